@@ -1,0 +1,65 @@
+"""jetgaudin: jet-extended su(2) Gaudin models, the generalised Lagrange top and its
+Bäcklund discretisation (Musso, Petrera, Ragnisco, Satta)."""
+
+from ._errors import (
+    BranchPointError,
+    IntegrationError,
+    InvalidParameterError,
+    InvalidStateError,
+    JetGaudinError,
+    OffLeafError,
+    SingularStepError,
+)
+from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
+from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
+from .flows import Trajectory, integrate
+from .hamiltonians import (
+    IntegralHamiltonian,
+    interpolating_flow_hamiltonian,
+    interpolating_hamiltonian,
+    interpolating_weights,
+    physical_hamiltonian,
+)
+from .lax import lax_matrix, r_matrix, uvw
+from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
+from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material_point
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "JetGaudinError",
+    "InvalidStateError",
+    "InvalidParameterError",
+    "SingularStepError",
+    "BranchPointError",
+    "OffLeafError",
+    "IntegrationError",
+    "structure_constants",
+    "poisson_tensor",
+    "bracket",
+    "hamiltonian_vector_field",
+    "casimirs",
+    "lax_matrix",
+    "uvw",
+    "r_matrix",
+    "integrals",
+    "integral_gradients",
+    "nu",
+    "nu_squared",
+    "branch_points",
+    "MapProperties",
+    "OnePointBacklund",
+    "TwoPointBacklund",
+    "Trajectory",
+    "integrate",
+    "IntegralHamiltonian",
+    "physical_hamiltonian",
+    "interpolating_hamiltonian",
+    "interpolating_weights",
+    "interpolating_flow_hamiltonian",
+    "GaudinTop",
+    "lagrange_top",
+    "generalized_lagrange_top",
+    "material_point",
+]

@@ -1,0 +1,83 @@
+"""Input validation shared by all modules (private)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._errors import InvalidParameterError, InvalidStateError
+
+
+def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.ndarray, int]:
+    """Return ``(X, N)`` with ``X`` a float (or complex) array of shape ``(..., 3N)``.
+
+    Raises :class:`InvalidStateError` if the trailing axis is not a positive
+    multiple of 3 or if any entry is not finite.
+    """
+    try:
+        arr = np.asarray(X)
+    except Exception as exc:  # pragma: no cover - numpy raises many types
+        raise InvalidStateError(f"{name} must be an array of numbers: {exc}") from None
+    if arr.dtype == object or arr.dtype.kind not in "biufc":
+        raise InvalidStateError(f"{name} must be numeric, got dtype {arr.dtype}")
+    if arr.dtype.kind == "c" and not allow_complex:
+        if np.any(arr.imag != 0):
+            raise InvalidStateError(f"{name} must be real; pass a real state (complex given)")
+        arr = arr.real
+    arr = arr.astype(np.complex128 if arr.dtype.kind == "c" else np.float64, copy=False)
+    if arr.ndim == 0 or arr.shape[-1] == 0 or arr.shape[-1] % 3 != 0:
+        n = "scalar" if arr.ndim == 0 else arr.shape[-1]
+        raise InvalidStateError(
+            f"{name} must have shape (..., 3N) with N >= 1 (components y_0, ..., y_(N-1)); "
+            f"its last axis has length {n}, not a positive multiple of 3"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise InvalidStateError(f"{name} has non-finite entries (NaN or inf); give finite numbers")
+    return arr, arr.shape[-1] // 3
+
+
+def check_N(N) -> int:
+    """Validate the jet order N (a positive integer)."""
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise InvalidParameterError(f"the jet order N must be an integer >= 1, got {N!r}")
+    return int(N)
+
+
+def field_vector(b) -> np.ndarray:
+    """Return the external field as a 3-vector; a scalar ``b`` means ``(0, 0, b)``."""
+    arr = np.asarray(b, dtype=float) if not np.iscomplexobj(b) else None
+    if arr is None:
+        raise InvalidParameterError("the field b must be real")
+    if arr.ndim == 0:
+        arr = np.array([0.0, 0.0, float(arr)])
+    if arr.shape != (3,):
+        raise InvalidParameterError(f"the field b must be a float or a 3-vector, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidParameterError("the field b must be finite")
+    return arr
+
+
+def nonzero_field(b) -> float:
+    """Validate a scalar field strength b (b e_3), which must be finite and nonzero."""
+    try:
+        val = float(b)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"the field strength b must be a real number, got {b!r}") from None
+    if not np.isfinite(val):
+        raise InvalidParameterError(f"the field strength b must be finite, got {val}")
+    if val == 0.0:
+        raise InvalidParameterError(
+            "the field strength b must be nonzero (the formulas divide by b and the "
+            "default branch of nu is normalised by nu -> |b| at infinity); give b != 0"
+        )
+    return val
+
+
+def spectral_parameter(eta, *, name: str = "eta") -> complex:
+    """Validate a complex spectral parameter."""
+    try:
+        val = complex(eta)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a complex number, got {eta!r}") from None
+    if not (np.isfinite(val.real) and np.isfinite(val.imag)):
+        raise InvalidParameterError(f"{name} must be finite, got {val}")
+    return val

@@ -1,0 +1,303 @@
+r"""Bäcklund transformations of Section 6: the one-point map and the real two-point map.
+
+Conventions (see ``docs/conventions.md``):
+
+* ``ν`` is an eigenvalue of ``ℓ(λ) = [[u, v], [w, −u]] = −2i L(λ)``, ``ν² = u² + vw``;
+  the paper's ``μ`` in the spectrality formulas (hhh), (x), (X) is this ``ν``.
+* One-point map ``B_(η, ν)`` (eqs. (rr), (ansatz), (hh), (hhh)): ``M = [[λ − η + pq, p], [q, 1]]``,
+  ``p = y_0^-/(2b)``, ``q = (u(η) − ν)/v(η)``; ``[1, −q]`` is the eigenvector of ``ℓ(η)`` for ``ν``.
+* Two-point map (eqs. (128), (mm), (x), (X)): ``M = λ + M0(s, t)``; ``[1, −s]`` is the eigenvector
+  of ``ℓ(η1)`` for ``ν1`` and ``[1, κ]``, ``κ = (η1 − η2)/t − s``, the eigenvector of ``ℓ(η2)`` for
+  ``−ν2`` (the point ``Q2 = (η2, −μ2)`` of the paper).
+* Real reduction: ``η1 = η``, ``η2 = η̄`` **and** ``ν2 = conj(ν1)`` (so ``−ν2`` is the eigenvalue at
+  ``η̄`` on the sheet opposite to ``ν(η̄) = conj ν(η)``); proof in ``docs/backlund.md``.
+* Default branch: ``ν1 = ν(η)`` continued from the positive root at ``Re η`` along the vertical
+  segment (:func:`jetgaudin.nu`); ``branch="opposite"`` uses ``−ν1`` and gives the inverse map.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._errors import InvalidParameterError, SingularStepError
+from .._validate import as_state, nonzero_field, spectral_parameter
+from ..lax import ell_coefficients, state_from_ell
+from ..spectral import _nu_from_kappa, curve_coefficients
+from ._dressing import _safe_ratio, dress_one_point, dress_two_point, horner, spectral_kappa, spectral_s
+
+__all__ = [
+    "MapProperties",
+    "OnePointBacklund",
+    "TwoPointBacklund",
+    "two_point_parameters",
+    "one_point_parameters",
+]
+
+_BRANCHES = {"default": 1, "opposite": -1}
+
+#: tolerance on the relative residual of the exact division (round-off level: the division
+#: is exact in exact arithmetic; values above this mean the spectral data are inconsistent)
+_RESIDUAL_TOL = 1e-8
+
+
+def _sheet(branch) -> int:
+    if branch in _BRANCHES:
+        return _BRANCHES[branch]
+    if branch in (1, -1):
+        return int(branch)
+    raise InvalidParameterError(f"branch must be 'default' or 'opposite' (or +1/-1), got {branch!r}")
+
+
+@dataclass(frozen=True)
+class MapProperties:
+    """Declared properties of a map; every ``True`` claim is asserted by ``tests/test_backlund_properties.py``.
+
+    ``order`` is the order of the map as an integrator of the flow of ``ν(Re η)`` with time step
+    ``−2 Im η`` in the limit ``Im η → 0`` (``None``: not an integrator of a real flow).
+    """
+
+    preserves_integrals: bool
+    poisson: bool
+    real: bool
+    order: int | None
+    symmetric: bool  # the map with the other branch (or conj eta) is the inverse
+    interpolates_flow: bool  # equals the time-1 flow of G_eta
+
+
+def _nu_default(X, b, eta, sheet):
+    kappa = curve_coefficients(X, b)
+    return _nu_from_kappa(kappa, np.asarray(eta, dtype=complex) * np.ones(X.shape[:-1]), sheet)
+
+
+def _continue_nu(ell, eta, nu_prev):
+    """``ν(η)`` for the state with Laurent coefficients ``ell``, on the root closest to ``nu_prev``.
+
+    Exact continuation along an orbit: ν(η) depends on the state only through the integrals,
+    which the maps preserve, so consecutive values differ by round-off only.
+    """
+    L = horner(ell, eta)
+    nu2 = L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0]
+    r = np.sqrt(nu2)
+    return np.where((np.conj(r) * nu_prev).real >= 0, r, -r)
+
+
+def two_point_parameters(ell, eta1, eta2, nu1, nu2):
+    r"""``(s, t)`` of eqs. (x), (X) from ``ℓ`` at ``η1, η2`` and the eigenvalues ``ν1`` at ``η1``,
+    ``−ν2`` at ``η2``.  Raises :class:`SingularStepError` at vanishing denominators."""
+    L1 = horner(ell, eta1)
+    L2 = horner(ell, eta2)
+    s = spectral_s(L1[..., 0, 0], L1[..., 0, 1], L1[..., 1, 0], nu1)
+    kappa = spectral_kappa(L2[..., 0, 0], L2[..., 0, 1], L2[..., 1, 0], -nu2)
+    den = s + kappa
+    if np.any(np.abs(den) <= 1e-13 * (np.abs(s) + np.abs(kappa))) or np.any(den == 0):
+        raise SingularStepError(
+            "singular Bäcklund step: the denominator s + kappa of t (eq. (X)) vanishes "
+            "(the two eigenvectors at eta1 and eta2 coincide); change eta"
+        )
+    return s, (eta1 - eta2) / den
+
+
+def one_point_parameters(ell, eta, nu, b):
+    r"""``(p, q)`` of eqs. (hh), (hhh): ``p = y_0^-/(2b)``, ``q = (u(η) − ν)/v(η)``."""
+    L = horner(ell, eta)
+    q = spectral_s(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu)
+    p = ell[..., 1, 0, 1] / (2.0 * b)
+    return p, q
+
+
+def _check_residual(res, ell, what):
+    scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
+    rel = res / scale
+    if np.any(rel > _RESIDUAL_TOL):
+        raise SingularStepError(
+            f"{what}: the dressing division left a remainder {np.max(rel):.2e} (relative); the step "
+            "is numerically singular (eta close to a branch point or a vanishing denominator)"
+        )
+
+
+@dataclass(frozen=True)
+class TwoPointBacklund:
+    r"""The real two-point Bäcklund map ``B_η: X ↦ X̆`` (Section 6.2, Appendix 1), any N.
+
+    ``X̆`` solves ``M(λ) L(λ) = L̆(λ) M(λ)`` (eq. (128)) with ``M = λ + M0(s, t)`` of (mm),
+    ``η1 = η``, ``η2 = η̄``, ``ν1 = ν(η)`` on the chosen branch and ``ν2 = conj ν1``.
+    Field ``b e_3`` (``b ≠ 0``).  Maps real states ``(..., 3N)`` to real states; it preserves the
+    2N integrals, is a Poisson map, commutes with itself for other ``η``, has the ``"opposite"``
+    branch as inverse, and equals the time-1 flow of ``G_η`` (:func:`jetgaudin.interpolating_hamiltonian`).
+
+    >>> import jetgaudin as jg
+    >>> B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
+    >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
+    >>> orbit = B.iterate(X0, 10)
+    >>> orbit.shape
+    (11, 9)
+    >>> import numpy as np
+    >>> bool(np.allclose(jg.integrals(orbit, 1.0), jg.integrals(X0, 1.0), rtol=1e-12, atol=1e-12))
+    True
+    """
+
+    b: float
+    eta: complex
+    branch: str = "default"
+    properties: MapProperties = field(
+        default=MapProperties(
+            preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
+        ),
+        init=False,
+        repr=False,
+        compare=False,
+    )
+
+    def __post_init__(self):
+        object.__setattr__(self, "b", nonzero_field(self.b))
+        object.__setattr__(self, "eta", spectral_parameter(self.eta))
+        _sheet(self.branch)
+
+    @property
+    def sheet(self) -> int:
+        return _sheet(self.branch)
+
+    def inverse(self) -> TwoPointBacklund:
+        """The inverse map: the same ``η`` on the other branch."""
+        return TwoPointBacklund(self.b, self.eta, "opposite" if self.sheet == 1 else "default")
+
+    def nu1(self, X):
+        """``ν1 = ±ν(η)`` used by the map at ``X`` (default branch times the sheet)."""
+        X, _ = as_state(X)
+        return _nu_default(X, self.b, self.eta, self.sheet)
+
+    def parameters(self, X, nu1=None):
+        """``(s, t, ν1)`` of eqs. (x), (X) at ``X``."""
+        X, _ = as_state(X)
+        if nu1 is None:
+            nu1 = self.nu1(X)
+        ell = ell_coefficients(X, self.b)
+        s, t = two_point_parameters(ell, self.eta, np.conj(self.eta), nu1, np.conj(nu1))
+        return s, t, nu1
+
+    def step(self, X, nu1=None):
+        """One step; returns ``(X̆, ν1, imag_residue)`` with ``X̆`` real (imaginary part dropped,
+        its size relative to ``1 + |X̆|`` returned as ``imag_residue``)."""
+        X, _ = as_state(X)
+        if self.eta.imag == 0:
+            return X.copy(), None, np.zeros(X.shape[:-1])
+        ell = ell_coefficients(X, self.b)
+        if nu1 is None:
+            nu1 = _nu_default(X, self.b, self.eta, self.sheet)
+        else:
+            nu1 = _continue_nu(ell, self.eta, nu1)
+        eta1, eta2 = self.eta, np.conj(self.eta)
+        s, t = two_point_parameters(ell, eta1, eta2, nu1, np.conj(nu1))
+        new_ell, res = dress_two_point(ell, eta1, eta2, s, t)
+        _check_residual(res, ell, "two-point Bäcklund step")
+        Xc = state_from_ell(new_ell)
+        Xr = Xc.real
+        imag = np.max(np.abs(Xc.imag), axis=-1) / (1.0 + np.max(np.abs(Xr), axis=-1))
+        if not np.all(np.isfinite(Xr)):
+            raise SingularStepError("two-point Bäcklund step produced non-finite values; change eta")
+        return Xr, nu1, imag
+
+    def __call__(self, X):
+        """Apply the map to states of shape ``(..., 3N)``."""
+        return self.step(X)[0]
+
+    def iterate(self, X0, steps: int):
+        """Orbit ``X_0, …, X_steps`` of shape ``(steps + 1, ..., 3N)``.
+
+        ``ν(η)`` is taken on the chosen branch at ``X_0`` and continued along the orbit (it depends on
+        the state only through the preserved integrals).
+        """
+        steps = _check_steps(steps)
+        X, _ = as_state(X0)
+        out = np.empty((steps + 1,) + X.shape)
+        out[0] = X
+        nu1 = None
+        for n in range(steps):
+            X, nu1, _ = self.step(X, nu1)
+            out[n + 1] = X
+        return out
+
+
+def _check_steps(steps) -> int:
+    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
+        raise InvalidParameterError(f"steps must be a non-negative integer, got {steps!r}")
+    return int(steps)
+
+
+@dataclass(frozen=True)
+class OnePointBacklund:
+    r"""The complex one-point Bäcklund map ``B_(η, ν)`` of Section 6.1 (or its inverse), any N,
+    field ``b e_3``.
+
+    Forward: ``L̃ = M L M^{-1}`` with ``M = [[λ − η + pq, p], [q, 1]]`` (eq. (ansatz)),
+    ``p = y_0^-/(2b)`` (hh), ``q = (u(η) − ν)/v(η)`` (hhh, with the paper's ``μ`` read as ``ν``):
+    ``[1, −q]`` is the eigenvector of ``ℓ(η)`` for ``ν``.
+
+    Inverse (``inverse=True``): ``L = M^{-1} L̃ M`` with ``q = ỹ_0^+/(2b)`` and ``p = (ũ(η) − ν)/w̃(η)``
+    (``[p, 1]`` is the eigenvector of ``ℓ̃(η)`` for ``−ν``).  This is the map the paper writes
+    ``B_(η, −μ)``; it is *not* the forward map on the other sheet.
+
+    ``ν = ±ν(η)`` by the branch rule of :func:`jetgaudin.nu` (principal root at ``Re η`` for complex
+    states), ``branch="opposite"`` taking ``−ν(η)``.  Real input gives complex output.
+    """
+
+    b: float
+    eta: complex
+    branch: str = "default"
+    inverse_map: bool = False
+    properties: MapProperties = field(
+        default=MapProperties(
+            preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
+        ),
+        init=False,
+        repr=False,
+        compare=False,
+    )
+
+    def __post_init__(self):
+        object.__setattr__(self, "b", nonzero_field(self.b))
+        object.__setattr__(self, "eta", spectral_parameter(self.eta))
+        _sheet(self.branch)
+
+    @property
+    def sheet(self) -> int:
+        return _sheet(self.branch)
+
+    def inverse(self) -> OnePointBacklund:
+        """The inverse map (same ``η`` and branch)."""
+        return OnePointBacklund(self.b, self.eta, self.branch, not self.inverse_map)
+
+    def nu(self, X):
+        """``±ν(η)`` at ``X`` on the chosen branch."""
+        X, _ = as_state(X, allow_complex=True)
+        return _nu_default(X, self.b, self.eta, self.sheet)
+
+    def parameters(self, X):
+        """``(p, q, ν)`` of eqs. (hh), (hhh) at ``X`` (``X`` is the image point for the inverse map)."""
+        X, _ = as_state(X, allow_complex=True)
+        ell = ell_coefficients(X, self.b)
+        nu = _nu_default(X, self.b, self.eta, self.sheet)
+        L = horner(ell, self.eta)
+        u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
+        if self.inverse_map:
+            q = ell[..., 1, 1, 0] / (2.0 * self.b)
+            p = _safe_ratio(
+                u - nu, w, -v, u + nu,
+                "singular inverse one-point step: w(eta) and u(eta) + nu(eta) both vanish; change eta",
+            )
+        else:
+            p = ell[..., 1, 0, 1] / (2.0 * self.b)
+            q = spectral_s(u, v, w, nu)
+        return p, q, nu
+
+    def __call__(self, X):
+        X, _ = as_state(X, allow_complex=True)
+        p, q, _ = self.parameters(X)
+        new_ell, res = dress_one_point(ell_coefficients(X, self.b), self.eta, p, q, inverse=self.inverse_map)
+        _check_residual(res, ell_coefficients(X, self.b), "one-point Bäcklund step")
+        out = state_from_ell(new_ell)
+        if not np.all(np.isfinite(out)):
+            raise SingularStepError("one-point Bäcklund step produced non-finite values; change eta")
+        return out
