@@ -135,9 +135,55 @@ def two_point_M0(eta1, eta2, s, t):
     return M0
 
 
-def dress_two_point(ell, eta1, eta2, s, t):
+def eigenvector(u, v, w, nu):
+    r"""An eigenvector ``k`` of ``ℓ(η) = [[u, v], [w, −u]]`` for the eigenvalue ``ν`` (``ν² = u² + vw``).
+
+    ``k = (v, ν − u)`` or ``k = (u + ν, w)`` (proportional on the curve), whichever is larger, so that
+    ``s = −k_2/k_1`` of eq. (x) may be infinite without loss (``v(η) = 0``, ``u + ν = 0``).  Both vanish
+    only if ``ℓ(η) = 0``, a double branch point: :class:`BranchPointError`.
+    """
+    a1, a2 = v, nu - u
+    b1, b2 = u + nu, w
+    na = np.abs(a1) ** 2 + np.abs(a2) ** 2
+    nb = np.abs(b1) ** 2 + np.abs(b2) ** 2
+    use_a = na >= nb
+    k1 = np.where(use_a, a1, b1)
+    k2 = np.where(use_a, a2, b2)
+    scale = np.abs(u) + np.abs(v) + np.abs(w) + np.abs(nu)
+    if np.any(np.maximum(na, nb) <= (1e-15 * scale) ** 2) or np.any(np.maximum(na, nb) == 0):
+        from .._errors import BranchPointError
+
+        raise BranchPointError(
+            "l(eta) vanishes (eta is a double branch point of nu): the eigenvector of the Bäcklund step is "
+            "undefined; change eta"
+        )
+    return k1, k2
+
+
+def real_two_point_M0(eta, k1, k2):
+    r"""``M0`` of the real two-point map (``η1 = η``, ``η2 = η̄``, ``μ2 = conj μ1``) from the eigenvector
+    ``k`` of ``ℓ(η)`` for ``ν1``, projectively (valid at ``s = −k_2/k_1 = ∞``):
+
+    .. math:: M_0 = -\operatorname{diag}(\eta, \bar\eta) + \frac{2 i\, \Im\eta}{|k|^2}
+              \begin{pmatrix} |k_2|^2 & -k_1 \bar k_2 \\ -\bar k_1 k_2 & -|k_2|^2 \end{pmatrix}.
+
+    This is eq. (mm) with ``t = 2i Im(η) s̄/(1 + |s|²)``: reality forces ``κ = 1/s̄`` in eq. (X), so the
+    denominator ``s + κ`` of ``t`` never vanishes (``docs/backlund.md``).
+    """
+    eta = np.asarray(eta, dtype=complex)
+    n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
+    c = 2j * eta.imag / n2
+    a2 = np.abs(k2) ** 2
+    M0 = np.empty(np.broadcast_shapes(np.shape(k1), eta.shape) + (2, 2), dtype=complex)
+    M0[..., 0, 0] = -eta + c * a2
+    M0[..., 0, 1] = -c * k1 * np.conj(k2)
+    M0[..., 1, 0] = -c * np.conj(k1) * k2
+    M0[..., 1, 1] = -np.conj(eta) - c * a2
+    return M0
+
+
+def dress_two_point(ell, eta1, eta2, M0):
     r"""``ℓ̆ = M ℓ adj(M) / ((λ−η1)(λ−η2))`` for ``M = λ + M0`` (eq. (128)); returns ``(ℓ̆, res)``."""
-    M0 = two_point_M0(eta1, eta2, s, t)
     A0 = adj(M0)
     N = ell.shape[-3] - 1
     M0e = M0[..., None, :, :]
@@ -148,7 +194,8 @@ def dress_two_point(ell, eta1, eta2, s, t):
     R[..., 0 : N + 1, :, :] += ell
     R[..., 1 : N + 2, :, :] += mm(M0e, ell) + mm(ell, A0e)
     R[..., 2 : N + 3, :, :] += mm(mm(M0e, ell), A0e)
-    return laurent_divide(R, [-(eta1 + eta2) * np.ones(np.shape(s)), eta1 * eta2 * np.ones(np.shape(s))])
+    ones = np.ones(M0.shape[:-2])
+    return laurent_divide(R, [-(eta1 + eta2) * ones, eta1 * eta2 * ones])
 
 
 def dress_one_point(ell, eta, p, q, inverse=False):

@@ -25,7 +25,17 @@ from .._errors import InvalidParameterError, SingularStepError
 from .._validate import as_state, nonzero_field, spectral_parameter
 from ..lax import ell_coefficients, state_from_ell
 from ..spectral import _nu_from_kappa, curve_coefficients
-from ._dressing import _safe_ratio, dress_one_point, dress_two_point, horner, spectral_kappa, spectral_s
+from ._dressing import (
+    _safe_ratio,
+    dress_one_point,
+    dress_two_point,
+    eigenvector,
+    horner,
+    real_two_point_M0,
+    spectral_kappa,
+    spectral_s,
+    two_point_M0,
+)
 
 __all__ = [
     "MapProperties",
@@ -33,6 +43,7 @@ __all__ = [
     "TwoPointBacklund",
     "two_point_parameters",
     "one_point_parameters",
+    "two_point_general",
 ]
 
 _BRANCHES = {"default": 1, "opposite": -1}
@@ -97,6 +108,18 @@ def two_point_parameters(ell, eta1, eta2, nu1, nu2):
             "(the two eigenvectors at eta1 and eta2 coincide); change eta"
         )
     return s, (eta1 - eta2) / den
+
+
+def two_point_general(X, b, eta1, eta2, nu1, nu2):
+    r"""The general (complex) two-point map of eqs. (128), (mm), (x), (X) for any ``η1, η2`` and
+    eigenvalues ``ν1`` of ``ℓ(η1)`` and ``−ν2`` of ``ℓ(η2)`` (``B_{Q2} ∘ B_{P1}`` with
+    ``P1 = (η1, ν1)``, ``Q2 = (η2, −ν2)``); returns complex states ``(..., 3N)``."""
+    X, _ = as_state(X, allow_complex=True)
+    ell = ell_coefficients(X, b)
+    s, t = two_point_parameters(ell, eta1, eta2, nu1, nu2)
+    new_ell, res = dress_two_point(ell, eta1, eta2, two_point_M0(eta1, eta2, s, t))
+    _check_residual(res, ell, "two-point Bäcklund step")
+    return state_from_ell(new_ell)
 
 
 def one_point_parameters(ell, eta, nu, b):
@@ -179,25 +202,35 @@ class TwoPointBacklund:
 
     def step(self, X, nu1=None):
         """One step; returns ``(X̆, ν1, imag_residue)`` with ``X̆`` real (imaginary part dropped,
-        its size relative to ``1 + |X̆|`` returned as ``imag_residue``)."""
+        its size relative to ``1 + |X̆|`` returned as ``imag_residue``).
+
+        ``nu1=None``: ``ν1`` from the branch rule; otherwise the root of ``ν(η)²`` closest to ``nu1``
+        (continuation along an orbit)."""
         X, _ = as_state(X)
         if self.eta.imag == 0:
-            return X.copy(), None, np.zeros(X.shape[:-1])
+            return X.copy(), nu1, np.zeros(X.shape[:-1])
+        # work on a 2-D batch: NumPy's scalar and 0-d paths round complex arithmetic differently from its
+        # array loops, and a single orbit must equal its ensemble member bit for bit
+        shape = X.shape
+        X = X.reshape(-1, shape[-1])
+        if nu1 is not None:
+            nu1 = np.asarray(nu1, dtype=complex).reshape(-1)
         ell = ell_coefficients(X, self.b)
         if nu1 is None:
             nu1 = _nu_default(X, self.b, self.eta, self.sheet)
         else:
             nu1 = _continue_nu(ell, self.eta, nu1)
-        eta1, eta2 = self.eta, np.conj(self.eta)
-        s, t = two_point_parameters(ell, eta1, eta2, nu1, np.conj(nu1))
-        new_ell, res = dress_two_point(ell, eta1, eta2, s, t)
+        L1 = horner(ell, self.eta)
+        k1, k2 = eigenvector(L1[..., 0, 0], L1[..., 0, 1], L1[..., 1, 0], nu1)
+        M0 = real_two_point_M0(self.eta, k1, k2)
+        new_ell, res = dress_two_point(ell, self.eta, np.conj(self.eta), M0)
         _check_residual(res, ell, "two-point Bäcklund step")
         Xc = state_from_ell(new_ell)
         Xr = Xc.real
         imag = np.max(np.abs(Xc.imag), axis=-1) / (1.0 + np.max(np.abs(Xr), axis=-1))
         if not np.all(np.isfinite(Xr)):
             raise SingularStepError("two-point Bäcklund step produced non-finite values; change eta")
-        return Xr, nu1, imag
+        return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
     def __call__(self, X):
         """Apply the map to states of shape ``(..., 3N)``."""
