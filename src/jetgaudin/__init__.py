@@ -12,6 +12,15 @@ from ._errors import (
 )
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
+from .canonical import (
+    canonical_hamiltonian,
+    canonical_integrals,
+    canonical_vector_field,
+    euler_to_state,
+    leaf_residuals,
+    on_canonical_leaf,
+    state_to_euler,
+)
 from .flows import Trajectory, integrate
 from .hamiltonians import (
     IntegralHamiltonian,
@@ -62,4 +71,11 @@ __all__ = [
     "lagrange_top",
     "generalized_lagrange_top",
     "material_point",
+    "euler_to_state",
+    "state_to_euler",
+    "on_canonical_leaf",
+    "leaf_residuals",
+    "canonical_hamiltonian",
+    "canonical_integrals",
+    "canonical_vector_field",
 ]
