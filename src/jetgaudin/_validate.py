@@ -44,9 +44,12 @@ def check_N(N) -> int:
 
 def field_vector(b) -> np.ndarray:
     """Return the external field as a 3-vector; a scalar ``b`` means ``(0, 0, b)``."""
-    arr = np.asarray(b, dtype=float) if not np.iscomplexobj(b) else None
-    if arr is None:
+    if np.iscomplexobj(b):
         raise InvalidParameterError("the field b must be real")
+    try:
+        arr = np.asarray(b, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"the field b must be a float or a 3-vector of floats, got {b!r}") from None
     if arr.ndim == 0:
         arr = np.array([0.0, 0.0, float(arr)])
     if arr.shape != (3,):
@@ -81,3 +84,25 @@ def spectral_parameter(eta, *, name: str = "eta") -> complex:
     if not (np.isfinite(val.real) and np.isfinite(val.imag)):
         raise InvalidParameterError(f"{name} must be finite, got {val}")
     return val
+
+
+def spectral_points(lam, *, name: str = "lambda") -> np.ndarray:
+    """Validate an array of spectral parameters: finite and nonzero (λ = 0 is the pole of L)."""
+    try:
+        arr = np.asarray(lam, dtype=complex)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a (complex) number or array, got {lam!r}") from None
+    if not np.all(np.isfinite(arr)):
+        raise InvalidParameterError(f"{name} must be finite (NaN or inf given)")
+    if np.any(arr == 0):
+        raise InvalidParameterError(f"{name} must be nonzero: lambda = 0 is the pole of the Lax matrix")
+    return arr
+
+
+def check_gradient(grad, n: int, *, name: str = "gradient") -> np.ndarray:
+    """Validate a gradient array whose trailing axis must have length ``n = 3N``."""
+    arr = np.asarray(grad)
+    if arr.ndim == 0 or arr.shape[-1] != n:
+        got = "a scalar" if arr.ndim == 0 else f"trailing length {arr.shape[-1]}"
+        raise InvalidStateError(f"{name} must have shape (..., {n}) like the state, got {got}")
+    return arr

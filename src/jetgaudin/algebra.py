@@ -17,7 +17,7 @@ from functools import cache
 
 import numpy as np
 
-from ._validate import as_state, check_N
+from ._validate import as_state, check_gradient, check_N
 
 __all__ = [
     "structure_constants",
@@ -71,13 +71,17 @@ def bracket(grad_f, grad_g, X) -> np.ndarray:
     For ``N = 3`` this is the displayed formula after (algebra) in Section 3.
     """
     P = poisson_tensor(X)
-    return np.einsum("...i,...ij,...j->...", np.asarray(grad_f), P, np.asarray(grad_g))
+    n = P.shape[-1]
+    grad_f = check_gradient(grad_f, n, name="grad_f")
+    grad_g = check_gradient(grad_g, n, name="grad_g")
+    return np.einsum("...i,...ij,...j->...", grad_f, P, grad_g)
 
 
 def hamiltonian_vector_field(grad_H, X) -> np.ndarray:
     r"""Hamiltonian vector field :math:`\dot X = \Pi(X) \nabla H` (so :math:`\dot f = \{f, H\}`)."""
     P = poisson_tensor(X)
-    return np.einsum("...ij,...j->...i", P, np.asarray(grad_H))
+    grad_H = check_gradient(grad_H, P.shape[-1], name="grad_H")
+    return np.einsum("...ij,...j->...i", P, grad_H)
 
 
 def _blocks(X, N):

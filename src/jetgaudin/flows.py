@@ -65,15 +65,86 @@ def _heyoka_system(H: IntegralHamiltonian, n: int):
     return list(zip(xs, rhs, strict=True))
 
 
+def _affine_gradient(H: IntegralHamiltonian, X0: np.ndarray):
+    """``(A, g0)`` with ``∇H(X) = A X + g0`` (exact: every κ_m is quadratic in X), batched like ``X0``."""
+    n = X0.shape[-1]
+    zero = np.zeros_like(X0)
+    g0 = H.gradient(zero)
+    cols = [H.gradient(zero + np.eye(n)[j]) - g0 for j in range(n)]
+    return np.stack(cols, axis=-1), g0  # A[..., i, j] = ∂g_i/∂X_j
+
+
+def _fast_rhs(H: IntegralHamiltonian, X0: np.ndarray):
+    """``Ẋ = Π(X)(A X + g0)`` with ``Π(X) = c · X`` (eq. (LP)): two small matrix products per call.
+
+    Same vector field as ``H.vector_field`` (checked in tests/test_flows.py), ~20x cheaper.
+    """
+    n = X0.shape[-1]
+    A, g0 = _affine_gradient(H, X0)
+    C = structure_constants(n // 3).reshape(n * n, n)
+    shape = X0.shape
+
+    def rhs(_t, y):
+        X = y.reshape(shape)
+        g = np.einsum("...ij,...j->...i", A, X) + g0
+        P = (X @ C.T).reshape(shape[:-1] + (n, n))
+        return np.einsum("...ij,...j->...i", P, g).reshape(-1)
+
+    return rhs
+
+
+def _check_times(T, t_eval):
+    try:
+        T = float(T)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"T must be a number, got {T!r}") from None
+    if not np.isfinite(T):
+        raise InvalidParameterError(f"T must be finite, got {T}")
+    if t_eval is None:
+        t_eval = np.array([0.0, T]) if T != 0 else np.array([0.0])
+    try:
+        t_eval = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"t_eval must be a 1-D array of times, got {t_eval!r}") from None
+    if t_eval.ndim != 1 or len(t_eval) == 0 or not np.all(np.isfinite(t_eval)):
+        raise InvalidParameterError("t_eval must be a non-empty 1-D array of finite times")
+    if T == 0:
+        if np.any(t_eval != 0):
+            raise InvalidParameterError("with T = 0, t_eval may only contain 0; give T != 0 to integrate")
+        return T, t_eval
+    d = np.sign(T)
+    s = d * t_eval
+    if np.any(s < 0) or np.any(s > abs(T)):
+        raise InvalidParameterError(f"t_eval must lie in the interval between 0 and T = {T}")
+    if np.any(np.diff(s) <= 0):
+        raise InvalidParameterError(
+            "t_eval must be strictly monotone in the direction of integration (increasing for T > 0, "
+            "decreasing for T < 0), without repeated times"
+        )
+    return T, t_eval
+
+
+def _check_tol(name, val, positive):
+    try:
+        val = float(val)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a number, got {val!r}") from None
+    if not np.isfinite(val) or val < 0 or (positive and val == 0):
+        raise InvalidParameterError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {val}")
+    return val
+
+
 def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: float = 1e-12, atol: float = 1e-12,
               b=None) -> Trajectory:
-    r"""Integrate ``Ẋ = Π(X) ∇H`` from ``X0`` over ``[0, T]``.
+    r"""Integrate ``Ẋ = Π(X) ∇H`` from ``X0`` over ``[0, T]`` (``T < 0``: backwards).
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
-    :func:`jetgaudin.interpolating_flow_hamiltonian`).  ``t_eval`` (default: ``0`` and ``T``)
-    are the sample times.  ``method``: ``"DOP853"`` (SciPy, tolerances ``rtol``/``atol``) or
-    ``"heyoka"`` (Taylor method, tolerance ``rtol``; needs ``pip install jetgaudin[heyoka]``).
-    ``X0`` may be a batch ``(..., 3N)`` for DOP853 (integrated as one system).
+    :func:`jetgaudin.interpolating_flow_hamiltonian`), or any object with ``vector_field(X)``
+    (then give the field ``b`` for the recorded integrals).  ``t_eval`` (default: ``0`` and ``T``)
+    are the sample times, strictly monotone, between ``0`` and ``T``.  ``method``: ``"DOP853"``
+    (SciPy, tolerances ``rtol``/``atol``) or ``"heyoka"`` (Taylor method, tolerance ``rtol``; needs
+    ``pip install jetgaudin[heyoka]``).  ``X0`` may be a batch ``(..., 3N)`` for DOP853 (integrated
+    as one system).
 
     >>> import jetgaudin as jg
     >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
@@ -82,28 +153,35 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     True
     """
     X0, N = as_state(X0)
-    try:
-        T = float(T)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"T must be a number, got {T!r}") from None
-    if not np.isfinite(T):
-        raise InvalidParameterError("T must be finite")
-    t_eval = np.array([0.0, T]) if t_eval is None else np.asarray(t_eval, dtype=float)
-    if t_eval.ndim != 1 or len(t_eval) == 0 or not np.all(np.isfinite(t_eval)):
-        raise InvalidParameterError("t_eval must be a non-empty 1-D array of finite times")
-    if not (rtol > 0 and atol >= 0):
-        raise InvalidParameterError("rtol must be > 0 and atol >= 0")
-    bb = H.b if b is None else b
+    T, t_eval = _check_times(T, t_eval)
+    rtol = _check_tol("rtol", rtol, True)
+    atol = _check_tol("atol", atol, False)
+    if method not in ("DOP853", "heyoka"):
+        raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {method!r}")
+    is_integral = isinstance(H, IntegralHamiltonian)
+    if not is_integral and not callable(getattr(H, "vector_field", None)):
+        raise InvalidParameterError("H must be an IntegralHamiltonian or have a vector_field(X) method")
+    if is_integral:
+        H._check(X0)  # N of the Hamiltonian matches the state
+    bb = getattr(H, "b", None) if b is None else b
+    if bb is None:
+        raise InvalidParameterError("give the field b (H has no attribute b) to record the integrals")
+    cc = getattr(H, "c", None)
     shape = X0.shape
-    if method == "DOP853":
-        def rhs(_t, y):
-            return H.vector_field(y.reshape(shape)).reshape(-1)
+    if T == 0:
+        Xs = np.broadcast_to(X0, (len(t_eval),) + shape).copy()
+    elif method == "DOP853":
+        if is_integral:
+            rhs = _fast_rhs(H, X0)
+        else:
+            def rhs(_t, y):
+                return np.asarray(H.vector_field(y.reshape(shape))).reshape(-1)
 
         sol = solve_ivp(rhs, (0.0, T), X0.reshape(-1), method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
         if not sol.success:
             raise IntegrationError(f"DOP853 failed: {sol.message}")
         Xs = sol.y.T.reshape((len(t_eval),) + shape)
-    elif method == "heyoka":
+    else:
         try:
             import heyoka as hy
         except ImportError:
@@ -112,11 +190,19 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
             ) from None
         if X0.ndim != 1:
             raise InvalidParameterError("method='heyoka' integrates one orbit: X0 must have shape (3N,)")
-        ta = hy.taylor_adaptive(_heyoka_system(H, 3 * N), X0.copy(), tol=rtol)
-        res = ta.propagate_grid(t_eval)
-        if res[0] not in (hy.taylor_outcome.time_limit,):
+        if not is_integral:
+            raise InvalidParameterError(
+                "method='heyoka' needs an IntegralHamiltonian (its vector field is built symbolically)"
+            )
+        grid = t_eval if t_eval[0] == 0.0 else np.concatenate([[0.0], t_eval])  # heyoka's grid starts at t = 0
+        try:
+            ta = hy.taylor_adaptive(_heyoka_system(H, 3 * N), X0.copy(), tol=rtol)
+            res = ta.propagate_grid(grid)
+        except (ValueError, RuntimeError) as exc:
+            raise IntegrationError(f"heyoka failed: {exc}") from None
+        if res[0] != hy.taylor_outcome.time_limit:
             raise IntegrationError(f"heyoka failed: {res[0]}")
-        Xs = np.asarray(res[-1])
-    else:
-        raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {method!r}")
-    return Trajectory(t=t_eval, X=Xs, integrals=integrals(Xs, bb, H.c), method=method)
+        Xs = np.asarray(res[-1])[len(grid) - len(t_eval):]
+    if not np.all(np.isfinite(Xs)):
+        raise IntegrationError(f"{method} produced non-finite states (the orbit blew up); reduce T or the tolerances")
+    return Trajectory(t=t_eval, X=Xs, integrals=integrals(Xs, bb, cc), method=method)

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import quad_vec
 
-from ._errors import InvalidParameterError
-from ._validate import as_state, field_vector, spectral_parameter
+from ._errors import InvalidParameterError, InvalidStateError
+from ._validate import as_state, check_N, field_vector, spectral_parameter
 from .algebra import hamiltonian_vector_field
 from .spectral import _nu_from_kappa, _roots, curve_coefficients, integral_gradients, integrals
 
@@ -41,7 +41,12 @@ class IntegralHamiltonian:
     c: object = None
 
     def __post_init__(self):
-        w = np.asarray(self.weights)
+        if np.iscomplexobj(self.weights):
+            raise InvalidParameterError("weights must be real (complex given)")
+        try:
+            w = np.asarray(self.weights, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"weights must be real numbers, got {self.weights!r}") from None
         if w.ndim == 0 or w.shape[-1] % 2 or w.shape[-1] == 0:
             raise InvalidParameterError("weights must have a trailing axis of length 2N")
         if not np.all(np.isfinite(w)):
@@ -53,11 +58,20 @@ class IntegralHamiltonian:
     def N(self) -> int:
         return self.weights.shape[-1] // 2
 
+    def _check(self, X):
+        X, N = as_state(X)
+        if N != self.N:
+            raise InvalidStateError(
+                f"this Hamiltonian has {2 * self.N} weights (N = {self.N}): states need {3 * self.N} "
+                f"components, got {3 * N}"
+            )
+        return X
+
     def __call__(self, X):
-        return np.sum(self.weights * integrals(X, self.b, self.c), axis=-1)
+        return np.sum(self.weights * integrals(self._check(X), self.b, self.c), axis=-1)
 
     def gradient(self, X):
-        return np.einsum("...m,...mi->...i", self.weights, integral_gradients(X, self.b, self.c))
+        return np.einsum("...m,...mi->...i", self.weights, integral_gradients(self._check(X), self.b, self.c))
 
     def vector_field(self, X):
         r"""``Ẋ = Π(X) ∇H`` (eq. (LP)), shape ``(..., 3N)``."""
@@ -68,6 +82,7 @@ def physical_hamiltonian(N: int, b) -> IntegralHamiltonian:
     r"""The physical Hamiltonian of the N-th system: ``H = H_2/2`` (eq. (H)) for ``N ≥ 2``
     (``N = 2``: the Lagrange top; ``N = 3``: the generalised Lagrange top of Section 4) and
     ``H = H_1/2 = ⟨b, y_0⟩`` for ``N = 1`` (a spin in the field, the only non-Casimir integral)."""
+    N = check_N(N)
     w = np.zeros(2 * N)
     w[1 if N >= 2 else 0] = 0.5
     return IntegralHamiltonian(b, w)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import InvalidParameterError
-from ._validate import as_state, check_N, field_vector
+from ._validate import as_state, check_N, field_vector, spectral_points
 
 __all__ = [
     "SIGMA",
@@ -89,9 +89,13 @@ def jet_coefficients(N: int, c=None) -> np.ndarray:
 
 def jet_function(i: int, lam, N: int | None = None, c=None):
     r"""Evaluate :math:`f_i(\lambda)` of Section 2 (``f_0 = 1/λ``)."""
+    if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or i < 0:
+        raise InvalidParameterError(f"the index i of f_i must be an integer >= 0, got {i!r}")
     N = check_N(N if N is not None else i + 1)
+    if i >= N:
+        raise InvalidParameterError(f"f_i needs i <= N - 1, got i = {i} with N = {N}; pass a larger N")
     T = jet_coefficients(N, c)
-    lam = np.asarray(lam, dtype=complex)
+    lam = spectral_points(lam)
     return sum(T[i, n] * lam ** (-(n + 1)) for n in range(N))
 
 
@@ -112,7 +116,7 @@ def lax_coefficients(X, b, c=None) -> np.ndarray:
 
 def _xi(lam, X, b, c=None):
     xi = lax_coefficients(X, b, c)
-    lam = np.asarray(lam, dtype=complex)
+    lam = spectral_points(lam)
     m = np.arange(xi.shape[-2])
     powers = lam[..., None] ** (-m)  # (..., N+1)
     return np.einsum("...m,...ma->...a", powers, xi)
@@ -168,6 +172,6 @@ def state_from_ell(ell) -> np.ndarray:
 def r_matrix(lam) -> np.ndarray:
     r"""The rational r-matrix :math:`r(\lambda) = \lambda^{-1} \sum_\alpha \sigma^\alpha \otimes \sigma^\alpha`
     of Prop. 1, shape ``(..., 4, 4)`` (Kronecker-product basis)."""
-    lam = np.asarray(lam, dtype=complex)
+    lam = spectral_points(lam)
     P = sum(np.kron(SIGMA[a], SIGMA[a]) for a in range(3))
     return P / lam[..., None, None]

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError
-from ._validate import as_state
+from ._validate import as_state, spectral_points
 from .lax import jet_coefficients, lax_coefficients
 
 __all__ = [
@@ -104,7 +104,7 @@ def _poly_eval(kappa, lam):
 
 def nu_squared(lam, X, b, c=None):
     r"""``ν(λ)² = u(λ)² + v(λ) w(λ)`` (so ``det(L − μ) = μ² + ν²/4``)."""
-    return _poly_eval(curve_coefficients(X, b, c), lam)
+    return _poly_eval(curve_coefficients(X, b, c), spectral_points(lam))
 
 
 def spectral_determinant(lam, mu, X, b, c=None):
@@ -113,6 +113,8 @@ def spectral_determinant(lam, mu, X, b, c=None):
 
     L = lax_matrix(lam, X, b, c)
     mu = np.asarray(mu, dtype=complex)
+    if not np.all(np.isfinite(mu)):
+        raise InvalidParameterError("mu must be finite")
     return (L[..., 0, 0] - mu) * (L[..., 1, 1] - mu) - L[..., 0, 1] * L[..., 1, 0]
 
 
@@ -122,7 +124,9 @@ def _roots(kappa):
     deg = kappa.shape[-1] - 1
     lead = kappa[..., 0]
     if np.any(lead == 0):
-        raise InvalidParameterError("the field b must be nonzero for the branch rule of nu")
+        raise InvalidParameterError(
+            "the field b must be nonzero for the branch rule of nu (|b|^2 = 0, or underflows); give b != 0"
+        )
     comp = np.zeros(kappa.shape[:-1] + (deg, deg), dtype=complex)
     comp[..., 0, :] = -kappa[..., 1:] / lead[..., None]
     idx = np.arange(deg - 1)
@@ -151,7 +155,12 @@ def _continued_sign_reference(kappa, a, lam, roots):
 
 
 def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
-    lam = np.asarray(lam, dtype=complex)
+    try:
+        lam = np.asarray(lam, dtype=complex)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"lambda must be a (complex) number or array, got {lam!r}") from None
+    if not np.all(np.isfinite(lam)):
+        raise InvalidParameterError("lambda must be finite (NaN or inf given)")
     kappa, lam = np.broadcast_arrays(kappa, lam[..., None])
     lam = lam[..., 0]
     a = lam.real

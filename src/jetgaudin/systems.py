@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validate import as_state, check_N, nonzero_field
+from ._validate import as_state, check_N, field_vector, nonzero_field
 from .hamiltonians import IntegralHamiltonian, physical_hamiltonian
 from .lax import SIGMA, lax_matrix
 from .spectral import integrals
@@ -95,7 +95,7 @@ def generalized_lagrange_top(b: float) -> GaudinTop:
 
 
 def twisted_top_rhs(X, b: float):
-    r"""The equations of motion (em) written out, ``N = 3``, field ``b e_3``:
+    r"""The equations of motion (em) written out, ``N = 3``, field ``b e_3`` (``b`` a float) or a 3-vector ``b``:
 
     .. math:: \dot y = b \wedge x, \quad \dot x = y \wedge x + b \wedge z, \quad \dot z = y \wedge z.
     """
@@ -104,7 +104,7 @@ def twisted_top_rhs(X, b: float):
         from ._errors import InvalidStateError
 
         raise InvalidStateError(f"(em) is for N = 3 (9 components), got {3 * N}")
-    bv = np.array([0.0, 0.0, float(b)])
+    bv = field_vector(b)
     y, x, z = X[..., 0:3], X[..., 3:6], X[..., 6:9]
     return np.concatenate(
         [np.cross(np.broadcast_to(bv, x.shape), x), np.cross(y, x) + np.cross(np.broadcast_to(bv, z.shape), z),
@@ -113,14 +113,23 @@ def twisted_top_rhs(X, b: float):
     )
 
 
+def _state3(X, what):
+    X, N = as_state(X)
+    if N != 3:
+        from ._errors import InvalidStateError
+
+        raise InvalidStateError(f"{what} is defined for N = 3 (9 components (y, x, z)), got {3 * N}")
+    return X
+
+
 def material_point(X):
     r"""Position ``x − z`` of the material point (Section 4), shape ``(..., 3)``, ``N = 3``."""
-    X, _ = as_state(X)
+    X = _state3(X, "the material point")
     return X[..., 3:6] - X[..., 6:9]
 
 
 def material_point_rhs(X, b: float):
     r"""``d/dt (x − z) = y ∧ (x − z) + b ∧ z`` (Section 4)."""
-    X, _ = as_state(X)
-    bv = np.broadcast_to(np.array([0.0, 0.0, float(b)]), X[..., 6:9].shape)
+    X = _state3(X, "the material point equation")
+    bv = np.broadcast_to(field_vector(b), X[..., 6:9].shape)
     return np.cross(X[..., 0:3], X[..., 3:6] - X[..., 6:9]) + np.cross(bv, X[..., 6:9])
