@@ -1,0 +1,220 @@
+"""The registry of checks behind ``jetgaudin verify`` (data structures and the runner).
+
+A :class:`Check` is one proposition, lemma or displayed formula of the paper.  Its function
+receives a :class:`Context` (seeded random source, precision, ``full`` flag) and returns an
+:class:`Outcome`: the verdict on the formula **as printed** and, for a misprint, the verdict
+on **our correction**.  :func:`run_checks` times each check and returns :class:`CheckResult`
+records; ``docs/errata.md`` is generated from the checks that declare an :class:`Erratum`.
+"""
+
+from __future__ import annotations
+
+import random
+import time
+import traceback
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+
+__all__ = [
+    "HOLDS",
+    "FAILS",
+    "UNDECIDED",
+    "Verdict",
+    "Outcome",
+    "Erratum",
+    "Check",
+    "CheckResult",
+    "Context",
+    "REGISTRY",
+    "register",
+    "run_checks",
+    "select",
+    "DEFAULT_SEED",
+]
+
+HOLDS, FAILS, UNDECIDED = "holds", "fails", "undecided"
+DEFAULT_SEED = 20261122
+
+#: relative tolerance for "holds" at 50-digit points: round-off of a 50-digit evaluation of a
+#: rational expression is ~1e-45; 1e-30 leaves a wide margin while a genuine misprint gives O(1).
+NUMERIC_TOL = 1e-30
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``status`` in {holds, fails, undecided}; ``residual`` the largest relative residual of a 50-digit
+    check, or for an exact SymPy check 0 (an identity) / 1 (not an identity: a nonzero remainder);
+    ``None`` when not measured; ``note`` a short explanation."""
+
+    status: str
+    residual: float | None = None
+    note: str = ""
+
+    @staticmethod
+    def from_residual(residual, tol: float = NUMERIC_TOL, note: str = "") -> Verdict:
+        r = float(residual)
+        return Verdict(HOLDS if r <= tol else FAILS, r, note)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    printed: Verdict
+    corrected: Verdict | None = None
+
+
+@dataclass(frozen=True)
+class Erratum:
+    """One entry of ``docs/errata.md``: the formula as printed and our correction."""
+
+    printed: str
+    corrected: str
+    comment: str = ""
+
+
+@dataclass(frozen=True)
+class Context:
+    seed: int
+    label: str
+    full: bool = False
+    dps: int = 50
+
+    def rng(self) -> random.Random:
+        """A generator seeded by ``(seed, label)``: every check is reproducible on its own."""
+        return random.Random(f"{self.seed}:{self.label}")
+
+
+@dataclass(frozen=True)
+class Check:
+    label: str
+    section: str
+    statement: str
+    method: str
+    func: Callable[[Context], Outcome]
+    erratum: Erratum | None = None
+    full_only: bool = False
+    #: declared verdict on the printed formula (``fails`` for a confirmed misprint); the test suite
+    #: asserts the run reproduces it, so a regression in either direction is caught
+    expect_printed: str = HOLDS
+    corrected_text: str = ""
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    label: str
+    section: str
+    statement: str
+    method: str
+    seed: int
+    printed: str
+    printed_residual: float | None
+    corrected: str | None
+    corrected_residual: float | None
+    status: str
+    expected_printed: str
+    seconds: float
+    note: str = ""
+    erratum: dict | None = field(default=None)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+REGISTRY: dict[str, Check] = {}
+
+
+def register(
+    label: str,
+    section: str,
+    statement: str,
+    method: str,
+    *,
+    erratum: Erratum | None = None,
+    full_only: bool = False,
+    expect_printed: str = HOLDS,
+):
+    """Decorator adding a check to :data:`REGISTRY` (labels are unique)."""
+
+    def deco(func):
+        if label in REGISTRY:
+            raise ValueError(f"duplicate check label {label!r}")
+        REGISTRY[label] = Check(label, section, statement, method, func, erratum, full_only, expect_printed)
+        return func
+
+    return deco
+
+
+def _overall(out: Outcome) -> str:
+    if out.printed.status == HOLDS:
+        return HOLDS
+    if out.corrected is not None and out.corrected.status == HOLDS:
+        return HOLDS
+    if out.printed.status == UNDECIDED or (out.corrected is not None and out.corrected.status == UNDECIDED):
+        return UNDECIDED
+    return FAILS
+
+
+def select(only) -> list[str]:
+    """Labels selected by ``only``: each entry selects the check with exactly that label or, if there is none,
+    its family (every label starting with ``entry-``, e.g. ``App1`` -> ``App1-A``, ``App1-B``, ``App1-X0``).
+    Raises ``KeyError`` listing the entries that select nothing."""
+    if isinstance(only, str):
+        only = [only]
+    chosen, unknown = set(), []
+    for o in only:
+        if o in REGISTRY:
+            chosen.add(o)
+            continue
+        fam = [k for k in REGISTRY if k.startswith(o + "-")]
+        if not fam:
+            unknown.append(o)
+        chosen.update(fam)
+    if unknown:
+        raise KeyError(", ".join(unknown))
+    return [k for k in REGISTRY if k in chosen]
+
+
+def run_checks(only=None, full: bool = False, seed: int = DEFAULT_SEED, dps: int = 50) -> list[CheckResult]:
+    """Run the registered checks and return one :class:`CheckResult` per check.
+
+    ``only``: a label or a list of labels (see :func:`select`; unknown labels raise ``KeyError``);
+    ``full`` adds the heavier checks; ``seed`` makes the random points reproducible.  The overall
+    ``status`` is ``holds`` when the formula holds as printed or after its documented correction.
+    """
+    from . import _load_all
+
+    _load_all()
+    chosen = None if only is None else set(select(only))
+    results = []
+    for check in REGISTRY.values():
+        if chosen is not None and check.label not in chosen:
+            continue
+        if check.full_only and not full and only is None:
+            continue
+        ctx = Context(seed=seed, label=check.label, full=full, dps=dps)
+        t0 = time.perf_counter()
+        try:
+            out = check.func(ctx)
+        except Exception as exc:  # a crashing check is undecided, never silently "holds"
+            tb = traceback.format_exception_only(type(exc), exc)[-1].strip()
+            out = Outcome(Verdict(UNDECIDED, None, f"check raised {tb}"))
+        dt = time.perf_counter() - t0
+        note = "; ".join(x for x in (out.printed.note, out.corrected.note if out.corrected else "") if x)
+        results.append(
+            CheckResult(
+                label=check.label,
+                section=check.section,
+                statement=check.statement,
+                method=check.method,
+                seed=seed,
+                printed=out.printed.status,
+                printed_residual=out.printed.residual,
+                corrected=out.corrected.status if out.corrected else None,
+                corrected_residual=out.corrected.residual if out.corrected else None,
+                status=_overall(out),
+                expected_printed=check.expect_printed,
+                seconds=round(dt, 3),
+                note=note,
+                erratum=asdict(check.erratum) if check.erratum else None,
+            )
+        )
+    return results
