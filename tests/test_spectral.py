@@ -418,3 +418,13 @@ def test_nu_vectorised_bitwise(rng):
     nu = jg.nu(lam, X, 1.0)
     for i, j in [(0, 0), (2, 3)]:
         assert nu[i, j] == jg.nu(lam, X[i, j], 1.0)
+
+
+def test_branch_rule_tiny_real_part_does_not_overflow(rng):
+    """Regression: for |Re lambda| = 1e-200 the value nu(Re lambda) overflows; the branch rule must still
+    pick the root continuous with Re lambda = 1e-8 (same sheet: unit phases agree to 1e-3)."""
+    for _ in range(50):
+        X = rng.normal(size=9)
+        v1 = jg.nu(1e-8 + 0.5j, X, 1.0)
+        v2 = jg.nu(1e-200 + 0.5j, X, 1.0)
+        assert abs(v1 / abs(v1) - v2 / abs(v2)) < 1e-3

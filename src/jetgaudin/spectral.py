@@ -140,18 +140,29 @@ def branch_points(X, b, c=None) -> np.ndarray:
 
 
 def _continued_sign_reference(kappa, a, lam, roots):
-    """Continuation of the positive root at a to lam (vertical segment), from the roots."""
+    """``λ^N`` times the continuation of the positive root at ``a`` to ``λ`` (vertical segment).
+
+    Computed from ``P(a) = a^{2N} ν²(a)`` (no overflow for tiny ``|a|``): ``ν(a) = √P(a)/|a|^N``, so
+    ``λ^N ν(λ) = √P(a) sign(a)^N Π_k √((λ − r_k)/(a − r_k))``.
+    """
     N = (kappa.shape[-1] - 1) // 2
-    nu_a = np.sqrt(_poly_eval(kappa, a).astype(complex))
+    m = np.arange(kappa.shape[-1])
+    P_a = np.sum(kappa * a[..., None].astype(complex) ** (2 * N - m), axis=-1)
+    sqrt_Pa = np.sqrt(P_a)
     ratio = (lam[..., None] - roots) / (a[..., None] - roots)
     # a root on the segment [a, lam] makes the ratio real and <= 0
     on_seg = (np.abs(ratio.imag) <= 1e-13 * np.abs(ratio)) & (ratio.real <= 0)
-    if np.any(on_seg) or np.any(nu_a == 0):
+    if np.any(on_seg) or np.any(sqrt_Pa == 0):
         raise BranchPointError(
             "nu has a branch point on the vertical segment from Re(eta) to eta "
             "(nu(eta) = 0 or nu(Re eta) = 0); move eta or the state off the branch point"
         )
-    return nu_a * (a / lam) ** N * np.prod(np.sqrt(ratio), axis=-1)
+    return sqrt_Pa * np.sign(a) ** N * np.prod(np.sqrt(ratio), axis=-1)
+
+
+def N_of(kappa) -> int:
+    """N from the number 2N + 1 of curve coefficients."""
+    return (kappa.shape[-1] - 1) // 2
 
 
 def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
@@ -173,7 +184,15 @@ def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
         roots = _roots(kappa)
     ref = _continued_sign_reference(kappa, a, lam, np.broadcast_to(roots, kappa.shape[:-1] + (roots.shape[-1],)))
     direct = np.sqrt(_poly_eval(kappa, lam))
-    sign = np.where((np.conj(direct) * ref).real >= 0, 1.0, -1.0)
+    # compare phases only (unit-modulus factors: no overflow for tiny or huge lambda)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        test = (np.conj(direct / np.abs(direct)) * (ref / np.abs(ref)) * (np.conj(lam) / np.abs(lam)) ** N_of(kappa)).real
+    if not np.all(np.isfinite(test)) or not np.all(np.isfinite(direct)):
+        raise BranchPointError(
+            "nu(lambda) is zero or not representable at this lambda (a branch point, or |Re lambda| so small that "
+            "nu overflows); move lambda away from the branch points and the pole lambda = 0"
+        )
+    sign = np.where(test >= 0, 1.0, -1.0)
     return sheet * sign * direct
 
 
