@@ -192,3 +192,21 @@ def test_cli_registered_on_main_app():
 def test_outcome_types():
     o = Outcome(Verdict(HOLDS, 0.0))
     assert o.corrected is None
+
+
+def test_errata_cross_references_name_existing_tests():
+    """Every pytest node named in docs/errata.md (the second, numerical route) exists, and every erratum
+    label has one."""
+    import pathlib
+    import re
+
+    from jetgaudin.verify._errata import TESTS, errata_markdown
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    for label, nodes in TESTS.items():
+        for node in nodes:
+            path, name = node.split("::")
+            text = (root / path).read_text(encoding="utf-8")
+            assert re.search(rf"^def {re.escape(name)}\(", text, flags=re.M), node
+    labels = re.findall(r"^## \d+\. `([^`]+)`", errata_markdown(), flags=re.M)
+    assert set(labels) <= set(TESTS), set(labels) - set(TESTS)

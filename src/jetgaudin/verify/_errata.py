@@ -19,6 +19,48 @@ in (curve) is an eigenvalue of `L` (`mu = +-i nu/2`), while in (hhh), (x), (X) i
 """
 
 
+#: pytest tests of the library that prove the same correction by a second, numerical route
+#: (tests/test_verify.py asserts that each named test function exists)
+TESTS: dict[str, tuple[str, ...]] = {
+    "Sec2-uvw": ("tests/test_lax.py::test_uvw_brackets_section2",
+                 "tests/test_lax.py::test_uvw_printed_misprints_fail_at_a_random_point"),
+    "Sec2-iso": ("tests/test_lax.py::test_su2_isomorphism_of_section2",),
+    "Hh": ("tests/test_spectral.py::test_integrals_from_determinant_prop2_and_lemma1",),
+    "Prop3": ("tests/test_spectral.py::test_prop3_printed_is_wrong_corrected_holds",),
+    "em-matrix": ("tests/test_systems.py::test_em_matrix_form_sign",),
+    "Prop-Lax": ("tests/test_systems.py::test_lax_equation_sign",),
+    "Prop-canonical": ("tests/test_canonical.py::test_printed_realisation_fails_symbolically",
+                       "tests/test_canonical.py::test_printed_realisation_fails_numerically",
+                       "tests/test_canonical.py::test_corrected_realisation_reproduces_algebra_and_leaf_symbolically",
+                       "tests/test_canonical.py::test_printed_angle_ranges_are_not_a_chart"),
+    "Sec5-H": ("tests/test_canonical.py::test_symbolic_hamiltonian_is_H2_over_2_and_printed_one_is_not",),
+    "Sec5-I": ("tests/test_canonical.py::test_canonical_hamiltonian_and_integrals",),
+    "hhh": ("tests/test_spectral.py::test_nu_squared_is_u2_plus_vw_and_determinant",
+            "tests/test_backlund.py::test_dressing_relation_and_lax_form"),
+    "mp-u": ("tests/test_closed_form.py::test_one_point_closed_form_symbolic",),
+    "mp-v": ("tests/test_closed_form.py::test_one_point_closed_form_symbolic",),
+    "mp": ("tests/test_closed_form.py::test_one_point_printed_misprints",
+           "tests/test_closed_form.py::test_one_point_printed_misprints_are_the_documented_terms"),
+    "Prop4-leaf": ("tests/test_generating.py::test_casimir_elimination",),
+    "Prop4-Psi": ("tests/test_generating.py::test_psi_formulas",),
+    "fu": ("tests/test_generating.py::test_printed_fu_fails", "tests/test_generating.py::test_e1_e2_corrected"),
+    "Rem-spectrality": ("tests/test_generating.py::test_spectrality_corrected",
+                        "tests/test_generating.py::test_printed_fu_spectrality_not_repairable"),
+    "x": ("tests/test_backlund.py::test_dressing_relation_and_lax_form",),
+    "X": ("tests/test_backlund.py::test_two_point_is_composition_of_one_point",),
+    "2p-inverse": ("tests/test_backlund.py::test_real_inverse_identity",),
+    "2p-real": ("tests/test_backlund.py::test_other_choice_of_nu2_is_not_real",
+                "tests/test_backlund.py::test_real_inverse_identity"),
+    "128": ("tests/test_backlund.py::test_two_point_is_composition_of_one_point",),
+    "App1-A": ("tests/test_closed_form.py::test_appendix1_printed_misprints",
+               "tests/test_closed_form.py::test_two_point_closed_form_equals_generic"),
+    "App1-B": ("tests/test_closed_form.py::test_appendix1_printed_misprints",
+               "tests/test_closed_form.py::test_two_point_matrices_symbolic"),
+    "App1-X0": ("tests/test_closed_form.py::test_appendix1_printed_misprints",
+                "tests/test_closed_form.py::test_two_point_matrices_real_and_assemble_the_map"),
+}
+
+
 def errata_markdown() -> str:
     from . import _load_all
 
@@ -37,4 +79,6 @@ def errata_markdown() -> str:
         if e.comment:
             parts.append(f"- **Note:** {e.comment}\n")
         parts.append(f"- **Check:** `jetgaudin verify --only {chk.label}` ({chk.method})\n")
+        if chk.label in TESTS:
+            parts.append("- **Also tested by:** " + ", ".join(f"`{t}`" for t in TESTS[chk.label]) + "\n")
     return "".join(parts)
