@@ -5,13 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 import jetgaudin as jg
 from jetgaudin.backlund.maps import two_point_general
 from jetgaudin.hamiltonians import IntegralHamiltonian
 from jetgaudin.lax import ell_coefficients
 from jetgaudin.spectral import curve_coefficients
+
+from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 NS = [1, 2, 3, 4, 5]
 ETAS = [0.35 + 0.25j, -0.7 + 0.45j, 0.9 - 0.6j, 2.0 + 1.0j, -3.0 + 0.2j, 5 + 0.1j]

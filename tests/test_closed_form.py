@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 
 import jetgaudin as jg
-from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 from jetgaudin.backlund.closed_form import (
     _one_point_core,
     _two_point_core,
@@ -16,6 +15,8 @@ from jetgaudin.backlund.closed_form import (
     two_point_matrices,
     two_point_matrices_printed,
 )
+
+from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 # (b, eta): both signs of b, |Re eta| < 1 and > 1, small and large Im eta
 CASES = [

@@ -4,8 +4,9 @@ import numpy as np
 import pytest
 
 import jetgaudin as jg
-from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 from jetgaudin.flows import Trajectory, _fast_rhs
+
+from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 T_LONG = 1000.0
 T_EVAL = np.linspace(0.0, T_LONG, 101)

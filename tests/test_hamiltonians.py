@@ -7,6 +7,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 import jetgaudin as jg
+
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 finite = st.floats(-2.0, 2.0, allow_nan=False, allow_infinity=False)

@@ -203,7 +203,7 @@ def test_errata_cross_references_name_existing_tests():
     from jetgaudin.verify._errata import TESTS, errata_markdown
 
     root = pathlib.Path(__file__).resolve().parents[1]
-    for label, nodes in TESTS.items():
+    for nodes in TESTS.values():
         for node in nodes:
             path, name = node.split("::")
             text = (root / path).read_text(encoding="utf-8")

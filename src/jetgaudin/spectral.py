@@ -186,7 +186,8 @@ def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
     direct = np.sqrt(_poly_eval(kappa, lam))
     # compare phases only (unit-modulus factors: no overflow for tiny or huge lambda)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        test = (np.conj(direct / np.abs(direct)) * (ref / np.abs(ref)) * (np.conj(lam) / np.abs(lam)) ** N_of(kappa)).real
+        phase_lam = (np.conj(lam) / np.abs(lam)) ** N_of(kappa)
+        test = (np.conj(direct / np.abs(direct)) * (ref / np.abs(ref)) * phase_lam).real
     if not np.all(np.isfinite(test)) or not np.all(np.isfinite(direct)):
         raise BranchPointError(
             "nu(lambda) is zero or not representable at this lambda (a branch point, or |Re lambda| so small that "
