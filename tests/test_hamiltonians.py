@@ -133,3 +133,19 @@ def test_hamiltonian_errors():
         jg.interpolating_hamiltonian(APPENDIX2_X0, 1.0, 0.3j)
     with pytest.raises(jg.InvalidParameterError, match="eta must be finite"):
         jg.interpolating_weights(APPENDIX2_X0, 1.0, complex(np.nan, 1))
+
+
+def test_interpolating_vector_field_is_pi_grad_G(rng):
+    """X_G(X) = Pi(X) grad G_eta, with grad G from central differences of G_eta (step 1e-5: truncation
+    ~1e-10, quadrature noise ~1e-13/1e-5 = 1e-8, hence tolerance 1e-6 relative); batch = per-state."""
+    X = rng.normal(size=(2, 9))
+    b, eta = 0.8, 1.1 + 0.4j
+    V = jg.interpolating_vector_field(X, b, eta)
+    for i in range(2):
+        g = np.zeros(9)
+        for j in range(9):
+            e = np.zeros(9)
+            e[j] = 1e-5
+            g[j] = (jg.interpolating_hamiltonian(X[i] + e, b, eta) - jg.interpolating_hamiltonian(X[i] - e, b, eta)) / 2e-5
+        ref = jg.poisson_tensor(X[i]) @ g
+        assert np.abs(V[i] - ref).max() <= 1e-6 * (1 + np.abs(ref).max())

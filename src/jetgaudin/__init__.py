@@ -26,6 +26,7 @@ from .hamiltonians import (
     IntegralHamiltonian,
     interpolating_flow_hamiltonian,
     interpolating_hamiltonian,
+    interpolating_vector_field,
     interpolating_weights,
     physical_hamiltonian,
 )
@@ -67,6 +68,7 @@ __all__ = [
     "interpolating_hamiltonian",
     "interpolating_weights",
     "interpolating_flow_hamiltonian",
+    "interpolating_vector_field",
     "GaudinTop",
     "lagrange_top",
     "generalized_lagrange_top",

@@ -25,6 +25,7 @@ __all__ = [
     "interpolating_hamiltonian",
     "interpolating_weights",
     "interpolating_flow_hamiltonian",
+    "interpolating_vector_field",
 ]
 
 
@@ -132,3 +133,10 @@ def interpolating_weights(X, b, eta):
 def interpolating_flow_hamiltonian(X0, b, eta) -> IntegralHamiltonian:
     r"""The quadratic Hamiltonian ``Σ_m ω_m(X0) κ_m`` whose flow from ``X0`` is the flow of ``G_η``."""
     return IntegralHamiltonian(b, interpolating_weights(X0, b, eta))
+
+
+def interpolating_vector_field(X, b, eta):
+    r"""The Hamiltonian vector field of ``G_η`` at ``X``: ``Π(X)∇G_η = Σ_m ω_m(X) Π(X)∇κ_m``,
+    shape ``(..., 3N)`` (vectorised: each state uses its own weights ``ω(X)``)."""
+    w = interpolating_weights(X, b, eta)
+    return IntegralHamiltonian(b, w).vector_field(X)
