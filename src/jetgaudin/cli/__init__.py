@@ -1,0 +1,96 @@
+"""The ``jetgaudin`` command line (Typer).
+
+Commands: ``orbit`` (the real two-point Bäcklund map; Appendix 2 by default), ``flow`` (continuous flows
+of ``H_2/2`` or ``G_η``, ``--compare`` with the map), ``info`` (integrals, Casimirs, ``ν(η)``, ``G_η`` of a
+state).  Other modules add commands with ``from . import app`` and ``@app.command()``; they are imported
+at the end of this module if present (``ensemble``, ``bench``, ``verify``).
+
+Errors never show a traceback: bad input prints one line ``jetgaudin: error: ...`` on stderr and exits
+with code 2; a run that fails (singular step, health check) exits with 1; SIGINT/SIGTERM exit with
+130/143 after saving a checkpoint.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from typing import Annotated
+
+import typer
+
+try:  # typer >= 0.24 vendors click as typer._click; older typer uses click itself
+    from typer._click import exceptions as _click_exc
+except ImportError:  # pragma: no cover
+    from click import exceptions as _click_exc
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="jetgaudin",
+    help="Jet-extended Gaudin models: Bäcklund orbits (Appendix 2), continuous flows, spectral data of a state.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+@app.callback(invoke_without_command=True)
+def _root(
+    ctx: typer.Context,
+    version: Annotated[
+        bool, typer.Option("--version", help="print the package version and exit", is_eager=True)
+    ] = False,
+) -> None:
+    """Jet-extended Gaudin models: Bäcklund orbits (Appendix 2), continuous flows, spectral data of a state."""
+    if version:
+        import jetgaudin as jg
+
+        typer.echo(jg.__version__)
+        raise typer.Exit(0)
+    if ctx.invoked_subcommand is None:
+        typer.echo(ctx.get_help())
+        raise typer.Exit(0)
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
+    args = sys.argv[1:] if argv is None else list(argv)
+    try:
+        code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+    except _click_exc.NoArgsIsHelpError as exc:
+        typer.echo(exc.ctx.get_help() if exc.ctx is not None else "usage: jetgaudin COMMAND --help")
+        sys.exit(0)
+    except _click_exc.UsageError as exc:
+        # one line, never a traceback (click would print the usage block)
+        msg = " ".join(exc.format_message().split())
+        cmd = f" {exc.ctx.info_name}" if exc.ctx is not None and exc.ctx.parent is not None else ""
+        typer.echo(f"jetgaudin{cmd}: error: {msg} (see: jetgaudin{cmd} --help)", err=True)
+        sys.exit(2)
+    except KeyboardInterrupt:  # Ctrl-C outside a run (runs handle it themselves and save a checkpoint)
+        typer.echo("jetgaudin: interrupted", err=True)
+        sys.exit(130)
+    except typer.Abort:
+        typer.echo("jetgaudin: aborted", err=True)
+        sys.exit(130)
+    except _click_exc.ClickException as exc:
+        typer.echo(f"jetgaudin: error: {' '.join(exc.format_message().split())}", err=True)
+        sys.exit(exc.exit_code)
+    except BrokenPipeError:  # e.g. `jetgaudin info | head`
+        sys.exit(0)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+from . import _flow, _info, _orbit  # noqa: E402,F401  (register the commands)
+
+for _m in ("ensemble", "bench", "verify"):
+    if importlib.util.find_spec(f"jetgaudin.cli.{_m}") is not None:
+        try:
+            importlib.import_module(f"jetgaudin.cli.{_m}")
+        except Exception as _exc:  # a broken optional command must not take down orbit/flow/info
+            print(
+                f"jetgaudin: warning: the '{_m}' command is unavailable ({type(_exc).__name__}: {_exc})",
+                file=sys.stderr,
+            )

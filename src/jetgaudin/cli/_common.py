@@ -1,0 +1,225 @@
+"""Shared pieces of the command line: input parsing, one-line errors, progress, summary tables (private).
+
+No mathematics here: everything numerical comes from the public API (``import jetgaudin as jg``).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import sys
+import time
+from pathlib import Path
+
+import typer
+
+#: Appendix 2 of the paper: field b, Bäcklund parameter eta, number of steps, (y, x, z)(0)
+APPENDIX2_B = 1.0
+APPENDIX2_ETA = "5+0.1i"
+APPENDIX2_STEPS = 1000
+APPENDIX2_INIT = "-2.4,-0.6,-1.2,-2.19,0.89,1.34,1,0,0"
+
+#: largest jet order the command line accepts: the spectral polynomial has degree 2N and its evaluation
+#: at |eta| ~ 5 overflows or loses all precision well before N ~ 256 (the library API has no such cap)
+MAX_N = 128
+
+EXIT_INPUT = 2  # bad input / unusable directory (click's usage-error code)
+EXIT_FAILED = 1  # the run started but failed (singular step, health check)
+
+
+class CliInputError(Exception):
+    """Bad command-line input: reported as one line on stderr, exit code 2."""
+
+
+def one_line(msg) -> str:
+    return re.sub(r"\s+", " ", str(msg)).strip()
+
+
+def fail(msg, code: int = EXIT_INPUT):
+    """Print ``jetgaudin: error: <msg>`` (one line) on stderr and exit with ``code``."""
+    typer.echo(f"jetgaudin: error: {one_line(msg)}", err=True)
+    raise typer.Exit(code)
+
+
+def parse_eta(text: str, option: str = "--eta") -> complex:
+    """``5+0.1i``, ``5+0.1j``, ``5 + 0.1 i``, ``0.1i``, ``5`` -> complex (finite)."""
+    s = re.sub(r"\s+", "", str(text)).lower()
+    if s.endswith("i"):
+        s = s[:-1] + "j"
+    if re.fullmatch(r"(.*[+-])?j", s):  # "5+i" -> "5+1j"
+        s = s[:-1] + "1j"
+    if s.count("j") > 1 or not re.fullmatch(r"[0-9eE.+\-j]+", s or "x"):
+        raise CliInputError(f"{option}: cannot read {text!r} as a complex number; write e.g. 5+0.1i or 5+0.1j")
+    try:
+        val = complex(s)
+    except ValueError:
+        raise CliInputError(
+            f"{option}: cannot read {text!r} as a complex number; write e.g. 5+0.1i or 5+0.1j"
+        ) from None
+    if not (math.isfinite(val.real) and math.isfinite(val.imag)):
+        raise CliInputError(f"{option}: {text!r} is not finite; give a finite complex number, e.g. 5+0.1i")
+    return val
+
+
+def parse_init(text: str, option: str = "--init") -> list[float]:
+    """Comma-separated 3N finite numbers (order y_0, y_1, ...); N is inferred from the count."""
+    parts = [p.strip() for p in str(text).split(",")]
+    if not parts or parts == [""]:
+        raise CliInputError(f"{option}: no numbers given; give 3N comma-separated numbers y_0, y_1, ...")
+    vals = []
+    for i, p in enumerate(parts, 1):
+        try:
+            v = float(p)
+        except ValueError:
+            raise CliInputError(
+                f"{option}: value {i} ({p!r}) is not a number; give 3N comma-separated numbers"
+            ) from None
+        if not math.isfinite(v):
+            raise CliInputError(f"{option}: value {i} ({p!r}) is not finite; give finite numbers")
+        vals.append(v)
+    if len(vals) % 3:
+        raise CliInputError(
+            f"{option}: got {len(vals)} numbers, not a multiple of 3; give 3N numbers (the N vectors y_0, ..., "
+            "y_(N-1), 3 components each; 9 for the generalised Lagrange top)"
+        )
+    if len(vals) > 3 * MAX_N:
+        raise CliInputError(
+            f"{option}: got {len(vals)} numbers (N = {len(vals) // 3}); the command line accepts N <= {MAX_N} "
+            f"({3 * MAX_N} numbers)"
+        )
+    return vals
+
+
+def parse_b(value: float, option: str = "--b") -> float:
+    if not math.isfinite(value):
+        raise CliInputError(f"{option}: the field strength must be finite, got {value}")
+    if value == 0.0:
+        raise CliInputError(f"{option}: the field strength b must be nonzero (the map divides by b); give b != 0")
+    return float(value)
+
+
+def parse_steps(value: int, option: str = "--steps") -> int:
+    if value < 0:
+        raise CliInputError(f"{option}: the number of steps must be >= 0, got {value}")
+    return int(value)
+
+
+def eta_label(eta: complex) -> str:
+    return f"{eta.real:g}{eta.imag:+g}i"
+
+
+class LazyProgress:
+    """A Rich progress bar on stderr that appears only when the run lasts more than ``delay`` seconds
+    and stderr is a terminal (``force=True`` shows it anyway)."""
+
+    def __init__(self, description: str, delay: float = 1.0, force: bool = False):
+        self.description, self.delay, self.force = description, delay, force
+        self.t0 = time.monotonic()
+        self._p = None
+        self._task = None
+
+    def __call__(self, n: int, total: int) -> None:
+        if self._p is None:
+            if time.monotonic() - self.t0 < self.delay or not (self.force or sys.stderr.isatty()):
+                return
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TimeElapsedColumn, TimeRemainingColumn
+
+            self._p = Progress(
+                "[progress.description]{task.description}",
+                BarColumn(),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                TimeRemainingColumn(),
+                console=Console(stderr=True, force_terminal=self.force or None),
+                transient=False,
+            )
+            self._p.start()
+            self._task = self._p.add_task(self.description, total=total)
+        self._p.update(self._task, completed=n, total=total)
+
+    def close(self) -> None:
+        if self._p is not None:
+            self._p.stop()
+            self._p = None
+
+
+def console():
+    from rich.console import Console
+
+    return Console(highlight=False, soft_wrap=True)
+
+
+def integrals_table(names, I0, drift_abs, drift_rel, title: str):
+    from rich.table import Table
+
+    t = Table(title=title, title_justify="left")
+    t.add_column("integral")
+    t.add_column("I_k(0)", justify="right")
+    t.add_column("max |I_k - I_k(0)|", justify="right")
+    t.add_column("relative", justify="right")
+    rows = range(len(names))
+    if len(names) > 12:  # large N: the integrals with the largest relative drift only
+        rows = sorted(sorted(rows, key=lambda k: -drift_rel[k])[:6])
+        t.caption = f"{len(names) - 6} more integrals in run.json"
+    for k in rows:
+        t.add_row(names[k], f"{I0[k]:.17g}", f"{drift_abs[k]:.3e}", f"{drift_rel[k]:.3e}")
+    return t
+
+
+def check_out_dir(path: Path) -> Path:
+    """Create ``path`` if needed and check that it is writable (exit 2 otherwise)."""
+    path = Path(path)
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".jetgaudin-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise CliInputError(f"--out: cannot write to {path}: {exc.strerror or exc}") from None
+    return path
+
+
+def check_state_scale(X, b, option: str = "--init") -> None:
+    """Refuse states whose integrals overflow double precision (they would turn into inf / NaN)."""
+    import numpy as np
+
+    import jetgaudin as jg
+
+    with np.errstate(all="ignore"):
+        ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), b)))
+    if not ok:
+        raise CliInputError(
+            f"{option}: the state is too large: its integrals (sums of products of components) overflow double "
+            "precision; scale the state down"
+        )
+
+
+class reported_errors:  # noqa: N801 - used as a context manager: ``with reported_errors(): ...``
+    """Turn expected failures into one-line messages and exit codes (never a traceback):
+    bad input (:class:`CliInputError`, :class:`jetgaudin.JetGaudinError`) -> 2, ``OSError`` -> 2.
+    NumPy floating-point warnings are silenced inside (results are checked for finiteness instead)."""
+
+    def __enter__(self):
+        import numpy as np
+
+        self._err = np.errstate(all="ignore")
+        self._err.__enter__()
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        self._err.__exit__(None, None, None)
+        if exc_type is None or issubclass(exc_type, (typer.Exit, SystemExit, KeyboardInterrupt)):
+            return False
+        import jetgaudin as jg
+
+        if issubclass(exc_type, (CliInputError, jg.JetGaudinError)):
+            fail(exc, EXIT_INPUT)
+        if issubclass(exc_type, OSError):
+            fail(f"{exc.strerror or exc}" + (f": {exc.filename}" if getattr(exc, "filename", None) else ""), EXIT_INPUT)
+        if issubclass(exc_type, (FloatingPointError, OverflowError, ZeroDivisionError, ValueError)):
+            fail(
+                f"numerical failure ({exc_type.__name__}: {exc}); the input is out of the range the map handles",
+                EXIT_FAILED,
+            )
+        return False

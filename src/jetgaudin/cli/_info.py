@@ -1,0 +1,142 @@
+"""``jetgaudin info``: spectral data of one state (private)."""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Annotated
+
+import numpy as np
+import typer
+
+import jetgaudin as jg
+
+from .. import recording as rec
+from . import app
+from ._common import (
+    APPENDIX2_B,
+    APPENDIX2_ETA,
+    APPENDIX2_INIT,
+    check_state_scale,
+    console,
+    one_line,
+    parse_b,
+    parse_eta,
+    parse_init,
+    reported_errors,
+)
+
+
+def _canonical_leaf(X, tol):
+    """``(answer, detail)`` from ``jetgaudin.canonical.on_canonical_leaf`` if that module exists."""
+    try:
+        from jetgaudin.canonical import on_canonical_leaf
+    except ImportError:
+        return None, "not available in this version (jetgaudin.canonical is missing)"
+    try:
+        res = on_canonical_leaf(X, tol)
+    except jg.JetGaudinError as exc:
+        return False, one_line(exc)
+    if isinstance(res, tuple):  # evidence (ok, residual)
+        return bool(res[0]), (f"residual {float(res[1]):.3e}" if len(res) > 1 else "")
+    detail = ""
+    try:
+        from jetgaudin.canonical import leaf_residuals
+
+        detail = "relative residuals of C^(1) = 0, C^(2) = 0, C^(3) = 1: " + ", ".join(
+            f"{float(r):.2e}" for r in np.ravel(leaf_residuals(X))
+        )
+    except (ImportError, jg.JetGaudinError):
+        pass
+    return bool(np.all(res)), detail
+
+
+def _c(z) -> list[float]:
+    z = complex(z)
+    return [z.real, z.imag]
+
+
+def _fmt(z) -> str:
+    z = complex(z)
+    return f"{z.real:.17g} {'+' if z.imag >= 0 else '-'} {abs(z.imag):.17g} i"
+
+
+@app.command()
+def info(
+    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3), nonzero")] = APPENDIX2_B,
+    eta: Annotated[str, typer.Option("--eta", help="spectral parameter η, e.g. 5+0.1i")] = APPENDIX2_ETA,
+    init: Annotated[
+        str, typer.Option("--init", help="the state: 3N comma-separated numbers y_0, y_1, ...")
+    ] = APPENDIX2_INIT,
+    tol: Annotated[float, typer.Option("--tol", help="tolerance of the canonical-leaf test")] = 1e-10,
+    as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
+) -> None:
+    """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies."""
+    with reported_errors():
+        b = parse_b(b)
+        eta_c = parse_eta(eta)
+        X = np.array(parse_init(init))
+        N = len(X) // 3
+        check_state_scale(X, b)
+        I = np.asarray(jg.integrals(X, b), dtype=float)
+        C = np.asarray(jg.casimirs(X), dtype=float)
+        d = {
+            "N": N,
+            "b": b,
+            "eta": _c(eta_c),
+            "state": X.tolist(),
+            "integrals": dict(zip(rec.integral_names(N), I.tolist(), strict=True)),
+            "casimirs": C.tolist(),
+        }
+        try:
+            d["nu_default"] = _c(jg.nu(eta_c, X, b))
+            d["nu_opposite"] = _c(jg.nu(eta_c, X, b, sheet=-1))
+            if not all(map(math.isfinite, d["nu_default"] + d["nu_opposite"])):
+                raise jg.InvalidParameterError("nu(eta) is not finite (the state or eta is too large)")
+        except jg.JetGaudinError as exc:
+            d["nu_default"] = d["nu_opposite"] = None
+            d["nu_note"] = one_line(exc)
+        try:
+            d["G_eta"] = float(jg.interpolating_hamiltonian(X, b, eta_c))
+            if not math.isfinite(d["G_eta"]):
+                raise jg.InvalidParameterError("G_eta is not finite (the state or eta is too large)")
+        except jg.JetGaudinError as exc:
+            d["G_eta"] = None
+            d["G_eta_note"] = one_line(exc)
+        try:
+            bp = np.asarray(jg.branch_points(X, b))
+            d["branch_points"] = [_c(z) for z in np.ravel(bp) if np.isfinite(z)]
+        except (jg.JetGaudinError, np.linalg.LinAlgError) as exc:
+            d["branch_points"] = []
+            d["branch_points_note"] = one_line(exc)
+        if N == 3:
+            d["material_point"] = np.asarray(jg.material_point(X)).tolist()
+        ok, detail = _canonical_leaf(X, tol)
+        d["on_canonical_leaf"] = ok
+        d["canonical_leaf_detail"] = detail
+    if as_json:
+        typer.echo(json.dumps(d, indent=1))
+        return
+    from rich.table import Table
+
+    con = console()
+    t = Table(title=f"state with N = {N}, b = {b:g}", title_justify="left")
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    for k, v in d["integrals"].items():
+        t.add_row(k, f"{v:.17g}")
+    for k, v in enumerate(d["casimirs"], 1):
+        t.add_row(f"Casimir C_{k}", f"{v:.17g}")
+    eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
+    if d["nu_default"] is not None:
+        t.add_row(f"ν({eta_s}), default root", _fmt(complex(*d["nu_default"])))
+        t.add_row(f"ν({eta_s}), opposite root", _fmt(complex(*d["nu_opposite"])))
+    else:
+        t.add_row(f"ν({eta_s})", f"undefined: {d['nu_note']}")
+    t.add_row(f"G_η, η = {eta_s}", f"{d['G_eta']:.17g}" if d["G_eta"] is not None else f"undefined: {d['G_eta_note']}")
+    if N == 3:
+        t.add_row("material point x − z", ", ".join(f"{v:.6g}" for v in d["material_point"]))
+    leaf = {True: "yes", False: "no", None: "unknown"}[ok]
+    t.add_row("on the canonical leaf", f"{leaf}" + (f" ({detail})" if detail else ""))
+    con.print(t)
+    con.print("branch points (zeros of λ^2N ν²): " + ", ".join(_fmt(complex(*z)) for z in d["branch_points"]))
