@@ -8,19 +8,11 @@ from ._errors import (
     InvalidStateError,
     JetGaudinError,
     OffLeafError,
+    RecordingError,
     SingularStepError,
 )
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
-from .canonical import (
-    canonical_hamiltonian,
-    canonical_integrals,
-    canonical_vector_field,
-    euler_to_state,
-    leaf_residuals,
-    on_canonical_leaf,
-    state_to_euler,
-)
 from .flows import Trajectory, integrate
 from .hamiltonians import (
     IntegralHamiltonian,
@@ -45,6 +37,7 @@ __all__ = [
     "BranchPointError",
     "OffLeafError",
     "IntegrationError",
+    "RecordingError",
     "structure_constants",
     "poisson_tensor",
     "bracket",
@@ -81,3 +74,29 @@ __all__ = [
     "canonical_integrals",
     "canonical_vector_field",
 ]
+
+# The canonical realisation builds its formulas with SymPy: import it on first use only, so that
+# `import jetgaudin` (and long runs) stay light.
+_LAZY = {
+    "euler_to_state": "canonical",
+    "state_to_euler": "canonical",
+    "on_canonical_leaf": "canonical",
+    "leaf_residuals": "canonical",
+    "canonical_hamiltonian": "canonical",
+    "canonical_integrals": "canonical",
+    "canonical_vector_field": "canonical",
+}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'jetgaudin' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))

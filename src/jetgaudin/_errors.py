@@ -15,6 +15,7 @@ __all__ = [
     "BranchPointError",
     "OffLeafError",
     "IntegrationError",
+    "RecordingError",
 ]
 
 
@@ -44,3 +45,7 @@ class OffLeafError(JetGaudinError):
 
 class IntegrationError(JetGaudinError):
     """A continuous-time integration failed (step size underflow, backend error, ...)."""
+
+
+class RecordingError(JetGaudinError):
+    """A run directory cannot be written, read or resumed (unwritable, corrupted, inconsistent)."""

@@ -106,3 +106,13 @@ def check_gradient(grad, n: int, *, name: str = "gradient") -> np.ndarray:
         got = "a scalar" if arr.ndim == 0 else f"trailing length {arr.shape[-1]}"
         raise InvalidStateError(f"{name} must have shape (..., {n}) like the state, got {got}")
     return arr
+
+
+def finite_result(arr, what: str):
+    """Raise :class:`InvalidStateError` if a computed quantity overflowed (never return a silent inf/NaN)."""
+    if not np.all(np.isfinite(arr)):
+        raise InvalidStateError(
+            f"{what} overflow for this input (products of components exceed the float range, |X| or |b| "
+            "above ~1e154); rescale the state and the field"
+        )
+    return arr

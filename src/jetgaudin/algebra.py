@@ -17,7 +17,7 @@ from functools import cache
 
 import numpy as np
 
-from ._validate import as_state, check_gradient, check_N
+from ._validate import as_state, check_gradient, check_N, finite_result
 
 __all__ = [
     "structure_constants",
@@ -99,7 +99,7 @@ def casimirs(X) -> np.ndarray:
     out = []
     for k in range(1, N + 1):
         out.append(sum(np.sum(y[..., i, :] * y[..., N + k - i - 2, :], axis=-1) for i in range(k - 1, N)))
-    return np.stack(out, axis=-1)
+    return finite_result(np.stack(out, axis=-1), "the Casimirs")
 
 
 def casimir_gradients(X) -> np.ndarray:

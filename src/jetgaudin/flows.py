@@ -11,7 +11,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from ._errors import IntegrationError, InvalidParameterError
 from ._validate import as_state
@@ -176,6 +175,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
         else:
             def rhs(_t, y):
                 return np.asarray(H.vector_field(y.reshape(shape))).reshape(-1)
+
+        from scipy.integrate import solve_ivp  # lazy: keeps `import jetgaudin` light
 
         sol = solve_ivp(rhs, (0.0, T), X0.reshape(-1), method="DOP853", t_eval=t_eval, rtol=rtol, atol=atol)
         if not sol.success:

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import quad_vec
 
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N, field_vector, spectral_parameter
@@ -113,6 +112,8 @@ def _segment_integral(X, b, eta, integrand, epsabs=1e-15, epsrel=1e-13):
 
     if h == 0:
         return np.zeros(np.shape(f(0.0)))
+    from scipy.integrate import quad_vec  # lazy: keeps `import jetgaudin` light
+
     val, _err = quad_vec(f, 0.0, h, epsabs=epsabs, epsrel=epsrel, limit=2000)
     return val
 

@@ -53,7 +53,7 @@ import numpy as np
 
 import jetgaudin as jg
 
-from ._errors import InvalidParameterError, JetGaudinError
+from ._errors import InvalidParameterError, JetGaudinError, RecordingError
 from ._validate import as_state
 
 __all__ = [
@@ -86,10 +86,6 @@ DEFAULT_MAX_IMAG = 1e-8
 RUN_JSON = "run.json"
 ORBIT_H5 = "orbit.h5"
 ORBIT_CSV = "orbit.csv"
-
-
-class RecordingError(JetGaudinError):
-    """A run directory cannot be written, read or resumed (unwritable, corrupted, inconsistent)."""
 
 
 class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input), hence not a JetGaudinError

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError
-from ._validate import as_state, spectral_points
+from ._validate import as_state, finite_result, spectral_points
 from .lax import jet_coefficients, lax_coefficients
 
 __all__ = [
@@ -56,7 +56,7 @@ def curve_coefficients(X, b, c=None) -> np.ndarray:
     for i in range(N + 1):
         for j in range(N + 1):
             out[..., i + j] += np.sum(xi[..., i, :] * xi[..., j, :], axis=-1)
-    return out
+    return finite_result(out, "the spectral invariants (integrals)")
 
 
 def integrals(X, b, c=None) -> np.ndarray:
