@@ -187,7 +187,10 @@ def check_state_scale(X, b, option: str = "--init") -> None:
     import jetgaudin as jg
 
     with np.errstate(all="ignore"):
-        ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), b)))
+        try:
+            ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), b)))
+        except jg.InvalidStateError:  # the library refuses overflowing integrals itself
+            ok = False
     if not ok:
         raise CliInputError(
             f"{option}: the state is too large: its integrals (sums of products of components) overflow double "

@@ -61,13 +61,22 @@ TESTS: dict[str, tuple[str, ...]] = {
 }
 
 
+def _paper_order(chk):
+    """Stable order (module order of the registry, then position in the module), independent of the
+    order in which other code happened to import the check modules."""
+    from . import _MODULES
+
+    mod = chk.func.__module__.rsplit(".", 1)[-1]
+    return (_MODULES.index(mod) if mod in _MODULES else len(_MODULES), chk.func.__code__.co_firstlineno)
+
+
 def errata_markdown() -> str:
     from . import _load_all
 
     _load_all()
     parts = [HEADER]
     n = 0
-    for chk in REGISTRY.values():
+    for chk in sorted(REGISTRY.values(), key=_paper_order):
         e = chk.erratum
         if e is None:
             continue
