@@ -1,0 +1,197 @@
+"""Compiled (Numba) kernels of the real two-point map against the NumPy reference route."""
+
+import numpy as np
+import pytest
+
+import jetgaudin as jg
+from jetgaudin.backlund import _kernels
+from jetgaudin.ensemble import sample_on_leaf
+
+from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
+
+# Tolerance for "same orbit to round-off".  Both routes are backward stable per step (a few ulp of
+# the state); on the invariant torus the error grows at most linearly with the number of steps
+# (a phase error), so after n steps the two orbits differ by ~ n * (few ulp) * max|X|.  We allow
+# 1e-14 per step relative to max|X| (~ 50 ulp per step), well below any genuine discrepancy
+# (a wrong formula shows up at the 1e-3 level after one step).
+PER_STEP_RTOL = 1e-14
+
+
+def _scale(orbit):
+    return np.max(np.abs(orbit))
+
+
+def test_appendix2_1000_steps_compiled_matches_numpy():
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    ref = B.iterate(APPENDIX2_X0, 1000, kernel="numpy")
+    for kern in ("compiled",):
+        orb = B.iterate(APPENDIX2_X0, 1000, kernel=kern)
+        assert orb.shape == ref.shape == (1001, 9)
+        assert np.max(np.abs(orb - ref)) <= 1000 * PER_STEP_RTOL * _scale(ref)
+    # the generic route on N = 3 as well
+    out, _, _, _ = _kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, B.nu1(APPENDIX2_X0), False,
+                                           1000, 1, specialise=False)
+    assert np.max(np.abs(out - ref)) <= 1000 * PER_STEP_RTOL * _scale(ref)
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 4, 5])
+@pytest.mark.parametrize("eta", [5 + 0.1j, 0.6 - 0.2j])  # |eta| >= 1 (bottom-up division) and < 1 (top-down)
+def test_random_states_compiled_matches_numpy(N, eta, rng):
+    c = np.zeros(N)
+    c[-1] = 1.0
+    c[:-1] = rng.uniform(-0.5, 0.5, N - 1)
+    X0 = sample_on_leaf(N, c, 3, seed=int(rng.integers(1 << 30)), scale=0.5)
+    B = jg.TwoPointBacklund(1.3, eta)
+    steps = 200
+    # near the pole (|eta| < 1, top-down division) the map amplifies round-off more: the NumPy route
+    # itself moves by ~1e-12 after 200 steps (N = 5) when X0 is perturbed by 1e-16 relative (measured),
+    # so "round-off" is 1e-13 per step there
+    rtol = PER_STEP_RTOL if abs(eta) >= 1 else 10 * PER_STEP_RTOL
+    for x in X0:
+        ref = B.iterate(x, steps, kernel="numpy")
+        nu0 = B.nu1(x)
+        gen, _, _, _ = _kernels.iterate_single(x, 1.3, eta, nu0, False, steps, 1, specialise=False)
+        assert np.max(np.abs(gen - ref)) <= steps * rtol * _scale(ref)
+        comp = B.iterate(x, steps, kernel="compiled")  # N = 3: the closed-form kernel
+        assert np.max(np.abs(comp - ref)) <= steps * rtol * _scale(ref)
+
+
+def test_one_step_matches_numpy_to_few_ulp(rng):
+    # one step: no accumulation; the two routes differ by a few ulp of the state (tolerance 1e-14
+    # relative, i.e. ~ 50 ulp, allows for the conditioning of the division by (l - eta)(l - conj eta))
+    X = sample_on_leaf(3, [0.3, -0.2, 2.0], 20, seed=5)
+    B = jg.TwoPointBacklund(0.7, 3 - 0.25j)
+    ref = B(X)
+    comp = B.iterate(X, 1, kernel="compiled")[1]
+    assert np.max(np.abs(comp - ref)) <= 1e-14 * _scale(ref)
+
+
+def test_compiled_preserves_integrals_and_inverse():
+    # independent checks of the compiled route: the 2N integrals (Prop. 2) are preserved, and the
+    # "opposite" branch undoes the map.  Tolerances: 1e-13 relative after 1000 steps (round-off
+    # random walk of ~1e-16 per step, measured drift ~1e-13).
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    orb = B.iterate(APPENDIX2_X0, 1000, kernel="compiled")
+    I0 = jg.integrals(APPENDIX2_X0, APPENDIX2_B)
+    drift = np.max(np.abs(jg.integrals(orb, APPENDIX2_B) - I0) / np.maximum(1, np.abs(I0)))
+    assert drift < 1e-12
+    back = B.inverse().iterate(orb[-1], 1000, kernel="compiled")[-1]
+    assert np.max(np.abs(back - APPENDIX2_X0)) < 1e-11
+
+
+def test_chunked_runs_equal_unsplit_bit_for_bit():
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    for kern in ("compiled", "numpy"):
+        full = B.iterate(APPENDIX2_X0, 60, kernel=kern)
+        a, nu = B.iterate(APPENDIX2_X0, 25, kernel=kern, return_nu=True)
+        b, nu2 = B.iterate(a[-1], 35, kernel=kern, nu1=nu, return_nu=True)
+        assert np.array_equal(np.concatenate([a, b[1:]]), full)
+        _, nu_full = B.iterate(APPENDIX2_X0, 60, kernel=kern, return_nu=True)
+        assert nu2 == nu_full
+
+
+def test_save_every_and_batches_bit_for_bit(rng):
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    for kern in ("compiled", "numpy"):
+        full = B.iterate(APPENDIX2_X0, 100, kernel=kern)
+        assert np.array_equal(B.iterate(APPENDIX2_X0, 100, save_every=7, kernel=kern), full[::7])
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 4, seed=3).reshape(2, 2, 9)
+    batch = B.iterate(X, 50, kernel="compiled")
+    assert batch.shape == (51, 2, 2, 9)
+    for i in range(2):
+        for j in range(2):
+            assert np.array_equal(batch[:, i, j], B.iterate(X[i, j], 50, kernel="compiled"))
+
+
+def test_auto_uses_compiled():
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    assert np.array_equal(B.iterate(APPENDIX2_X0, 20), B.iterate(APPENDIX2_X0, 20, kernel="compiled"))
+
+
+def test_real_eta_is_identity():
+    B = jg.TwoPointBacklund(1.0, 2.0)
+    orb = B.iterate(APPENDIX2_X0, 3, kernel="compiled")
+    assert np.array_equal(orb, np.broadcast_to(APPENDIX2_X0, (4, 9)))
+
+
+def test_state_along_the_field_is_a_fixed_point():
+    # N = 1, y = (0, 0, 1): v = w = 0, s = 0 and M0 is diagonal, so the dressing is the identity.  The
+    # projective eigenvector makes this regular (the ratio forms of s and kappa would divide by zero).
+    B = jg.TwoPointBacklund(1.0, 2 + 0.5j)
+    x = np.array([0.0, 0.0, 1.0])
+    for kern in ("numpy", "compiled"):
+        orb = B.iterate(x, 3, kernel=kern)
+        assert np.allclose(orb, x, rtol=0, atol=1e-15)  # round-off of one division by |eta|^2
+
+
+def test_status_codes_map_to_typed_errors():
+    assert isinstance(_kernels.status_error(_kernels.STATUS_BRANCH, 3), jg.BranchPointError)
+    for st in (_kernels.STATUS_RESIDUAL, _kernels.STATUS_NONFINITE):
+        err = _kernels.status_error(st, 7, 2)
+        assert isinstance(err, jg.SingularStepError) and "step 7 of orbit 2" in str(err)
+
+
+def test_overflow_raises_singular_step():
+    # entries ~1e200: u^2 overflows inside the step; the kernels report it instead of returning NaN
+    B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
+    x = APPENDIX2_X0 * 1e200
+    nu0 = 1.0 + 0j  # the branch rule itself would overflow; give a value to reach the kernel
+    for spec in (True, False):
+        with pytest.raises(jg.SingularStepError):
+            _kernels.iterate_single(x, 1.0, B.eta, nu0, False, 2, 1, specialise=spec)
+
+
+def test_wrong_nu_is_caught_by_the_residual():
+    # a nu1 that is not an eigenvalue of l(eta) makes the division inexact: status RESIDUAL -> error
+    for spec in (True, False):
+        with pytest.raises(jg.SingularStepError, match="remainder"):
+            _kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, 1.0 + 0j, False, 1, 1,
+                                    specialise=spec)
+
+
+def test_bad_arguments():
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    with pytest.raises(jg.InvalidParameterError, match="kernel"):
+        B.iterate(APPENDIX2_X0, 3, kernel="fortran")
+    with pytest.raises(jg.InvalidParameterError, match="save_every"):
+        B.iterate(APPENDIX2_X0, 3, save_every=0)
+    with pytest.raises(jg.InvalidStateError):
+        B.iterate([np.nan] * 9, 3, kernel="compiled")
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 5])
+def test_compiled_branch_rule_matches_nu(N, rng):
+    # the compiled default branch of nu(eta) vs jetgaudin.nu (NumPy): same root, equal to round-off.
+    # 1e-13 relative: the two evaluate nu^2 by different sums (Horner vs powers) near the pole lambda = 0
+    c = np.zeros(N)
+    c[-1] = 1.0
+    c[:-1] = rng.uniform(-0.5, 0.5, N - 1)
+    X = sample_on_leaf(N, c, 50, seed=N)
+    eta = rng.uniform(-5, 5, 50) + 1j * rng.uniform(-1, 1, 50)
+    b = rng.uniform(0.5, 2, 50) * rng.choice([-1, 1], 50)
+    for sheet in (1, -1):
+        got = _kernels.nu_default(X, b, eta, sheet)
+        ref = np.array([jg.nu(eta[i], X[i], b[i], sheet=sheet) for i in range(50)])
+        assert np.all(np.abs(got - ref) <= 1e-13 * np.abs(ref))
+    with pytest.raises(jg.BranchPointError):
+        _kernels.nu_default(X[:1], b[:1], [0.5j])  # Re(eta) = 0: the rule is undefined
+
+
+def test_compiled_branch_rule_refuses_a_branch_point_on_the_segment():
+    # N = 1, y = (1, 0, -2), b = 1: nu^2 = (l^2 - 4 l + 5)/l^2 vanishes at 2 +- i, on the segment [2, 2 + 2i]
+    x = np.array([[1.0, 0.0, -2.0]])
+    with pytest.raises(jg.BranchPointError):
+        jg.nu(2 + 2j, x[0], 1.0)
+    with pytest.raises(jg.BranchPointError):
+        _kernels.nu_default(x, [1.0], [2 + 2j])
+    # just off the line the rule is defined, and the two routes take the same root (1e-13, as above)
+    for eta in (2.001 + 2j, 1.999 + 2j):
+        ref = jg.nu(eta, x[0], 1.0)
+        assert abs(_kernels.nu_default(x, [1.0], [eta])[0] - ref) <= 1e-13 * abs(ref)
+
+
+def test_flop_count_is_consistent():
+    # the generic count grows linearly in N (Horner, products, division are O(N) per step)
+    f = [_kernels.flops_per_step(N, "generic")["total"] for N in range(1, 6)]
+    d = np.diff(f)
+    assert np.all(d > 0) and np.all(d == d[0])
