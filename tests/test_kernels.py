@@ -103,9 +103,32 @@ def test_save_every_and_batches_bit_for_bit(rng):
             assert np.array_equal(batch[:, i, j], B.iterate(X[i, j], 50, kernel="compiled"))
 
 
-def test_auto_uses_compiled():
+def test_auto_uses_compiled_once_loaded():
     B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    B.iterate(APPENDIX2_X0, 2, kernel="compiled")  # loads the N = 3 kernels in this process
+    assert jg.backlund.auto_kernel(20, 9) == "compiled"
     assert np.array_equal(B.iterate(APPENDIX2_X0, 20), B.iterate(APPENDIX2_X0, 20, kernel="compiled"))
+
+
+@pytest.mark.parametrize(("state", "work", "expected"), [
+    ("cold", 1000, "numpy"), ("cold", 19_999, "numpy"), ("cold", 20_000, "compiled"),
+    ("cached", 1999, "numpy"), ("cached", 2000, "compiled"), ("loaded", 1, "compiled"),
+])
+def test_auto_policy(monkeypatch, state, work, expected):
+    # the thresholds of docs/performance.md (part f): loading cached kernels ~ 1000 NumPy steps, compiling ~ 6 s
+    from jetgaudin.backlund import maps
+
+    monkeypatch.setattr(maps, "_kernels_state", lambda names: state)
+    assert maps.auto_kernel(work, 9) == expected
+    assert maps.auto_kernel(work // 4, 9, (4,)) == maps.auto_kernel(work // 4 * 4, 9)  # work counts orbit-steps
+
+
+def test_kernels_state_sees_the_cache():
+    from jetgaudin.backlund import maps
+
+    jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA).iterate(APPENDIX2_X0, 2, kernel="compiled")
+    assert maps._kernels_state(maps._kernel_names(9, False)) == "loaded"
+    assert maps._kernels_state(("no_such_kernel",)) == "cold"
 
 
 def test_real_eta_is_identity():

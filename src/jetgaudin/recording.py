@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import inspect
 import json
 import math
 import os
@@ -562,21 +561,17 @@ def _inputs(spec: OrbitSpec, options: RecordOptions, limits: HealthLimits) -> di
     return d
 
 
-def _compiled_available() -> bool:
-    """Whether :meth:`jetgaudin.TwoPointBacklund.iterate` offers the compiled, resumable chunked route."""
-    params = inspect.signature(jg.TwoPointBacklund.iterate).parameters
-    return all(p in params for p in ("kernel", "nu1", "return_nu", "save_every"))
-
-
-def resolve_kernel(kernel: str) -> str:
-    """``"auto"`` -> ``"compiled"`` when available, else ``"numpy"``; the resolved name is recorded so that a
-    resumed run uses the same kernel (the two agree only to round-off, not bit for bit)."""
+def resolve_kernel(kernel: str, steps: int = 0, n_state: int = 9) -> str:
+    """``"auto"`` -> the kernel :func:`jetgaudin.backlund.auto_kernel` picks for ``steps`` steps of one orbit
+    (``"numpy"`` for short runs such as Appendix 2 unless the compiled kernels are already loaded or cached);
+    the resolved name is recorded so that a resumed run uses the same kernel (the two agree only to round-off,
+    not bit for bit)."""
     if kernel not in ("auto", "compiled", "numpy"):
         raise InvalidParameterError(f"kernel must be 'auto', 'compiled' or 'numpy', got {kernel!r}")
     if kernel == "auto":
-        return "compiled" if _compiled_available() else "numpy"
-    if kernel == "compiled" and not _compiled_available():
-        raise InvalidParameterError("kernel 'compiled' is not available in this version of jetgaudin; use 'numpy'")
+        from .backlund import auto_kernel
+
+        return auto_kernel(steps, n_state)
     return kernel
 
 
@@ -716,8 +711,6 @@ def run_orbit(
                 raise ValueError("inconsistent checkpoint")
         except (KeyError, TypeError, ValueError, IndexError, JetGaudinError) as exc:
             raise RecordingError(f"{out_dir / RUN_JSON} is corrupted ({exc}); cannot resume") from None
-        if kernel == "compiled" and not _compiled_available():
-            raise RecordingError(f"the run in {out_dir} used the compiled kernel, not available here; cannot resume")
         mine = _inputs(spec, options, limits)
         if expect:
             diff = [k for k, v in expect.items() if k not in mine or mine[k] != v]
@@ -731,7 +724,7 @@ def run_orbit(
     else:
         if spec is None:
             raise InvalidParameterError("spec is required for a new run")
-        kernel = "numpy" if backlund is not None else resolve_kernel(options.kernel)
+        kernel = "numpy" if backlund is not None else resolve_kernel(options.kernel, spec.steps, 3 * spec.N)
         options = RecordOptions(
             save_every=options.save_every,
             csv=options.csv,

@@ -2,12 +2,13 @@
 
 from .closed_form import one_point_closed_form, two_point_closed_form, two_point_matrices
 from .generating import generating_function
-from .maps import MapProperties, OnePointBacklund, TwoPointBacklund
+from .maps import MapProperties, OnePointBacklund, TwoPointBacklund, auto_kernel
 
 __all__ = [
     "MapProperties",
     "OnePointBacklund",
     "TwoPointBacklund",
+    "auto_kernel",
     "one_point_closed_form",
     "two_point_closed_form",
     "two_point_matrices",
