@@ -77,17 +77,7 @@ def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise):
     """Run one chunk with the compiled kernels; returns arrays and status (no exception: for Dask)."""
     from .backlund import _kernels
 
-    B, n3 = X.shape
-    S = _kernels.saved_count(steps, save_every)
-    out = np.empty((B, S, n3))
-    final = np.empty((B, n3))
-    drift = np.empty((B, 2 * (n3 // 3)))
-    status = np.zeros(B, np.int64)
-    fail = np.zeros(B, np.int64)
-    nu_last = np.empty(B, np.complex128)
-    _kernels.run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail,
-                          nu_last)
-    return out, final, drift, nu_last, status, fail
+    return _kernels.run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
 
 
 def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="default", nu1=None,

@@ -1145,16 +1145,15 @@ def saved_count(steps: int, save_every: int) -> int:
     return steps // save_every + 1
 
 
-def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):
-    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,).
+def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True):
+    r"""Run :func:`run_ensemble` on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,); never raises.
 
-    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,))``; raises
-    :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,), status (B,), fail (B,))``
+    (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit).
     """
     X = np.ascontiguousarray(X, dtype=np.float64)
     B, n3 = X.shape
-    S = saved_count(steps, save_every)
-    out = np.empty((B, S, n3))
+    out = np.empty((B, saved_count(steps, save_every), n3))
     final = np.empty((B, n3))
     drift = np.empty((B, 2 * (n3 // 3)))
     status = np.zeros(B, np.int64)
@@ -1176,6 +1175,16 @@ def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):
         fail,
         nu_last,
     )
+    return out, final, drift, nu_last, status, fail
+
+
+def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):
+    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,).
+
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,))``; raises
+    :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
+    """
+    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
     bad = np.flatnonzero(status)
     if bad.size:
         i = bad[0]

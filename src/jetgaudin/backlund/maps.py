@@ -63,7 +63,7 @@ def _sheet(branch) -> int:
 
 @dataclass(frozen=True)
 class MapProperties:
-    """Declared properties of a map; every ``True`` claim is asserted by ``tests/test_backlund_properties.py``.
+    """Declared properties of a map; every ``True`` claim is asserted by ``tests/test_backlund.py``.
 
     ``order`` is the order of the map as an integrator of the flow of ``ν(Re η)`` with time step
     ``−2 Im η`` in the limit ``Im η → 0`` (``None``: not an integrator of a real flow).

@@ -9,6 +9,7 @@ import math
 import re
 import sys
 import time
+from enum import StrEnum
 from pathlib import Path
 
 import typer
@@ -25,6 +26,13 @@ MAX_N = 128
 
 EXIT_INPUT = 2  # bad input / unusable directory (click's usage-error code)
 EXIT_FAILED = 1  # the run started but failed (singular step, health check)
+
+
+class Branch(StrEnum):
+    """``--branch``: the default root ν(η) of the branch rule, or the opposite one (the inverse map)."""
+
+    default = "default"
+    opposite = "opposite"
 
 
 class CliInputError(Exception):

@@ -20,6 +20,7 @@ from ._common import (
     APPENDIX2_INIT,
     APPENDIX2_STEPS,
     EXIT_FAILED,
+    Branch,
     CliInputError,
     LazyProgress,
     check_out_dir,
@@ -40,11 +41,6 @@ class Kernel(StrEnum):
     auto = "auto"
     compiled = "compiled"
     numpy = "numpy"
-
-
-class Branch(StrEnum):
-    default = "default"
-    opposite = "opposite"
 
 
 def figure_title(b, eta, steps, init) -> str:
@@ -139,7 +135,7 @@ def orbit(
         typer.Option(
             "--kernel",
             help="'compiled' (Numba kernels, fast), 'numpy' (reference route; checks the imaginary residue of every "
-            "step) or 'auto' (compiled when available) [default: auto]",
+            "step) or 'auto' (NumPy for short runs, compiled where it pays off) [default: auto]",
         ),
     ] = None,
     progress: Annotated[

@@ -18,17 +18,12 @@ import numpy as np
 import typer
 
 from . import app
-from ._common import EXIT_FAILED, CliInputError, console, fail, parse_b, parse_eta, parse_steps, reported_errors
+from ._common import EXIT_FAILED, Branch, CliInputError, console, fail, parse_b, parse_eta, parse_steps, reported_errors
 
 
 class Sampler(StrEnum):
     leaf = "leaf"
     energy = "energy"
-
-
-class Branch(StrEnum):
-    default = "default"
-    opposite = "opposite"
 
 
 def _floats(text: str, option: str) -> list[float]:
