@@ -466,22 +466,96 @@ def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_
 # tests compare this route with the generic route and with the NumPy route.
 
 
+# ---------------------------------------------------------------------------------------------
+# N = 3 building blocks, shared by the single-orbit step and the lock-step lanes (scalars only: inlined
+# into both, so the two perform the same operations in the same order and give the same bits)
+# ---------------------------------------------------------------------------------------------
+
+
 @njit(cache=True, error_model="numpy", inline="always")
-def _step3(x, b, eta, z1, z2, z3, d1, d2, inv_d2, bottom_up, nu, nu_sq, inv_2nu, newton):
-    """One N = 3 step from the tuple ``x`` (9 floats); returns ``(status, ν1, x_new)``."""
-    u1 = x[2]
-    v1 = complex(x[0], -x[1])
-    w1 = complex(x[0], x[1])
-    u2 = x[5]
-    v2 = complex(x[3], -x[4])
-    w2 = complex(x[3], x[4])
-    u3 = x[8]
-    v3 = complex(x[6], -x[7])
-    w3 = complex(x[6], x[7])
-    # ℓ(η) = Σ ℓ_m η^{-m}
+def _uvw3(x0, x1, x2, x3, x4, x5, x6, x7, x8):
+    """``(u_m, v_m, w_m)`` of ``ℓ_m``, m = 1, 2, 3: ``u = y^3``, ``v = y^1 − i y^2``, ``w = y^1 + i y^2``."""
+    return (x2, complex(x0, -x1), complex(x0, x1), x5, complex(x3, -x4), complex(x3, x4),
+            x8, complex(x6, -x7), complex(x6, x7))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _ell3(b, z1, z2, z3, u1, v1, w1, u2, v2, w2, u3, v3, w3):
+    """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` (``z^m = η^-m`` precomputed): entries ``(u, v, w)``."""
     u = (complex(b, 0.0) + _cr(z1, u1)) + (_cr(z2, u2) + _cr(z3, u3))
     v = (v1 * z1 + v2 * z2) + v3 * z3
     w = (w1 * z1 + w2 * z2) + w3 * z3
+    return u, v, w
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _R3(m00, m01, m10, m11, b, u1, v1, w1, u2, v2, w2, u3, v3, w3):
+    """Entries of ``R(λ) = λ² ℓ + λ (M0 ℓ + ℓ adj M0) + M0 ℓ adj M0`` by powers, ``R_0 … R_5`` (``R_0 = b``)."""
+    T1u0, T1v0, T1w0, T2u0, T2v0, T2w0 = _products0(m00, m01, m10, m11, b)
+    T1u1, T1v1, T1w1, T2u1, T2v1, T2w1 = _products(m00, m01, m10, m11, u1, v1, w1)
+    T1u2, T1v2, T1w2, T2u2, T2v2, T2w2 = _products(m00, m01, m10, m11, u2, v2, w2)
+    T1u3, T1v3, T1w3, T2u3, T2v3, T2w3 = _products(m00, m01, m10, m11, u3, v3, w3)
+    return (complex(b, 0.0),
+            complex(u1, 0.0) + T1u0, v1 + T1v0, w1 + T1w0,
+            (complex(u2, 0.0) + T1u1) + T2u0, (v2 + T1v1) + T2v0, (w2 + T1w1) + T2w0,
+            (complex(u3, 0.0) + T1u2) + T2u1, (v3 + T1v2) + T2v1, (w3 + T1w2) + T2w1,
+            T1u3 + T2u2, T1v3 + T2v2, T1w3 + T2w2,
+            T2u3, T2v3, T2w3)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _bottom_up3(Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, inv_d2):
+    """Laurent division of ``R`` by ``λ² + δ1 λ + δ2`` from the lowest power (``|η| ≥ 1``): ``Q_1 … Q_3`` and
+    the squared residual of the two unused equations."""
+    Qu3 = _cr(Ru5, inv_d2)
+    Qv3 = _cr(Rv5, inv_d2)
+    Qw3 = _cr(Rw5, inv_d2)
+    Qu2 = _cr(Ru4 - _cr(Qu3, d1), inv_d2)
+    Qv2 = _cr(Rv4 - _cr(Qv3, d1), inv_d2)
+    Qw2 = _cr(Rw4 - _cr(Qw3, d1), inv_d2)
+    Qu1 = _cr((Ru3 - Qu3) - _cr(Qu2, d1), inv_d2)
+    Qv1 = _cr((Rv3 - Qv3) - _cr(Qv2, d1), inv_d2)
+    Qw1 = _cr((Rw3 - Qw3) - _cr(Qw2, d1), inv_d2)
+    Qu0 = _cr((Ru2 - Qu2) - _cr(Qu1, d1), inv_d2)
+    Qv0 = _cr((Rv2 - Qv2) - _cr(Qv1, d1), inv_d2)
+    Qw0 = _cr((Rw2 - Qw2) - _cr(Qw1, d1), inv_d2)
+    res2 = max(_abs2(Ru0 - Qu0), _abs2(Qv0), _abs2(Qw0))
+    res2 = max(
+        res2,
+        _abs2(Ru1 - Qu1 - _cr(Qu0, d1)),
+        _abs2(Rv1 - Qv1 - _cr(Qv0, d1)),
+        _abs2(Rw1 - Qw1 - _cr(Qw0, d1)),
+    )
+    return Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _top_down3(Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, d2):
+    """The same division from the highest power (``|η| < 1``)."""
+    Qu0 = Ru0
+    Qu1 = Ru1 - _cr(Qu0, d1)
+    Qv1 = Rv1
+    Qw1 = Rw1
+    Qu2 = (Ru2 - _cr(Qu1, d1)) - _cr(Qu0, d2)
+    Qv2 = Rv2 - _cr(Qv1, d1)
+    Qw2 = Rw2 - _cr(Qw1, d1)
+    Qu3 = (Ru3 - _cr(Qu2, d1)) - _cr(Qu1, d2)
+    Qv3 = (Rv3 - _cr(Qv2, d1)) - _cr(Qv1, d2)
+    Qw3 = (Rw3 - _cr(Qw2, d1)) - _cr(Qw1, d2)
+    res2 = max(
+        _abs2(Ru4 - _cr(Qu3, d1) - _cr(Qu2, d2)),
+        _abs2(Rv4 - _cr(Qv3, d1) - _cr(Qv2, d2)),
+        _abs2(Rw4 - _cr(Qw3, d1) - _cr(Qw2, d2)),
+    )
+    res2 = max(res2, _abs2(Ru5 - _cr(Qu3, d2)), _abs2(Rv5 - _cr(Qv3, d2)), _abs2(Rw5 - _cr(Qw3, d2)))
+    return Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _step3(x, b, eta, z1, z2, z3, d1, d2, inv_d2, bottom_up, nu, nu_sq, inv_2nu, newton):
+    """One N = 3 step from the tuple ``x`` (9 floats); returns ``(status, ν1, x_new)``."""
+    u1, v1, w1, u2, v2, w2, u3, v3, w3 = _uvw3(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8])
+    u, v, w = _ell3(b, z1, z2, z3, u1, v1, w1, u2, v2, w2, u3, v3, w3)  # ℓ(η) = Σ ℓ_m η^{-m}
     nu2 = u * u + v * w
     if newton:
         c = nu2 - nu_sq
@@ -493,63 +567,14 @@ def _step3(x, b, eta, z1, z2, z3, d1, d2, inv_d2, bottom_up, nu, nu_sq, inv_2nu,
     if st != STATUS_OK:
         return st, nu, x
     m00, m01, m10, m11 = _m0_from_k(eta, k1, k2, nk)
-    T1u0, T1v0, T1w0, T2u0, T2v0, T2w0 = _products0(m00, m01, m10, m11, b)
-    T1u1, T1v1, T1w1, T2u1, T2v1, T2w1 = _products(m00, m01, m10, m11, u1, v1, w1)
-    T1u2, T1v2, T1w2, T2u2, T2v2, T2w2 = _products(m00, m01, m10, m11, u2, v2, w2)
-    T1u3, T1v3, T1w3, T2u3, T2v3, T2w3 = _products(m00, m01, m10, m11, u3, v3, w3)
-    Ru0 = complex(b, 0.0)
-    Ru1 = complex(u1, 0.0) + T1u0
-    Rv1 = v1 + T1v0
-    Rw1 = w1 + T1w0
-    Ru2 = (complex(u2, 0.0) + T1u1) + T2u0
-    Rv2 = (v2 + T1v1) + T2v0
-    Rw2 = (w2 + T1w1) + T2w0
-    Ru3 = (complex(u3, 0.0) + T1u2) + T2u1
-    Rv3 = (v3 + T1v2) + T2v1
-    Rw3 = (w3 + T1w2) + T2w1
-    Ru4 = T1u3 + T2u2
-    Rv4 = T1v3 + T2v2
-    Rw4 = T1w3 + T2w2
-    Ru5 = T2u3
-    Rv5 = T2v3
-    Rw5 = T2w3
+    (Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5,
+     Rw5) = _R3(m00, m01, m10, m11, b, u1, v1, w1, u2, v2, w2, u3, v3, w3)
     if bottom_up:
-        Qu3 = _cr(Ru5, inv_d2)
-        Qv3 = _cr(Rv5, inv_d2)
-        Qw3 = _cr(Rw5, inv_d2)
-        Qu2 = _cr(Ru4 - _cr(Qu3, d1), inv_d2)
-        Qv2 = _cr(Rv4 - _cr(Qv3, d1), inv_d2)
-        Qw2 = _cr(Rw4 - _cr(Qw3, d1), inv_d2)
-        Qu1 = _cr((Ru3 - Qu3) - _cr(Qu2, d1), inv_d2)
-        Qv1 = _cr((Rv3 - Qv3) - _cr(Qv2, d1), inv_d2)
-        Qw1 = _cr((Rw3 - Qw3) - _cr(Qw2, d1), inv_d2)
-        Qu0 = _cr((Ru2 - Qu2) - _cr(Qu1, d1), inv_d2)
-        Qv0 = _cr((Rv2 - Qv2) - _cr(Qv1, d1), inv_d2)
-        Qw0 = _cr((Rw2 - Qw2) - _cr(Qw1, d1), inv_d2)
-        res2 = max(_abs2(Ru0 - Qu0), _abs2(Qv0), _abs2(Qw0))
-        res2 = max(
-            res2,
-            _abs2(Ru1 - Qu1 - _cr(Qu0, d1)),
-            _abs2(Rv1 - Qv1 - _cr(Qv0, d1)),
-            _abs2(Rw1 - Qw1 - _cr(Qw0, d1)),
-        )
+        Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2 = _bottom_up3(
+            Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, inv_d2)
     else:
-        Qu0 = Ru0
-        Qu1 = Ru1 - _cr(Qu0, d1)
-        Qv1 = Rv1
-        Qw1 = Rw1
-        Qu2 = (Ru2 - _cr(Qu1, d1)) - _cr(Qu0, d2)
-        Qv2 = Rv2 - _cr(Qv1, d1)
-        Qw2 = Rw2 - _cr(Qw1, d1)
-        Qu3 = (Ru3 - _cr(Qu2, d1)) - _cr(Qu1, d2)
-        Qv3 = (Rv3 - _cr(Qv2, d1)) - _cr(Qv1, d2)
-        Qw3 = (Rw3 - _cr(Qw2, d1)) - _cr(Qw1, d2)
-        res2 = max(
-            _abs2(Ru4 - _cr(Qu3, d1) - _cr(Qu2, d2)),
-            _abs2(Rv4 - _cr(Qv3, d1) - _cr(Qv2, d2)),
-            _abs2(Rw4 - _cr(Qw3, d1) - _cr(Qw2, d2)),
-        )
-        res2 = max(res2, _abs2(Ru5 - _cr(Qu3, d2)), _abs2(Rv5 - _cr(Qv3, d2)), _abs2(Rw5 - _cr(Qw3, d2)))
+        Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2 = _top_down3(
+            Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, d2)
     e2 = max(b * b, u1 * u1, _abs2(v1), u2 * u2, _abs2(v2), u3 * u3, _abs2(v3))
     sc = 1.0 + math.sqrt(e2)
     xn = (
@@ -637,18 +662,8 @@ def _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, eta, z1, z2, z3, d1, d2, inv_d
     same value is selected, so each lane gives the bits of :func:`_step3`.  Returns
     ``(status, ν1, y0, …, y8, need_root)``; on a failed step the old state is returned (as :func:`_step3`
     does); ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone by :func:`_step3`."""
-    u1 = x2
-    v1 = complex(x0, -x1)
-    w1 = complex(x0, x1)
-    u2 = x5
-    v2 = complex(x3, -x4)
-    w2 = complex(x3, x4)
-    u3 = x8
-    v3 = complex(x6, -x7)
-    w3 = complex(x6, x7)
-    u = (complex(b, 0.0) + _cr(z1, u1)) + (_cr(z2, u2) + _cr(z3, u3))
-    v = (v1 * z1 + v2 * z2) + v3 * z3
-    w = (w1 * z1 + w2 * z2) + w3 * z3
+    u1, v1, w1, u2, v2, w2, u3, v3, w3 = _uvw3(x0, x1, x2, x3, x4, x5, x6, x7, x8)
+    u, v, w = _ell3(b, z1, z2, z3, u1, v1, w1, u2, v2, w2, u3, v3, w3)
     nu2 = u * u + v * w
     c = nu2 - nu_sq
     # the closest-root fallback of _step3 is rare: flag the lane (it is redone by _step3) instead of computing it
@@ -670,63 +685,14 @@ def _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, eta, z1, z2, z3, d1, d2, inv_d
     bad_scale = not (scale2 - scale2 == 0.0)
     branch = nk <= _EIG_TOL2 * scale2 or nk == 0.0
     m00, m01, m10, m11 = _m0_from_k(eta, k1, k2, nk)
-    T1u0, T1v0, T1w0, T2u0, T2v0, T2w0 = _products0(m00, m01, m10, m11, b)
-    T1u1, T1v1, T1w1, T2u1, T2v1, T2w1 = _products(m00, m01, m10, m11, u1, v1, w1)
-    T1u2, T1v2, T1w2, T2u2, T2v2, T2w2 = _products(m00, m01, m10, m11, u2, v2, w2)
-    T1u3, T1v3, T1w3, T2u3, T2v3, T2w3 = _products(m00, m01, m10, m11, u3, v3, w3)
-    Ru0 = complex(b, 0.0)
-    Ru1 = complex(u1, 0.0) + T1u0
-    Rv1 = v1 + T1v0
-    Rw1 = w1 + T1w0
-    Ru2 = (complex(u2, 0.0) + T1u1) + T2u0
-    Rv2 = (v2 + T1v1) + T2v0
-    Rw2 = (w2 + T1w1) + T2w0
-    Ru3 = (complex(u3, 0.0) + T1u2) + T2u1
-    Rv3 = (v3 + T1v2) + T2v1
-    Rw3 = (w3 + T1w2) + T2w1
-    Ru4 = T1u3 + T2u2
-    Rv4 = T1v3 + T2v2
-    Rw4 = T1w3 + T2w2
-    Ru5 = T2u3
-    Rv5 = T2v3
-    Rw5 = T2w3
+    (Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5,
+     Rw5) = _R3(m00, m01, m10, m11, b, u1, v1, w1, u2, v2, w2, u3, v3, w3)
     # bottom-up
-    Bu3 = _cr(Ru5, inv_d2)
-    Bv3 = _cr(Rv5, inv_d2)
-    Bw3 = _cr(Rw5, inv_d2)
-    Bu2 = _cr(Ru4 - _cr(Bu3, d1), inv_d2)
-    Bv2 = _cr(Rv4 - _cr(Bv3, d1), inv_d2)
-    Bw2 = _cr(Rw4 - _cr(Bw3, d1), inv_d2)
-    Bu1 = _cr((Ru3 - Bu3) - _cr(Bu2, d1), inv_d2)
-    Bv1 = _cr((Rv3 - Bv3) - _cr(Bv2, d1), inv_d2)
-    Bw1 = _cr((Rw3 - Bw3) - _cr(Bw2, d1), inv_d2)
-    Bu0 = _cr((Ru2 - Bu2) - _cr(Bu1, d1), inv_d2)
-    Bv0 = _cr((Rv2 - Bv2) - _cr(Bv1, d1), inv_d2)
-    Bw0 = _cr((Rw2 - Bw2) - _cr(Bw1, d1), inv_d2)
-    resB = max(_abs2(Ru0 - Bu0), _abs2(Bv0), _abs2(Bw0))
-    resB = max(
-        resB,
-        _abs2(Ru1 - Bu1 - _cr(Bu0, d1)),
-        _abs2(Rv1 - Bv1 - _cr(Bv0, d1)),
-        _abs2(Rw1 - Bw1 - _cr(Bw0, d1)),
-    )
+    Bu1, Bv1, Bw1, Bu2, Bv2, Bw2, Bu3, Bv3, Bw3, resB = _bottom_up3(
+        Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, inv_d2)
     # top-down
-    Tu0 = Ru0
-    Tu1 = Ru1 - _cr(Tu0, d1)
-    Tv1 = Rv1
-    Tw1 = Rw1
-    Tu2 = (Ru2 - _cr(Tu1, d1)) - _cr(Tu0, d2)
-    Tv2 = Rv2 - _cr(Tv1, d1)
-    Tw2 = Rw2 - _cr(Tw1, d1)
-    Tu3 = (Ru3 - _cr(Tu2, d1)) - _cr(Tu1, d2)
-    Tv3 = (Rv3 - _cr(Tv2, d1)) - _cr(Tv1, d2)
-    Tw3 = (Rw3 - _cr(Tw2, d1)) - _cr(Tw1, d2)
-    resT = max(
-        _abs2(Ru4 - _cr(Tu3, d1) - _cr(Tu2, d2)),
-        _abs2(Rv4 - _cr(Tv3, d1) - _cr(Tv2, d2)),
-        _abs2(Rw4 - _cr(Tw3, d1) - _cr(Tw2, d2)),
-    )
-    resT = max(resT, _abs2(Ru5 - _cr(Tu3, d2)), _abs2(Rv5 - _cr(Tv3, d2)), _abs2(Rw5 - _cr(Tw3, d2)))
+    Tu1, Tv1, Tw1, Tu2, Tv2, Tw2, Tu3, Tv3, Tw3, resT = _top_down3(
+        Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, d2)
     Qu1 = _selc(bottom_up, Bu1, Tu1)
     Qv1 = _selc(bottom_up, Bv1, Tv1)
     Qw1 = _selc(bottom_up, Bw1, Tw1)
