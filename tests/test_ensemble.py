@@ -136,38 +136,25 @@ def cli():
     return CliRunner(), app
 
 
-def test_cli_sampler_to_npz(cli, tmp_path):
-    runner, app = cli
-    out = tmp_path / "ens.npz"
-    r = runner.invoke(app, ["ensemble", "--sample", "leaf", "--casimirs", "0.4,-0.3,1.5", "--orbits", "5",
-                            "--seed", "3", "--steps", "20", "--save-every", "5", "--output", str(out)])
-    assert r.exit_code == 0, r.output
-    assert "drift" in r.output
-    d = np.load(out)
-    assert d["states"].shape == (5, 5, 9)
-    X0 = sample_on_leaf(3, [0.4, -0.3, 1.5], 5, seed=3)
-    ref = iterate_ensemble(X0, 1.0, 5 + 0.1j, 20, save_every=5)
-    assert np.array_equal(d["states"], ref.states)
-    assert np.array_equal(d["drift"], ref.drift)
-
-
 def test_cli_csv_and_npz_input(cli, tmp_path):
+    from jetgaudin.ensemble_recording import load_ensemble
+
     runner, app = cli
     X0 = sample_on_leaf(3, [0.4, -0.3, 1.5], 3, seed=4)
     csv = tmp_path / "x.csv"
     np.savetxt(csv, X0, delimiter=",", header="y1,y2,y3,x1,x2,x3,z1,z2,z3")
-    out = tmp_path / "a.npz"
-    r = runner.invoke(app, ["ensemble", "--input", str(csv), "--steps", "10", "--output", str(out), "--eta",
+    out = tmp_path / "a"
+    r = runner.invoke(app, ["ensemble", "--input", str(csv), "--steps", "10", "--out", str(out), "--eta",
                             "4+0.2i", "--b", "2"])
     assert r.exit_code == 0, r.output
     ref = iterate_ensemble(X0, 2.0, 4 + 0.2j, 10)
-    assert np.array_equal(np.load(out)["states"], ref.states)
+    assert np.array_equal(load_ensemble(out).states, ref.states)
     npz = tmp_path / "x.npz"
     np.savez(npz, X=X0, b=np.array([1.0, 2.0, 3.0]), eta=np.array([4 + 0.2j, 5 + 0.1j, 3 - 0.3j]))
-    r = runner.invoke(app, ["ensemble", "--input", str(npz), "--steps", "10", "--output", str(out)])
+    r = runner.invoke(app, ["ensemble", "--input", str(npz), "--steps", "10", "--out", str(out)])
     assert r.exit_code == 0, r.output
     ref = iterate_ensemble(X0, [1.0, 2.0, 3.0], [4 + 0.2j, 5 + 0.1j, 3 - 0.3j], 10)
-    assert np.array_equal(np.load(out)["states"], ref.states)
+    assert np.array_equal(load_ensemble(out).states, ref.states)
 
 
 @pytest.mark.parametrize(
@@ -181,9 +168,9 @@ def test_cli_csv_and_npz_input(cli, tmp_path):
         ["--sample", "leaf", "--casimirs", "0,0,1", "--orbits", "0"],
     ],
 )
-def test_cli_bad_input_one_line_exit_2(cli, args):
+def test_cli_bad_input_one_line_exit_2(cli, args, tmp_path):
     runner, app = cli
-    r = runner.invoke(app, ["ensemble", *args])
+    r = runner.invoke(app, ["ensemble", *args, "--out", str(tmp_path)])
     assert r.exit_code == 2, r.output
     lines = [ln for ln in r.output.splitlines() if ln.strip()]
     assert len(lines) == 1 and "error" in lines[0]

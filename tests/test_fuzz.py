@@ -202,3 +202,93 @@ def test_fuzz_resume_of_damaged_files(interrupted_run, which, mode, frac, bit):
         else:  # the damage hit bytes that carry no data (free space, the 'updated' time, ...)
             n, X = rec.load_orbit(d)
             assert np.array_equal(X, ref)
+
+
+# ---------------------------------------------------------------------------------------------- ensembles
+def check_ensemble_outcome(code, err, out_dir: Path):
+    """A clear error (one line, exit 1 or 2) or a completed run whose rows are finite and healthy."""
+    from jetgaudin.ensemble_recording import load_ensemble
+
+    assert "Traceback" not in err, err
+    assert code in (0, 1, 2), (code, err)
+    if code != 0:
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        assert len(lines) >= 1 and lines[-1].startswith("jetgaudin"), err
+        if code == 2:
+            assert len(lines) == 1, err
+        return
+    run = rec.read_run(out_dir)
+    assert run["status"] == "completed"
+    assert np.all(np.isfinite(load_ensemble(out_dir).states))
+
+
+@given(b=NUMBER_TEXT, eta=ETA_TEXT, casimirs=INIT_TEXT, steps=st.integers(-3, 4), orbits=st.integers(-1, 3),
+       n=st.integers(-1, 4), every=st.integers(-1, 3))
+def test_fuzz_ensemble_cli(b, eta, casimirs, steps, orbits, n, every):
+    with tempfile.TemporaryDirectory() as d:
+        out = Path(d) / "e"
+        code, _, err = run_cli(["ensemble", "--sample", "leaf", f"--casimirs={casimirs}", f"--n={n}",
+                                f"--orbits={orbits}", f"--b={b}", f"--eta={eta}", f"--steps={steps}",
+                                f"--save-every={every}", "--no-progress", "--out", out])
+        check_ensemble_outcome(code, err, out)
+
+
+@given(content=st.one_of(st.text(max_size=60).map(str.encode), st.binary(max_size=60),
+                         st.lists(st.lists(NUMBERS, min_size=1, max_size=7), min_size=1, max_size=3).map(
+                             lambda rows: "\n".join(",".join(repr(v) for v in r) for r in rows).encode())))
+def test_fuzz_ensemble_input_file(content):
+    """Garbage CSV input (text, binary, ragged or hostile numbers): a clear error or a correct run."""
+    with tempfile.TemporaryDirectory() as d:
+        f = Path(d) / "x.csv"
+        f.write_bytes(content)
+        code, _, err = run_cli(["ensemble", "--input", f, "--steps=2", "--no-progress", "--out", Path(d) / "e"])
+        check_ensemble_outcome(code, err, Path(d) / "e")
+
+
+@pytest.fixture(scope="module")
+def interrupted_ensemble(tmp_path_factory):
+    """An ensemble interrupted (SIGINT) after about 20 of 60 steps, to damage and resume."""
+    import signal
+
+    from jetgaudin import ensemble_recording as er
+    from jetgaudin.ensemble import iterate_ensemble, sample_on_leaf
+
+    d = tmp_path_factory.mktemp("ens")
+    spec = er.EnsembleSpec(sample_on_leaf(3, [0.4, -0.3, 1.5], 4, seed=2), 1.0, 5 + 0.1j, 60, 3)
+
+    def progress(n, steps):
+        if n >= 20:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(rec.RunInterrupted):
+        er.run_ensemble(spec, d, max_chunk_steps=4, checkpoint_seconds=0.0, progress=progress)
+    return d, iterate_ensemble(spec.X0, 1.0, 5 + 0.1j, 60, save_every=3).states
+
+
+@given(which=st.sampled_from(["run.json", "ensemble.h5", "checkpoint-0.npz", "checkpoint-1.npz"]),
+       mode=st.sampled_from(["truncate", "flip"]), frac=st.floats(0, 1), bit=st.integers(0, 7))
+def test_fuzz_ensemble_resume_of_damaged_files(interrupted_ensemble, which, mode, frac, bit):
+    """A truncated or bit-flipped file passed to `ensemble --resume`: a clear error, or exactly the true rows."""
+    import shutil
+
+    from jetgaudin.ensemble_recording import load_ensemble
+
+    src, ref = interrupted_ensemble
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d) / "r"
+        shutil.copytree(src, d)
+        path = d / which
+        data = bytearray(path.read_bytes())
+        at = min(len(data) - 1, int(frac * len(data)))
+        if mode == "truncate":
+            data = data[:at]
+        else:
+            data[at] ^= 1 << bit
+        path.write_bytes(bytes(data))
+        code, _, err = run_cli(["ensemble", "--resume", d, "--no-progress"])
+        assert "Traceback" not in err
+        assert code in (0, 2), (code, err)
+        if code == 2:
+            assert len([ln for ln in err.splitlines() if ln.strip()]) == 1
+        else:  # the damage hit bytes that carry no data (the unused checkpoint slot, free space, ...)
+            assert np.array_equal(load_ensemble(d).states, ref)

@@ -22,7 +22,7 @@ from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
 from .backlund.maps import _sheet
 
-__all__ = ["EnsembleResult", "iterate_ensemble", "sample_on_leaf", "sample_on_energy_shell"]
+__all__ = ["EnsembleResult", "iterate_ensemble", "dask_client", "sample_on_leaf", "sample_on_energy_shell"]
 
 
 @dataclass(frozen=True)
@@ -154,18 +154,29 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     )
 
 
-def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+def dask_client(scheduler, timeout: float = 30.0):
+    """A ``distributed.Client`` for a scheduler address (``"tcp://host:8786"``); a client is returned as it is.
+    Raises :class:`InvalidParameterError` when ``distributed`` is missing or the scheduler cannot be reached."""
     try:
         from distributed import Client
     except ImportError:
         raise InvalidParameterError(
             "a Dask scheduler was given but the 'distributed' package is missing: pip install 'jetgaudin[distributed]'"
         ) from None
-    own = not isinstance(scheduler, Client)
+    if isinstance(scheduler, Client):
+        return scheduler
+    if not isinstance(scheduler, str):
+        raise InvalidParameterError(f"scheduler must be an address 'tcp://host:port' or a distributed.Client, "
+                                    f"got {scheduler!r}")
     try:
-        client = Client(scheduler, timeout=timeout) if own else scheduler
+        return Client(scheduler, timeout=timeout)
     except (OSError, TimeoutError, ValueError) as exc:
         raise InvalidParameterError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}") from None
+
+
+def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+    client = dask_client(scheduler, timeout)
+    own = client is not scheduler
     try:
         B = X.shape[0]
         if chunk_size is None:

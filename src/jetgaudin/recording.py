@@ -90,13 +90,13 @@ ORBIT_CSV = "orbit.csv"
 class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input), hence not a JetGaudinError
     """The run stopped on SIGINT / SIGTERM after writing a checkpoint (``signum``, ``last_safe_step``)."""
 
-    def __init__(self, signum: int, last_safe_step: int, out_dir: Path):
+    def __init__(self, signum: int, last_safe_step: int, out_dir: Path, command: str = "jetgaudin orbit"):
         self.signum = int(signum)
         self.last_safe_step = int(last_safe_step)
         self.out_dir = Path(out_dir)
         name = signal.Signals(self.signum).name
         super().__init__(
-            f"interrupted by {name} at step {last_safe_step} (saved); resume with: jetgaudin orbit --resume {out_dir}"
+            f"interrupted by {name} at step {last_safe_step} (saved); resume with: {command} --resume {out_dir}"
         )
 
     @property

@@ -3,13 +3,15 @@
 Initial data from a file (CSV: one state per row, 3N numbers; NPZ: array ``X`` of shape ``(B, 3N)`` and
 optionally per-orbit ``b`` and ``eta``) or from a seeded sampler (``--sample leaf`` with ``--casimirs``,
 ``--sample energy`` with ``--energy``).  Runs locally on all cores or on a Dask cluster
-(``--scheduler tcp://host:port``), saves every k-th state to an NPZ file and prints the per-orbit drift
-of the integrals.  No mathematics here: everything comes from :mod:`jetgaudin.ensemble`.
+(``--scheduler tcp://host:port``), streams every k-th state into ``DIR/ensemble.h5`` with checkpoints
+(``--resume DIR`` continues an interrupted or killed run bit for bit) and prints the per-orbit drift of
+the integrals.  No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
+:mod:`jetgaudin.ensemble_recording`.
 """
 
 from __future__ import annotations
 
-import time
+import warnings
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -17,8 +19,24 @@ from typing import Annotated
 import numpy as np
 import typer
 
+import jetgaudin as jg
+
+from .. import recording as rec
 from . import app
-from ._common import EXIT_FAILED, Branch, CliInputError, console, fail, parse_b, parse_eta, parse_steps, reported_errors
+from ._common import (
+    EXIT_FAILED,
+    Branch,
+    CliInputError,
+    LazyProgress,
+    check_out_dir,
+    console,
+    fail,
+    one_line,
+    parse_b,
+    parse_eta,
+    parse_steps,
+    reported_errors,
+)
 
 
 class Sampler(StrEnum):
@@ -53,9 +71,11 @@ def _read_input(path: Path):
             raise CliInputError(f"--input: cannot read {path} as NPZ: {exc}") from None
     else:
         try:
-            X = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-        except ValueError as exc:
-            raise CliInputError(f"--input: cannot read {path} as CSV of numbers: {exc}") from None
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
+                X = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise CliInputError(f"--input: cannot read {path} as CSV of numbers: {one_line(exc)}") from None
     if X.ndim != 2 or X.shape[0] == 0 or X.shape[1] == 0 or X.shape[1] % 3:
         raise CliInputError(
             f"--input: the states must form a (B, 3N) table (one state y_0, y_1, ... per row, 3N numbers); "
@@ -87,99 +107,156 @@ def ensemble_command(
     scale: Annotated[float, typer.Option("--scale", help="spread of the sampled components")] = 1.0,
     b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3)")] = 1.0,
     eta: Annotated[str, typer.Option("--eta", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
-    steps: Annotated[int, typer.Option("--steps", help="number of steps")] = 100,
-    save_every: Annotated[int, typer.Option("--save-every", help="keep every k-th state")] = 1,
-    output: Annotated[Path | None, typer.Option("--output", help="NPZ file for states, final, drift, nu")] = None,
+    steps: Annotated[int | None, typer.Option("--steps", help="number of steps [default: 100]")] = None,
+    save_every: Annotated[
+        int | None, typer.Option("--save-every", help="keep every k-th state (and the last) [default: 1]")
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option("--out", help="output directory (ensemble.h5, run.json) [default: ./jetgaudin-ensemble]"),
+    ] = None,
+    resume: Annotated[
+        Path | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="replace an unfinished run in --out instead of refusing")
+    ] = False,
+    max_drift: Annotated[
+        float | None,
+        typer.Option("--max-drift", help="stop as failed when an orbit's relative integral drift exceeds this "
+                     f"[default: {rec.DEFAULT_MAX_DRIFT:g}]"),
+    ] = None,
+    checkpoint_seconds: Annotated[
+        float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
+    ] = 2.0,
     scheduler: Annotated[
         str | None,
         typer.Option("--scheduler", help="Dask scheduler address tcp://host:port (needs jetgaudin[distributed])"),
     ] = None,
     chunk_size: Annotated[int | None, typer.Option("--chunk-size", help="orbits per Dask task")] = None,
-    branch: Annotated[Branch, typer.Option("--branch", help="'opposite' gives the inverse map")] = Branch.default,
+    branch: Annotated[
+        Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
+    ] = None,
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
+    ] = None,
 ) -> None:
-    """Iterate the real two-point Bäcklund map on an ensemble of orbits; report the per-orbit integral drift."""
-    import jetgaudin as jg
+    """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens
+    from jetgaudin import ensemble_recording as er
 
     with reported_errors():
-        if (input is None) == (sample is None):
-            raise CliInputError("give exactly one of --input FILE and --sample leaf|energy")
-        bb = parse_b(b)
-        ee = parse_eta(eta)
-        steps = parse_steps(steps)
-        if save_every < 1:
-            raise CliInputError(f"--save-every: must be >= 1, got {save_every}")
-        if input is not None:
-            X0, b_file, eta_file = _read_input(input)
-            bb = bb if b_file is None else b_file
-            ee = ee if eta_file is None else eta_file
+        if chunk_size is not None and chunk_size < 1:
+            raise CliInputError(f"--chunk-size: must be >= 1, got {chunk_size}")
+        if max_drift is not None and not (max_drift >= 0):
+            raise CliInputError(f"--max-drift: must be a number >= 0, got {max_drift}")
+        if not (checkpoint_seconds >= 0) or checkpoint_seconds == float("inf"):
+            raise CliInputError(f"--checkpoint-seconds: must be a finite number >= 0, got {checkpoint_seconds}")
+        expect = {}
+        if steps is not None:
+            expect["steps"] = parse_steps(steps)
+        if save_every is not None:
+            if save_every < 1:
+                raise CliInputError(f"--save-every: must be >= 1, got {save_every}")
+            expect["save_every"] = save_every
+        if branch is not None:
+            expect["branch"] = branch.value
+        if max_drift is not None:
+            expect["max_drift"] = max_drift
+        if resume is not None:
+            if input is not None or sample is not None:
+                raise CliInputError("--resume continues a recorded ensemble: do not give --input or --sample")
+            if out is not None and Path(out).resolve() != Path(resume).resolve():
+                raise CliInputError("--out and --resume name different directories; give only --resume DIR")
+            out_dir, spec = Path(resume), None
+            if not (out_dir / rec.RUN_JSON).exists():
+                raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
         else:
-            if orbits < 1:
-                raise CliInputError(f"--orbits: must be >= 1, got {orbits}")
-            if sample is Sampler.leaf:
-                if casimirs is None:
-                    raise CliInputError("--sample leaf needs --casimirs C_1,...,C_N")
-                c = _floats(casimirs, "--casimirs")
-                if len(c) != n:
-                    raise CliInputError(f"--casimirs: give N = {n} numbers (set N with --n), got {len(c)}")
-                X0 = ens.sample_on_leaf(n, c, orbits, seed=seed, scale=scale)
+            if (input is None) == (sample is None):
+                raise CliInputError("give exactly one of --input FILE and --sample leaf|energy")
+            bb = parse_b(b)
+            ee = parse_eta(eta)
+            if input is not None:
+                X0, b_file, eta_file = _read_input(input)
+                bb = bb if b_file is None else b_file
+                ee = ee if eta_file is None else eta_file
             else:
-                if energy is None:
-                    raise CliInputError("--sample energy needs --energy E")
-                X0 = ens.sample_on_energy_shell(n, bb, energy, orbits, seed=seed, scale=scale)
-        t0 = time.perf_counter()
+                if orbits < 1:
+                    raise CliInputError(f"--orbits: must be >= 1, got {orbits}")
+                if sample is Sampler.leaf:
+                    if casimirs is None:
+                        raise CliInputError("--sample leaf needs --casimirs C_1,...,C_N")
+                    c = _floats(casimirs, "--casimirs")
+                    if len(c) != n:
+                        raise CliInputError(f"--casimirs: give N = {n} numbers (set N with --n), got {len(c)}")
+                    X0 = ens.sample_on_leaf(n, c, orbits, seed=seed, scale=scale)
+                else:
+                    if energy is None:
+                        raise CliInputError("--sample energy needs --energy E")
+                    X0 = ens.sample_on_energy_shell(n, bb, energy, orbits, seed=seed, scale=scale)
+            spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
+                                   expect.get("branch", "default"))
+            out_dir = check_out_dir(Path(out) if out is not None else Path("jetgaudin-ensemble"))
+            if (out_dir / rec.RUN_JSON).exists() and not overwrite:
+                try:
+                    old = rec.read_run(out_dir)["status"]
+                except jg.JetGaudinError:
+                    old = "unreadable"
+                if old in ("running", "interrupted"):
+                    raise CliInputError(
+                        f"--out: {out_dir} holds an unfinished run (status {old}); continue it with "
+                        f"--resume {out_dir}, or pass --overwrite, or choose another --out"
+                    )
+        bar = LazyProgress("ensemble", force=bool(progress)) if progress is not False else None
         try:
-            res = ens.iterate_ensemble(
-                X0,
-                bb,
-                ee,
-                steps,
-                save_every=save_every,
-                branch=branch.value,
+            res = er.run_ensemble(
+                spec,
+                out_dir,
+                resume=resume is not None,
+                max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
+                checkpoint_seconds=checkpoint_seconds,
                 scheduler=scheduler,
                 chunk_size=chunk_size,
+                expect=expect if resume is not None else None,
+                progress=bar,
             )
-        except (jg.SingularStepError, jg.BranchPointError) as exc:
-            fail(exc, EXIT_FAILED)
-        elapsed = time.perf_counter() - t0
-        if output is not None:
-            np.savez(
-                output,
-                states=res.states,
-                final=res.final,
-                drift=res.drift,
-                nu=res.nu,
-                b=res.b,
-                eta=res.eta,
-                steps=res.steps,
-                save_every=res.save_every,
-                X0=X0,
-            )
-    _report(res, X0.shape[0], elapsed, output, show)
+        except rec.RunInterrupted as exc:
+            if bar:
+                bar.close()
+            typer.echo(f"jetgaudin: {exc}", err=True)
+            raise typer.Exit(exc.exit_code) from None
+        finally:
+            if bar:
+                bar.close()
+        run = rec.read_run(out_dir)
+        _report(res, run, show)
+        if res.status.startswith("failed"):
+            fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
 
 
-def _report(res, B, elapsed, output, show):
+def _report(res, run, show):
     from rich.table import Table
 
-    N = res.final.shape[-1] // 3
-    names = [f"H_{k}" for k in range(1, N + 1)] + [f"C_{k}" for k in range(1, N + 1)]
+    B = res.drift.shape[0]
+    N = res.drift.shape[1] // 2
+    steps = int(run["inputs"]["steps"])
     con = console()
     t = Table(
         title=f"relative drift max_n |I(X_n) - I(X_0)| / max(1, |I(X_0)|) (first {min(show, B)} of {B})",
         title_justify="left",
     )
     t.add_column("orbit", justify="right")
-    for name in names:
+    for name in rec.integral_names(N):
         t.add_column(name, justify="right")
     for i in range(min(show, B)):
         t.add_row(str(i), *[f"{d:.2e}" for d in res.drift[i]])
     con.print(t)
     md = res.max_drift
-    rate = B * res.steps / elapsed if elapsed > 0 else float("inf")
+    rate = B * steps / res.elapsed if res.elapsed > 0 else float("inf")
     con.print(
-        f"{B} orbits x {res.steps} steps in {elapsed:.3f} s ({rate:.3g} orbit-steps/s); "
+        f"{B} orbits x {steps} steps in {res.elapsed:.3f} s ({rate:.3g} orbit-steps/s); "
         f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}"
     )
-    if output is not None:
-        con.print(f"saved {res.states.shape[0]} states per orbit to {output}")
+    con.print(f"status: {res.status}; {res.rows} saved rows of {B} states in {res.out_dir / 'ensemble.h5'}")
