@@ -15,7 +15,7 @@ run bit for bit) and streams the saved states into a run directory::
 Guarantees (tested in ``tests/test_ensemble_recording.py``; ``docs/reliability.md``):
 
 * Memory is constant: a chunk holds at most ``max_chunk_bytes`` of saved states (and at least one row)
-  and lasts about 0.1-1 s (its length adapts), so signals are handled within about a second.
+  and lasts about 0.3-1.5 s (its length adapts), so signals are handled within about two seconds.
 * A checkpoint (at most every ``checkpoint_seconds`` and at every stop) appends the rows to
   ``ensemble.h5`` and ``fsync``-s it, writes the other checkpoint slot (temporary file, ``fsync``,
   ``os.replace``), then replaces ``run.json`` atomically.  A kill at any moment leaves ``run.json``
@@ -337,7 +337,7 @@ def run_ensemble(
     ``scheduler``: a Dask scheduler address or ``distributed.Client`` (each time chunk is split over the
     cluster by orbits; the result is the same bit for bit).  ``progress(n, steps)`` is called after each chunk.
     A time chunk holds at most ``max_chunk_bytes`` of saved states and at most ``max_chunk_steps`` steps (its
-    length otherwise adapts to last 0.1-1 s); how the run is cut into chunks never changes the result.
+    length otherwise adapts to last 0.3-1.5 s); how the run is cut into chunks never changes the result.
 
     Returns an :class:`EnsembleRunResult` (status ``completed`` or ``failed: <reason>``); raises
     :class:`~jetgaudin.recording.RunInterrupted` on SIGINT/SIGTERM and :class:`RecordingError` for unusable
@@ -499,10 +499,11 @@ def run_ensemble(
                 failure = (health(rows_n, S) if rows_n else None) or health([n_new], res.final[None])
                 writer.append(np.asarray(rows_n, dtype=np.int64), S)
                 X, nu1, n = res.final, res.nu, n_new
-                # ~0.1-1 s per chunk, at most max_rows saved rows
-                if dt < 0.1:
+                # ~0.3-1.5 s per chunk (a kernel call has a fixed cost of ~10 steps: set-up of the lanes, the
+                # integrals at the start), at most max_rows saved rows
+                if dt < 0.3:
                     L = min(L_max, L * 2)
-                elif dt > 1.0:
+                elif dt > 1.5:
                     L = max(1, L // 2)
                 now = time.monotonic()
                 if failure is None and now - t_ck >= checkpoint_seconds:
