@@ -25,12 +25,14 @@ def long_runs():
 def test_six_integrals_conserved_over_t1000(long_runs, method):
     """Drift of (H_1, H_2, H_3, C_1, C_2, C_3), relative to max(1, |I(0)|), at rtol = atol = 1e-12.
 
-    Bound asserted: 2e-8 = (number of steps ~2e4) x (tolerance 1e-12), the worst case of a linear
-    accumulation of local errors; measured: DOP853 max 5.3e-10 (H_3), heyoka max 1.6e-11."""
+    Bound asserted for DOP853: 2e-8 = (number of steps ~2e4) x (tolerance 1e-12), the worst case of a linear
+    accumulation of local errors (measured max 5.3e-10, H_3).  For heyoka (Taylor, ~1e4 steps each with an error
+    below 1e-12 of either sign): 1e-9, ten times the random-walk estimate sqrt(1e4) x 1e-12 = 1e-10 (measured
+    1.6e-11); DOP853's drift would fail it."""
     tr = long_runs[method]
     assert tr.X.shape == (len(T_EVAL), 9) and tr.integrals.shape == (len(T_EVAL), 6)
     assert np.array_equal(tr.t, T_EVAL)
-    assert np.all(tr.drift <= 2e-8), tr.drift
+    assert np.all(tr.drift <= {"DOP853": 2e-8, "heyoka": 1e-9}[method]), tr.drift
     # H_1 = 2 b y^3: y^3' = (b ^ x)^3 = 0 identically (b = e_3), so only rounding can move it
     assert tr.drift[0] <= 1e-14
     # the orbit is non-trivial: the state moves by O(1)

@@ -9,7 +9,7 @@ With ``L = (i/2) ℓ``, ``ℓ = [[u, v], [w, -u]]`` (eq. (yy)),
 so the paper's curve (curve) ``4μ² + |b|² + H(λ) + C(λ) = 0`` has ``μ = ± i ν / 2``:
 **μ of (curve) is an eigenvalue of L, while ν is an eigenvalue of ℓ = -2 i L**.
 The spectrality formulas of Section 6, (hhh), (x), (X), hold with their ``μ``
-replaced by ``ν`` (see ``docs/conventions.md`` and ``docs/errata.md``).
+replaced by ``ν`` (see ``docs/backlund.md``, section 1, and ``docs/errata.md``).
 
 ``κ_0 = |b|²``, ``κ_k = H_k`` and ``κ_{N+k} = C_k`` (``k = 1..N``), with
 ``κ_m = Σ_{i+j=m} ⟨ξ_i, ξ_j⟩`` (Prop. 2; for general ``c_k`` in terms of ``Y_n``,

@@ -1,6 +1,6 @@
 r"""Bäcklund transformations of Section 6: the one-point map and the real two-point map.
 
-Conventions (see ``docs/conventions.md``):
+Conventions (see ``docs/backlund.md``, section 1):
 
 * ``ν`` is an eigenvalue of ``ℓ(λ) = [[u, v], [w, −u]] = −2i L(λ)``, ``ν² = u² + vw``;
   the paper's ``μ`` in the spectrality formulas (hhh), (x), (X) is this ``ν``.
@@ -408,11 +408,16 @@ class OnePointBacklund:
         X, _ = as_state(X, allow_complex=True)
         return _nu_default(X, self.b, self.eta, self.sheet)
 
-    def parameters(self, X):
-        """``(p, q, ν)`` of eqs. (hh), (hhh) at ``X`` (``X`` is the image point for the inverse map)."""
+    def parameters(self, X, nu=None):
+        """``(p, q, ν)`` of eqs. (hh), (hhh) at ``X`` (``X`` is the image point for the inverse map).
+
+        ``nu=None``: ``ν`` by the branch rule; otherwise the root of ``ν(η)²`` closest to ``nu``."""
         X, _ = as_state(X, allow_complex=True)
         ell = ell_coefficients(X, self.b)
-        nu = _nu_default(X, self.b, self.eta, self.sheet)
+        if nu is None:
+            nu = _nu_default(X, self.b, self.eta, self.sheet)
+        else:
+            nu = _continue_nu(ell, self.eta, np.asarray(nu, dtype=complex))
         L = horner(ell, self.eta)
         u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
         if self.inverse_map:
@@ -426,12 +431,35 @@ class OnePointBacklund:
             q = spectral_s(u, v, w, nu)
         return p, q, nu
 
-    def __call__(self, X):
+    def step(self, X, nu=None):
+        """One step; returns ``(X̃, ν)`` (``X̃`` complex).  ``nu``: continue from this ``ν`` (the root of
+        ``ν(η)²`` closest to it) instead of applying the branch rule."""
         X, _ = as_state(X, allow_complex=True)
-        p, q, _ = self.parameters(X)
-        new_ell, res = dress_one_point(ell_coefficients(X, self.b), self.eta, p, q, inverse=self.inverse_map)
-        _check_residual(res, ell_coefficients(X, self.b), "one-point Bäcklund step")
+        p, q, nu = self.parameters(X, nu)
+        ell = ell_coefficients(X, self.b)
+        new_ell, res = dress_one_point(ell, self.eta, p, q, inverse=self.inverse_map)
+        _check_residual(res, ell, "one-point Bäcklund step")
         out = state_from_ell(new_ell)
         if not np.all(np.isfinite(out)):
             raise SingularStepError("one-point Bäcklund step produced non-finite values; change eta")
+        return out, nu
+
+    def __call__(self, X):
+        """Apply the map to states of shape ``(..., 3N)`` (real or complex); complex output."""
+        return self.step(X)[0]
+
+    def iterate(self, X0, steps: int):
+        """Orbit ``X_0, …, X_steps`` (complex), shape ``(steps + 1, ..., 3N)``.
+
+        ``ν`` is taken by the branch rule at ``X_0`` and continued along the orbit (the map preserves ``ν(η)²``).
+        The states grow complex and, in general, large: the one-point map is not a physical (real) map.
+        """
+        steps = _check_steps(steps)
+        X, _ = as_state(X0, allow_complex=True)
+        out = np.empty((steps + 1,) + X.shape, dtype=complex)
+        out[0] = X
+        nu = None
+        for n in range(steps):
+            X, nu = self.step(X, nu)
+            out[n + 1] = X
         return out
