@@ -210,6 +210,10 @@ BAD_ORBIT = [
     (["--b", "-0.0"], "nonzero"),
     (["--b", "nan"], "finite"),
     (["--b", "abc"], "--b"),
+    (["--b", "1e308"], "--b"),  # the message names the option at fault, not --init
+    (["--b", "1e154"], "--b"),
+    (["--eta", "0+0.1i"], "--eta: Re(eta) = 0"),
+    (["--eta", "1e308+0.1i"], "--eta"),
     (["--steps", "-1"], ">= 0"),
     (["--steps", "1.5"], "--steps"),
     (["--save-every", "0"], "--save-every"),
@@ -242,9 +246,35 @@ def test_unwritable_out(tmp_path, capsys):
         assert_one_line_error(code, err)
 
 
+@pytest.mark.parametrize("out", ["", "/dev/null", "/proc/jetgaudin-x", "/sys/jetgaudin-x"])
+def test_hostile_out_paths(tmp_path, capsys, out, monkeypatch):
+    """An empty --out (it would mean the current directory), a device, and paths under /proc and /sys."""
+    monkeypatch.chdir(tmp_path)
+    for cmd in (["orbit", "--steps", 2, "--no-plots"], ["flow", "--steps", 2, "--no-plots"],
+                ["ensemble", "--sample", "leaf", "--casimirs", "0,0,1", "--orbits", 2, "--steps", 2]):
+        code, _, err = run_cli(capsys, *cmd, "--out", out)
+        assert_one_line_error(code, err)
+        assert "--out" in err
+    assert list(tmp_path.iterdir()) == []  # nothing written into the current directory
+
+
+def test_broken_pipe_is_not_a_failure(tmp_path):
+    """`jetgaudin info | head -1`: the reader leaves early; exit 0 (exit 1 is reserved for failed runs)."""
+    import subprocess
+    import sys
+
+    for cmd in (["info"], ["verify", "--only", "Hh"]):
+        p = subprocess.Popen([sys.executable, "-m", "jetgaudin", *cmd], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        p.stdout.close()
+        assert p.wait(timeout=120) == 0
+        assert b"Traceback" not in p.stderr.read()
+        p.stderr.close()
+
+
 @pytest.mark.parametrize(
     "args",
-    [["flow", "--eta", "x"], ["flow", "--b", "0"], ["flow", "--init", "1,2"], ["flow", "--steps", "-2"],
+    [["info", "--tol", "nan"], ["info", "--tol", "-1"], ["orbit", "--resume", ""],
+     ["flow", "--eta", "x"], ["flow", "--b", "0"], ["flow", "--init", "1,2"], ["flow", "--steps", "-2"],
      ["flow", "--eta", "5"], ["flow", "--dt", "0"], ["flow", "--compare", "--hamiltonian", "physical"],
      ["flow", "--compare", "--dt", "0.5"], ["info", "--init", "1,2,3,4"], ["info", "--b", "0"],
      ["info", "--eta", "1+2k"], ["orbit", "--resume", "/nonexistent/dir"]],

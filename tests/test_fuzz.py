@@ -134,7 +134,8 @@ MODERATE_HOSTILE = st.sampled_from([0.0, -0.0, 5e-324, -5e-324, 2.22507385850720
 @given(X=st.lists(MODERATE_HOSTILE, min_size=0, max_size=12), b=MODERATE_HOSTILE)
 def test_fuzz_public_map_hostile_states(X, b):
     """Hostile states and fields (NaN, inf, subnormals, -0.0, 1e50, wrong lengths): the map raises a
-    JetGaudinError or returns a finite state.  (Magnitudes whose squares overflow: see the xfail below.)"""
+    JetGaudinError or returns a finite state.  (Magnitudes whose squares overflow:
+    test_overflowing_input_raises_jetgaudin_error.)"""
     try:
         with np.errstate(all="ignore"):
             r = jg.TwoPointBacklund(b, 5 + 0.1j)(X)

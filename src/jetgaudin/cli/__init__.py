@@ -12,6 +12,7 @@ with code 2; a run that fails (singular step, health check) exits with 1; SIGINT
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import importlib.util
 import sys
@@ -60,6 +61,13 @@ def main(argv: list[str] | None = None) -> None:
     args = sys.argv[1:] if argv is None else list(argv)
     try:
         code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+    except SystemExit as exc:
+        # Click answers a closed stdout (EPIPE) with exit 1 after wrapping stdout in PacifyFlushWrapper; our exit
+        # code 1 means a failed run, and a reader that left early (`jetgaudin info | head`) is not one
+        if exc.code == 1 and type(sys.stdout).__name__ == "PacifyFlushWrapper":
+            _silence_stdout()
+            sys.exit(0)
+        raise
     except _click_exc.NoArgsIsHelpError as exc:
         typer.echo(exc.ctx.get_help() if exc.ctx is not None else "usage: jetgaudin COMMAND --help")
         sys.exit(0)
@@ -78,9 +86,23 @@ def main(argv: list[str] | None = None) -> None:
     except _click_exc.ClickException as exc:
         typer.echo(f"jetgaudin: error: {' '.join(exc.format_message().split())}", err=True)
         sys.exit(exc.exit_code)
-    except BrokenPipeError:  # e.g. `jetgaudin info | head`
+    except BrokenPipeError:  # e.g. `jetgaudin info | head`: the reader left; not an error of the run
+        _silence_stdout()
         sys.exit(0)
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
     sys.exit(code if isinstance(code, int) else 0)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail again (and exit with 1)."""
+    import os
+
+    with contextlib.suppress(OSError, ValueError):
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
 
 
 from . import _flow, _info, _orbit  # noqa: E402,F401  (register the commands)

@@ -39,6 +39,10 @@ class CliInputError(Exception):
     """Bad command-line input: reported as one line on stderr, exit code 2."""
 
 
+#: largest |b| and |eta| the command line accepts: b^2 and the powers of eta in nu(eta)^2 stay representable
+MAX_SCALE = 1e150
+
+
 def one_line(msg) -> str:
     return re.sub(r"\s+", " ", str(msg)).strip()
 
@@ -66,6 +70,14 @@ def parse_eta(text: str, option: str = "--eta") -> complex:
         ) from None
     if not (math.isfinite(val.real) and math.isfinite(val.imag)):
         raise CliInputError(f"{option}: {text!r} is not finite; give a finite complex number, e.g. 5+0.1i")
+    if abs(val) > MAX_SCALE:
+        raise CliInputError(f"{option}: |eta| = {abs(val):.3g} is too large (nu(eta)^2 would overflow); "
+                            f"give |eta| <= {MAX_SCALE:g}")
+    if val.real == 0.0:
+        raise CliInputError(
+            f"{option}: Re(eta) = 0: the branch of nu(eta) is continued from lambda = Re(eta), here the pole "
+            "lambda = 0 of the Lax matrix; give Re(eta) != 0"
+        )
     return val
 
 
@@ -103,6 +115,9 @@ def parse_b(value: float, option: str = "--b") -> float:
         raise CliInputError(f"{option}: the field strength must be finite, got {value}")
     if value == 0.0:
         raise CliInputError(f"{option}: the field strength b must be nonzero (the map divides by b); give b != 0")
+    if abs(value) > MAX_SCALE:
+        raise CliInputError(f"{option}: |b| = {abs(value):.3g} is too large (b^2 enters nu^2 and would overflow); "
+                            f"give |b| <= {MAX_SCALE:g}")
     return float(value)
 
 
@@ -152,10 +167,18 @@ class LazyProgress:
             self._p = None
 
 
-def console():
+def console(**kwargs):
+    """A Rich console for the command's output.  When the reader of stdout goes away (``jetgaudin info | head``)
+    Rich would exit with status 1, which our exit codes reserve for failed runs; this one raises
+    :class:`BrokenPipeError` instead, which :func:`jetgaudin.cli.main` turns into a quiet exit 0."""
     from rich.console import Console
 
-    return Console(highlight=False, soft_wrap=True)
+    class _Console(Console):
+        def on_broken_pipe(self) -> None:
+            self.quiet = True
+            raise BrokenPipeError
+
+    return _Console(**({"highlight": False, "soft_wrap": True} | kwargs))
 
 
 def integrals_table(names, I0, drift_abs, drift_rel, title: str):
@@ -175,9 +198,21 @@ def integrals_table(names, I0, drift_abs, drift_rel, title: str):
     return t
 
 
-def check_out_dir(path: Path) -> Path:
-    """Create ``path`` if needed and check that it is writable (exit 2 otherwise)."""
+def resume_dir(text) -> Path:
+    """The directory given to ``--resume`` (an empty string is refused: it would mean the current directory)."""
+    if str(text).strip() == "":
+        raise CliInputError("--resume: empty path; give the directory of the run to continue")
+    return Path(text)
+
+
+def check_out_dir(path) -> Path:
+    """Create ``path`` (a string or path) if needed and check that it is writable (exit 2 otherwise)."""
+    if str(path).strip() == "":
+        raise CliInputError("--out: empty path; give a directory name (an empty one would write into the current "
+                            "directory)")
     path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise CliInputError(f"--out: {path} exists and is not a directory; choose another --out")
     try:
         path.mkdir(parents=True, exist_ok=True)
         probe = path / ".jetgaudin-write-test"
@@ -200,6 +235,16 @@ def check_state_scale(X, b, option: str = "--init") -> None:
         except jg.InvalidStateError:  # the library refuses overflowing integrals itself
             ok = False
     if not ok:
+        with np.errstate(all="ignore"):
+            try:  # the same state in a unit field: is the field the culprit (the term 2 b y^3)?
+                state_ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), 1.0)))
+            except jg.InvalidStateError:
+                state_ok = False
+        if state_ok:
+            raise CliInputError(
+                "--b: the field is too large for this state: the integrals H_k = 2 b y^3 + ... overflow double "
+                "precision; give a smaller |b|"
+            )
         raise CliInputError(
             f"{option}: the state is too large: its integrals (sums of products of components) overflow double "
             "precision; scale the state down"
@@ -226,6 +271,8 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
 
         if issubclass(exc_type, (CliInputError, jg.JetGaudinError)):
             fail(exc, EXIT_INPUT)
+        if issubclass(exc_type, BrokenPipeError):  # the reader of stdout left: handled by main()
+            return False
         if issubclass(exc_type, OSError):
             fail(f"{exc.strerror or exc}" + (f": {exc.filename}" if getattr(exc, "filename", None) else ""), EXIT_INPUT)
         if issubclass(exc_type, (FloatingPointError, OverflowError, ZeroDivisionError, ValueError)):

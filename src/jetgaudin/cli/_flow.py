@@ -75,7 +75,7 @@ def flow(
             help="also iterate the map and report its distance to the flow of G_η at each step (needs --dt 1)",
         ),
     ] = False,
-    out: Annotated[Path, typer.Option("--out", help="output directory")] = Path("jetgaudin-flow"),
+    out: Annotated[str, typer.Option("--out", help="output directory")] = "jetgaudin-flow",
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.

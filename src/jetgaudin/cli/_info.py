@@ -17,6 +17,7 @@ from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
     APPENDIX2_INIT,
+    CliInputError,
     check_state_scale,
     console,
     one_line,
@@ -73,6 +74,8 @@ def info(
 ) -> None:
     """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies."""
     with reported_errors():
+        if not (math.isfinite(tol) and tol > 0):
+            raise CliInputError(f"--tol: the tolerance must be a finite number > 0, got {tol}")
         b = parse_b(b)
         eta_c = parse_eta(eta)
         X = np.array(parse_init(init))

@@ -34,6 +34,7 @@ from ._common import (
     parse_init,
     parse_steps,
     reported_errors,
+    resume_dir,
 )
 
 
@@ -99,14 +100,14 @@ def orbit(
             "--branch", help="root ν1 = +ν(η) ('default') or −ν(η) ('opposite': the inverse map) [default: default]"
         ),
     ] = None,
-    out: Annotated[Path | None, typer.Option("--out", help="output directory [default: ./jetgaudin-orbit]")] = None,
+    out: Annotated[str | None, typer.Option("--out", help="output directory [default: ./jetgaudin-orbit]")] = None,
     save_every: Annotated[
         int | None, typer.Option("--save-every", help="save every K-th step (and the last) [default: 1]")
     ] = None,
     no_csv: Annotated[bool, typer.Option("--no-csv", help="do not write orbit.csv (orbit.h5 only)")] = False,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
     resume: Annotated[
-        Path | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
+        str | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
     ] = None,
     overwrite: Annotated[
         bool, typer.Option("--overwrite", help="replace an interrupted run in --out instead of refusing")
@@ -188,12 +189,12 @@ def orbit(
         if resume is not None:
             if out is not None and Path(out).resolve() != Path(resume).resolve():
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
-            out_dir = Path(resume)
+            out_dir = resume_dir(resume)
             spec = limits = None
             if not (out_dir / rec.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
         else:
-            out_dir = check_out_dir(Path(out) if out is not None else Path("jetgaudin-orbit"))
+            out_dir = check_out_dir(out if out is not None else "jetgaudin-orbit")
             eta_c = parse_eta(eta) if eta is not None else parse_eta(APPENDIX2_ETA)
             if eta_c.imag == 0:
                 raise CliInputError(

@@ -36,6 +36,7 @@ from ._common import (
     parse_eta,
     parse_steps,
     reported_errors,
+    resume_dir,
 )
 
 
@@ -112,11 +113,11 @@ def ensemble_command(
         int | None, typer.Option("--save-every", help="keep every k-th state (and the last) [default: 1]")
     ] = None,
     out: Annotated[
-        Path | None,
+        str | None,
         typer.Option("--out", help="output directory (ensemble.h5, run.json) [default: ./jetgaudin-ensemble]"),
     ] = None,
     resume: Annotated[
-        Path | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
+        str | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
     ] = None,
     overwrite: Annotated[
         bool, typer.Option("--overwrite", help="replace an unfinished run in --out instead of refusing")
@@ -170,7 +171,7 @@ def ensemble_command(
                 raise CliInputError("--resume continues a recorded ensemble: do not give --input or --sample")
             if out is not None and Path(out).resolve() != Path(resume).resolve():
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
-            out_dir, spec = Path(resume), None
+            out_dir, spec = resume_dir(resume), None
             if not (out_dir / rec.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
         else:
@@ -198,7 +199,7 @@ def ensemble_command(
                     X0 = ens.sample_on_energy_shell(n, bb, energy, orbits, seed=seed, scale=scale)
             spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
                                    expect.get("branch", "default"))
-            out_dir = check_out_dir(Path(out) if out is not None else Path("jetgaudin-ensemble"))
+            out_dir = check_out_dir(out if out is not None else "jetgaudin-ensemble")
             if (out_dir / rec.RUN_JSON).exists() and not overwrite:
                 try:
                     old = rec.read_run(out_dir)["status"]

@@ -88,10 +88,10 @@ def verify(
     else:
         import sys
 
-        from rich.console import Console
+        from ._common import console
 
         # a pipe gets a wide table (Rich would otherwise fold it to 80 columns)
-        Console(width=None if sys.stdout.isatty() else 180).print(_table(results, seed))
+        console(width=None if sys.stdout.isatty() else 180).print(_table(results, seed))
         n_ok = sum(r.status == "holds" for r in results)
         n_fix = sum(r.printed != "holds" and r.status == "holds" for r in results)
         typer.echo(
