@@ -213,3 +213,21 @@ def test_errata_cross_references_name_existing_tests():
             assert re.search(rf"^def {re.escape(name)}\(", text, flags=re.M), node
     labels = re.findall(r"^## \d+\. `([^`]+)`", errata_markdown(), flags=re.M)
     assert set(labels) <= set(TESTS), set(labels) - set(TESTS)
+
+
+def test_errata_links_point_at_their_entries(results):
+    """Each misprinted check links its docs/errata.md entry: the anchor is the slug of the entry's heading and
+    the heading names the check's label."""
+    from jetgaudin.verify._errata import _slug
+
+    text = (ROOT / "docs" / "errata.md").read_text(encoding="utf-8")
+    headings = {_slug(h): h for h in re.findall(r"^## (.+)$", text, flags=re.M)}
+    linked = 0
+    for label, r in results.items():
+        if r.erratum is None:
+            continue
+        anchor = r.erratum["link"].split("#", 1)[1]
+        assert anchor in headings, (label, anchor)
+        assert f"`{label}`" in headings[anchor] and headings[anchor].startswith(f"{r.erratum['entry']}. ")
+        linked += 1
+    assert linked == len(re.findall(r"^## \d+\. ", text, flags=re.M))

@@ -42,7 +42,7 @@ def _table(results, seed):
     for r in results:
         corrected = _fmt(r.corrected, r.corrected_residual)
         if r.erratum is not None:
-            corrected += "  [dim](errata)[/dim]"
+            corrected += f"  [dim](errata #{r.erratum['entry']})[/dim]"
         t.add_row(
             escape(r.label),
             escape(r.statement),

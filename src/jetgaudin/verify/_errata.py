@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 from ._registry import REGISTRY
 
 HEADER = """# Errata: Musso, Petrera, Ragnisco, Satta,
@@ -70,6 +72,31 @@ def _paper_order(chk):
     return (_MODULES.index(mod) if mod in _MODULES else len(_MODULES), chk.func.__code__.co_firstlineno)
 
 
+def _heading(n: int, chk) -> str:
+    where = f"Section {chk.section}" if chk.section[:1].isdigit() else chk.section
+    return f"{n}. `{chk.label}` ({where})"
+
+
+def _slug(heading: str) -> str:
+    """The anchor GitHub (and most Markdown renderers) give a heading: lower case, punctuation dropped, spaces
+    to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.lower()).replace(" ", "-")
+
+
+def errata_entries() -> dict[str, tuple[int, str]]:
+    """``{label: (entry number, "docs/errata.md#anchor")}`` for every check with an erratum, in the file's order."""
+    from . import _load_all
+
+    _load_all()
+    out = {}
+    n = 0
+    for chk in sorted(REGISTRY.values(), key=_paper_order):
+        if chk.erratum is not None:
+            n += 1
+            out[chk.label] = (n, "docs/errata.md#" + _slug(_heading(n, chk)))
+    return out
+
+
 def errata_markdown() -> str:
     from . import _load_all
 
@@ -81,8 +108,7 @@ def errata_markdown() -> str:
         if e is None:
             continue
         n += 1
-        where = f"Section {chk.section}" if chk.section[:1].isdigit() else chk.section
-        parts.append(f"\n## {n}. `{chk.label}` ({where})\n")
+        parts.append(f"\n## {_heading(n, chk)}\n")
         parts.append(f"\n*Statement checked:* {chk.statement}\n")
         parts.append(f"\n- **As printed:** `{e.printed}`\n- **Corrected:** `{e.corrected}`\n")
         if e.comment:

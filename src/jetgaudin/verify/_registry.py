@@ -122,6 +122,16 @@ class CheckResult:
 REGISTRY: dict[str, Check] = {}
 
 
+def _erratum_dict(check: Check) -> dict | None:
+    """The erratum as printed / corrected, with its entry in ``docs/errata.md`` (``entry``: number, ``link``)."""
+    if check.erratum is None:
+        return None
+    from ._errata import errata_entries
+
+    n, link = errata_entries()[check.label]
+    return dict(asdict(check.erratum), entry=n, link=link)
+
+
 def register(
     label: str,
     section: str,
@@ -214,7 +224,7 @@ def run_checks(only=None, full: bool = False, seed: int = DEFAULT_SEED, dps: int
                 expected_printed=check.expect_printed,
                 seconds=round(dt, 3),
                 note=note,
-                erratum=asdict(check.erratum) if check.erratum else None,
+                erratum=_erratum_dict(check),
             )
         )
     return results
