@@ -323,3 +323,19 @@ def test_bad_state_input(rng):
     origin[0:3] = [0.0, 0.4, -0.2]
     with pytest.raises(OffLeafError, match="x = 0"):
         cn.state_to_euler(origin)
+
+
+def test_leaf_casimirs_are_the_section3_casimirs(rng):
+    """leaf_casimirs = (C^(1), C^(2), C^(3)): equal to (C_1/2, C_2/2, C_3) of eq. (cas) (a few ulps of |X|^2), and
+    central: Pi(X) grad C^(k) = 0 with the gradient by central differences (exact for quadratics up to
+    round-off ~ eps |X|^2 / h with h = 1e-4: 1e-10 absolute for |X| ~ 1)."""
+    from jetgaudin.canonical import leaf_casimirs
+
+    X = rng.normal(size=(4, 9))
+    C = leaf_casimirs(X)
+    I = jg.integrals(X, 1.0)
+    np.testing.assert_allclose(C, np.stack([I[:, 3] / 2, I[:, 4] / 2, I[:, 5]], axis=-1), rtol=0, atol=1e-13)
+    h = 1e-4
+    for x in X:
+        grad = np.stack([(leaf_casimirs(x + h * e) - leaf_casimirs(x - h * e)) / (2 * h) for e in np.eye(9)], axis=-1)
+        assert np.abs(grad @ jg.poisson_tensor(x).T).max() <= 1e-10

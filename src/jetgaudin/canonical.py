@@ -45,6 +45,7 @@ __all__ = [
     "euler_to_state",
     "state_to_euler",
     "leaf_residuals",
+    "leaf_casimirs",
     "on_canonical_leaf",
     "canonical_hamiltonian",
     "canonical_integrals",
@@ -251,6 +252,23 @@ def _as_state3(X) -> np.ndarray:
             f"the canonical realisation is for N = 3 (states (y, x, z) of shape (..., 9)); got N = {N}"
         )
     return X
+
+
+def leaf_casimirs(X) -> np.ndarray:
+    r"""The Casimirs of :math:`\mathfrak g^{(3)}` of Section 3, ``(C^(1), C^(2), C^(3))``, shape ``(..., 3)``:
+
+    .. math:: C^{(1)} = \langle y, z\rangle + \tfrac12 |x|^2, \quad C^{(2)} = \langle x, z\rangle, \quad
+              C^{(3)} = |z|^2
+
+    (eq. (cas): ``C_1 = 2 C^(1)``, ``C_2 = 2 C^(2)``, ``C_3 = C^(3)``); the leaf (fo) is ``(0, 0, 1)``.
+
+    >>> [round(float(c), 12) for c in leaf_casimirs([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0])]  # Appendix 2
+    [1.2919, -2.19, 1.0]
+    """
+    X = _as_state3(X)
+    y, x, z = X[..., 0:3], X[..., 3:6], X[..., 6:9]
+    return np.stack([np.sum(y * z, axis=-1) + np.sum(x * x, axis=-1) / 2, np.sum(x * z, axis=-1),
+                     np.sum(z * z, axis=-1)], axis=-1)
 
 
 def leaf_residuals(X) -> np.ndarray:

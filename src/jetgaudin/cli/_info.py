@@ -29,27 +29,15 @@ from ._common import (
 
 
 def _canonical_leaf(X, tol):
-    """``(answer, detail)`` from ``jetgaudin.canonical.on_canonical_leaf`` if that module exists."""
+    """``(answer, detail)``: whether ``X`` lies on the leaf (fo) of the canonical realisation, with the residuals."""
+    from jetgaudin.canonical import leaf_residuals, on_canonical_leaf
+
     try:
-        from jetgaudin.canonical import on_canonical_leaf
-    except ImportError:
-        return None, "not available in this version (jetgaudin.canonical is missing)"
-    try:
-        res = on_canonical_leaf(X, tol)
+        ok = bool(np.all(on_canonical_leaf(X, tol)))
+        res = np.ravel(leaf_residuals(X))
     except jg.JetGaudinError as exc:
         return False, one_line(exc)
-    if isinstance(res, tuple):  # evidence (ok, residual)
-        return bool(res[0]), (f"residual {float(res[1]):.3e}" if len(res) > 1 else "")
-    detail = ""
-    try:
-        from jetgaudin.canonical import leaf_residuals
-
-        detail = "relative residuals of C^(1) = 0, C^(2) = 0, C^(3) = 1: " + ", ".join(
-            f"{float(r):.2e}" for r in np.ravel(leaf_residuals(X))
-        )
-    except (ImportError, jg.JetGaudinError):
-        pass
-    return bool(np.all(res)), detail
+    return ok, "relative residuals of C^(1) = 0, C^(2) = 0, C^(3) = 1: " + ", ".join(f"{float(r):.2e}" for r in res)
 
 
 def _c(z) -> list[float]:
@@ -113,7 +101,10 @@ def info(
             d["branch_points"] = []
             d["branch_points_note"] = one_line(exc)
         if N == 3:
+            from jetgaudin.canonical import leaf_casimirs
+
             d["material_point"] = np.asarray(jg.material_point(X)).tolist()
+            d["casimirs_section3"] = dict(zip(("C^(1)", "C^(2)", "C^(3)"), leaf_casimirs(X).tolist(), strict=True))
         ok, detail = _canonical_leaf(X, tol)
         d["on_canonical_leaf"] = ok
         d["canonical_leaf_detail"] = detail
@@ -129,7 +120,9 @@ def info(
     for k, v in d["integrals"].items():
         t.add_row(k, f"{v:.17g}")
     for k, v in enumerate(d["casimirs"], 1):
-        t.add_row(f"Casimir C_{k}", f"{v:.17g}")
+        t.add_row(f"Casimir C_{k} (Prop. 2)", f"{v:.17g}")
+    for k, v in d.get("casimirs_section3", {}).items():
+        t.add_row(f"Casimir {k} (Section 3)", f"{v:.17g}")
     eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
     if d["nu_default"] is not None:
         t.add_row(f"ν({eta_s}), default root", _fmt(complex(*d["nu_default"])))
