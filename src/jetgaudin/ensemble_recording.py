@@ -54,6 +54,7 @@ from .recording import (
     RUN_JSON,
     RunInterrupted,
     _fsync_path,
+    _mark_crashed,
     _open_h5_read,
     _prepare_dir,
     _RowDigest,
@@ -519,10 +520,7 @@ def run_ensemble(
                 status = "completed"
             writer.checkpoint(n, X, nu1, drift, **summary(status))
     except BaseException as exc:
-        with contextlib.suppress(Exception):
-            run["status"] = "interrupted"
-            run["error"] = one_line(f"{type(exc).__name__}: {exc}")
-            _write_run(out_dir, run)
+        _mark_crashed(out_dir, run, exc)
         raise
     finally:
         writer.close()

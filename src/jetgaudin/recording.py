@@ -539,6 +539,15 @@ class _Writer:
                 self.csv_fh.close()
 
 
+def _mark_crashed(out_dir: Path, run: dict, exc: BaseException) -> None:
+    """An unexpected error (a bug, a full disk) during a run: the checkpointed data stay valid and resumable, so
+    ``run.json`` says ``interrupted`` and records the error (best effort: the disk may be what failed)."""
+    with contextlib.suppress(Exception):
+        run["status"] = "interrupted"
+        run["error"] = one_line(f"{type(exc).__name__}: {exc}")
+        _write_run(out_dir, run)
+
+
 def _prepare_dir(out_dir: Path) -> None:
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -853,11 +862,7 @@ def run_orbit(
             if progress is not None:
                 progress(n, steps)
     except BaseException as exc:
-        # an unexpected error (a bug, a full disk): the checkpointed data stay valid and resumable
-        with contextlib.suppress(Exception):
-            run["status"] = "interrupted"
-            run["error"] = one_line(f"{type(exc).__name__}: {exc}")
-            _write_run(out_dir, run)
+        _mark_crashed(out_dir, run, exc)
         raise
     finally:
         writer.close()

@@ -281,3 +281,39 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
                 EXIT_FAILED,
             )
         return False
+
+
+def refuse_unfinished_run(out_dir: Path) -> None:
+    """Refuse to start a new run in a directory that holds an unfinished one (``--resume`` or ``--overwrite``)."""
+    import jetgaudin as jg
+    from jetgaudin import recording as rec
+
+    if not (out_dir / rec.RUN_JSON).exists():
+        return
+    try:
+        old = rec.read_run(out_dir)["status"]
+    except jg.JetGaudinError:
+        old = "unreadable"
+    if old in ("running", "interrupted"):
+        raise CliInputError(
+            f"--out: {out_dir} holds an unfinished run (status {old}); continue it with "
+            f"--resume {out_dir}, or pass --overwrite, or choose another --out"
+        )
+
+
+def run_with_progress(description: str, progress: bool | None, run):
+    """Call ``run(bar)`` with a :class:`LazyProgress` bar (``None`` with ``--no-progress``); an interrupted run
+    (:class:`jetgaudin.recording.RunInterrupted`, checkpoint written) prints its one line and exits 130 / 143."""
+    from jetgaudin import recording as rec
+
+    bar = LazyProgress(description, force=bool(progress)) if progress is not False else None
+    try:
+        return run(bar)
+    except rec.RunInterrupted as exc:
+        if bar:
+            bar.close()
+        typer.echo(f"jetgaudin: {exc}", err=True)
+        raise typer.Exit(exc.exit_code) from None
+    finally:
+        if bar:
+            bar.close()

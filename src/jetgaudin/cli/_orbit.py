@@ -10,8 +10,6 @@ from typing import Annotated
 import numpy as np
 import typer
 
-import jetgaudin as jg
-
 from .. import recording as rec
 from . import app
 from ._common import (
@@ -22,7 +20,6 @@ from ._common import (
     EXIT_FAILED,
     Branch,
     CliInputError,
-    LazyProgress,
     check_out_dir,
     check_state_scale,
     console,
@@ -33,8 +30,10 @@ from ._common import (
     parse_eta,
     parse_init,
     parse_steps,
+    refuse_unfinished_run,
     reported_errors,
     resume_dir,
+    run_with_progress,
 )
 
 
@@ -213,35 +212,17 @@ def orbit(
                 max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
                 max_imag=rec.DEFAULT_MAX_IMAG if max_imag is None else max_imag,
             )
-            if (out_dir / rec.RUN_JSON).exists() and not overwrite:
-                try:
-                    old = rec.read_run(out_dir)["status"]
-                except jg.JetGaudinError:
-                    old = "unreadable"
-                if old in ("running", "interrupted"):
-                    raise CliInputError(
-                        f"--out: {out_dir} holds an unfinished run (status {old}); continue it with "
-                        f"--resume {out_dir}, or pass --overwrite, or choose another --out"
-                    )
-        bar = LazyProgress("orbit", force=bool(progress)) if progress is not False else None
-        try:
-            res = rec.run_orbit(
-                spec,
-                out_dir,
-                options=options,
-                limits=limits,
-                resume=resume is not None,
-                expect=expect if resume is not None else None,
-                progress=bar,
-            )
-        except rec.RunInterrupted as exc:
-            if bar:
-                bar.close()
-            typer.echo(f"jetgaudin: {exc}", err=True)
-            raise typer.Exit(exc.exit_code) from None
-        finally:
-            if bar:
-                bar.close()
+            if not overwrite:
+                refuse_unfinished_run(out_dir)
+        res = run_with_progress("orbit", progress, lambda bar: rec.run_orbit(
+            spec,
+            out_dir,
+            options=options,
+            limits=limits,
+            resume=resume is not None,
+            expect=expect if resume is not None else None,
+            progress=bar,
+        ))
         run = rec.read_run(out_dir)
         spec = rec.OrbitSpec.from_json(run["inputs"])
         files = list(res.files)

@@ -19,15 +19,12 @@ from typing import Annotated
 import numpy as np
 import typer
 
-import jetgaudin as jg
-
 from .. import recording as rec
 from . import app
 from ._common import (
     EXIT_FAILED,
     Branch,
     CliInputError,
-    LazyProgress,
     check_out_dir,
     console,
     fail,
@@ -35,8 +32,10 @@ from ._common import (
     parse_b,
     parse_eta,
     parse_steps,
+    refuse_unfinished_run,
     reported_errors,
     resume_dir,
+    run_with_progress,
 )
 
 
@@ -200,37 +199,19 @@ def ensemble_command(
             spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
                                    expect.get("branch", "default"))
             out_dir = check_out_dir(out if out is not None else "jetgaudin-ensemble")
-            if (out_dir / rec.RUN_JSON).exists() and not overwrite:
-                try:
-                    old = rec.read_run(out_dir)["status"]
-                except jg.JetGaudinError:
-                    old = "unreadable"
-                if old in ("running", "interrupted"):
-                    raise CliInputError(
-                        f"--out: {out_dir} holds an unfinished run (status {old}); continue it with "
-                        f"--resume {out_dir}, or pass --overwrite, or choose another --out"
-                    )
-        bar = LazyProgress("ensemble", force=bool(progress)) if progress is not False else None
-        try:
-            res = er.run_ensemble(
-                spec,
-                out_dir,
-                resume=resume is not None,
-                max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
-                checkpoint_seconds=checkpoint_seconds,
-                scheduler=scheduler,
-                chunk_size=chunk_size,
-                expect=expect if resume is not None else None,
-                progress=bar,
-            )
-        except rec.RunInterrupted as exc:
-            if bar:
-                bar.close()
-            typer.echo(f"jetgaudin: {exc}", err=True)
-            raise typer.Exit(exc.exit_code) from None
-        finally:
-            if bar:
-                bar.close()
+            if not overwrite:
+                refuse_unfinished_run(out_dir)
+        res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
+            spec,
+            out_dir,
+            resume=resume is not None,
+            max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
+            checkpoint_seconds=checkpoint_seconds,
+            scheduler=scheduler,
+            chunk_size=chunk_size,
+            expect=expect if resume is not None else None,
+            progress=bar,
+        ))
         run = rec.read_run(out_dir)
         _report(res, run, show)
         if res.status.startswith("failed"):
