@@ -5,6 +5,7 @@ Bounded time: every CLI example runs at most a handful of steps (`--steps` <= 4,
 number of examples comes from the Hypothesis profile in conftest (30 per test).
 """
 
+import contextlib
 import json
 import math
 import os
@@ -181,9 +182,19 @@ def interrupted_run(tmp_path_factory):
        frac=st.floats(0, 1), bit=st.integers(0, 7))
 def test_fuzz_resume_of_damaged_files(interrupted_run, which, mode, frac, bit):
     """A truncated or bit-flipped file passed to --resume: a clear error, or exactly the true orbit."""
+    src, ref = interrupted_run
+    with resume_damaged_copy(src, which, mode, frac, bit, ["orbit", "--no-plots"]) as d:
+        if d is not None:  # the damage hit bytes that carry no data (free space, the 'updated' time, ...)
+            n, X = rec.load_orbit(d)
+            assert np.array_equal(X, ref)
+
+
+@contextlib.contextmanager
+def resume_damaged_copy(src, which, mode, frac, bit, command):
+    """Copy the run ``src``, truncate ``which`` at ``frac`` or flip one bit there, and resume it with ``command``:
+    a one-line error (exit 2; yields None) or a completed resume (exit 0; yields the directory)."""
     import shutil
 
-    src, ref = interrupted_run
     with tempfile.TemporaryDirectory() as d:
         d = Path(d) / "r"
         shutil.copytree(src, d)
@@ -195,14 +206,12 @@ def test_fuzz_resume_of_damaged_files(interrupted_run, which, mode, frac, bit):
         else:
             data[at] ^= 1 << bit
         path.write_bytes(bytes(data))
-        code, _, err = run_cli(["orbit", "--resume", d, "--no-plots"])
+        code, _, err = run_cli([command[0], "--resume", d, *command[1:]])
         assert "Traceback" not in err
         assert code in (0, 2), (code, err)
         if code == 2:
             assert len([ln for ln in err.splitlines() if ln.strip()]) == 1
-        else:  # the damage hit bytes that carry no data (free space, the 'updated' time, ...)
-            n, X = rec.load_orbit(d)
-            assert np.array_equal(X, ref)
+        yield d if code == 0 else None
 
 
 # ---------------------------------------------------------------------------------------------- ensembles
@@ -270,26 +279,9 @@ def interrupted_ensemble(tmp_path_factory):
        mode=st.sampled_from(["truncate", "flip"]), frac=st.floats(0, 1), bit=st.integers(0, 7))
 def test_fuzz_ensemble_resume_of_damaged_files(interrupted_ensemble, which, mode, frac, bit):
     """A truncated or bit-flipped file passed to `ensemble --resume`: a clear error, or exactly the true rows."""
-    import shutil
-
     from jetgaudin.ensemble_recording import load_ensemble
 
     src, ref = interrupted_ensemble
-    with tempfile.TemporaryDirectory() as d:
-        d = Path(d) / "r"
-        shutil.copytree(src, d)
-        path = d / which
-        data = bytearray(path.read_bytes())
-        at = min(len(data) - 1, int(frac * len(data)))
-        if mode == "truncate":
-            data = data[:at]
-        else:
-            data[at] ^= 1 << bit
-        path.write_bytes(bytes(data))
-        code, _, err = run_cli(["ensemble", "--resume", d, "--no-progress"])
-        assert "Traceback" not in err
-        assert code in (0, 2), (code, err)
-        if code == 2:
-            assert len([ln for ln in err.splitlines() if ln.strip()]) == 1
-        else:  # the damage hit bytes that carry no data (the unused checkpoint slot, free space, ...)
+    with resume_damaged_copy(src, which, mode, frac, bit, ["ensemble", "--no-progress"]) as d:
+        if d is not None:  # the damage hit bytes that carry no data (the unused checkpoint slot, free space, ...)
             assert np.array_equal(load_ensemble(d).states, ref)
