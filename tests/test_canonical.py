@@ -184,9 +184,11 @@ def test_batch_equals_single_bit_for_bit(rng):
         assert np.array_equal(cn.canonical_vector_field(Q, 0.7)[i, 0], cn.canonical_vector_field(Q[i, 0], 0.7))
 
 
-def test_printed_angle_ranges_are_not_a_chart(rng):
+def test_printed_angle_ranges_are_not_euler_angles(rng):
     # printed: theta in [0, 2 pi), psi in [0, pi).  theta -> 2 pi - theta (with phi, psi -> +pi, p_theta -> -p_theta)
-    # gives the same state (double cover), and psi -> psi + pi gives x -> -x (a different state), so psi needs [0, 2pi)
+    # gives the same state, so the printed ranges are another fundamental domain of the same parametrisation
+    # (harmless), but for theta in (pi, 2 pi) theta is not the polar angle of z, and with the Euler range
+    # theta in (0, pi) the range psi in [0, pi) misses half of the leaf (psi -> psi + pi gives x -> -x)
     Q = random_Q(rng, 20)
     Qb = Q.copy()
     Qb[:, 0] = 2 * np.pi - Q[:, 0]
@@ -194,6 +196,8 @@ def test_printed_angle_ranges_are_not_a_chart(rng):
     Qb[:, 2] += np.pi
     Qb[:, 3] *= -1
     np.testing.assert_allclose(cn.euler_to_state(Qb), cn.euler_to_state(Q), atol=1e-12)
+    Xb = cn.euler_to_state(Qb)
+    assert np.all(np.abs(np.arccos(Xb[:, 8]) - Qb[:, 0]) > 0.1)  # theta in (pi, 2 pi) is not the polar angle
     Qc = Q.copy()
     Qc[:, 2] += np.pi
     Xc = cn.euler_to_state(Qc)

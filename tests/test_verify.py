@@ -33,6 +33,9 @@ REQUIRED = [
     "Sec3-casimirs", "Prop3", "we-cas", "Sec4-complex", "H", "em", "em-matrix", "Sec4-material", "Prop-Lax",
     "Prop-canonical", "Sec5-H", "Sec5-I", "hh", "hhh", "mp-u", "mp-v", "mp-w", "mp", "fu", "Rem-spectrality",
     "mm", "x", "X", "2p", "App1-A", "App1-B", "App1-X0", "App2-sphere",
+    # issue 13: the maps' Poisson property and integrals in verify, structure and the misprints found since
+    "BT-poisson-one-point", "BT-poisson-two-point", "BT-integrals", "LP-jacobi", "LP-rank", "Sec3-structure",
+    "Sec3-cocycle", "Sec5-momenta", "yy", "lax2", "Prop2-proof", "Sec5-ranges", "App2-timestep",
 ]
 
 
@@ -231,3 +234,25 @@ def test_errata_links_point_at_their_entries(results):
         assert f"`{label}`" in headings[anchor] and headings[anchor].startswith(f"{r.erratum['entry']}. ")
         linked += 1
     assert linked == len(re.findall(r"^## \d+\. ", text, flags=re.M))
+
+
+def test_prop2_proof_index_numerically():
+    """Second route for the erratum Prop2-proof: with random numbers for y_m (m up to 3N, brackets not yet
+    truncated), sum_i [y_i^a {y_n^a, y_j^b} + y_n^a {y_i^a, y_j^b}] (n = N+k-i-2) equals
+    2 sum eps y_{i+j}^c y_n^a, not the printed 2 sum eps y_{i+j}^c y_{n+j}^a (for j >= 1)."""
+    import numpy as np
+
+    rng = np.random.default_rng(20261123)
+    eps = np.zeros((3, 3, 3))
+    eps[0, 1, 2] = eps[1, 2, 0] = eps[2, 0, 1] = 1
+    eps[0, 2, 1] = eps[2, 1, 0] = eps[1, 0, 2] = -1
+    N, k, j, be = 3, 1, 1, 0
+    y = rng.standard_normal((3 * N + 1, 3))
+    rows = range(k - 1, N)
+    lhs = sum(eps[:, be, :] * (np.outer(y[i], y[N + k - i - 2 + j]) + np.outer(y[N + k - i - 2], y[i + j]))
+              for i in rows).sum()
+    corrected = 2 * sum(eps[:, be, :] * np.outer(y[N + k - i - 2], y[i + j]) for i in rows).sum()
+    printed = 2 * sum(eps[:, be, :] * np.outer(y[N + k - i - 2 + j], y[i + j]) for i in rows).sum()
+    # a few products of O(1) numbers: round-off ~1e-15
+    assert abs(lhs - corrected) < 1e-12
+    assert abs(lhs - printed) > 1e-3

@@ -42,7 +42,7 @@ __all__ = [
     "exit_code",
 ]
 
-_MODULES = ("sec2", "sec4", "sec5", "sec6", "appendix")
+_MODULES = ("structure", "sec2", "sec4", "sec5", "sec6", "maps", "appendix")
 
 
 def _load_all():

@@ -294,3 +294,56 @@ def _app2(ctx):
     if lib is not None and lib > 1e-11:  # float64 round-off over 1000 steps: ~1e-13; 1e-11 is a wide margin
         v = Verdict(FAILS, lib, note)
     return Outcome(v)
+
+
+@register(
+    "App2-timestep",
+    "Appendix 2",
+    "Appendix 2: Im(eta) is the time step of the discretisation (of the flow the real two-point map interpolates)",
+    "mpmath (60 digits): odd part [B_(a+ih)(X) - B_(a-ih)(X)]/2 of the exact real two-point map, h = 1e-17 "
+    "(error O(h^3): relative 1e-34), vs h X_F for F = nu(a) and F = H = H_2/2; 6 seeded real states, N = 1..3",
+    erratum=Erratum(
+        "Im(eta) is the time-step of the discretization",
+        "B_eta = exp(tau X_nu(Re eta)) + O(Im(eta)^3) with tau = -2 Im(eta), nu(Re eta) = sqrt(<xi, xi>) at "
+        "l = Re eta (> 0, the default branch); for large |eta| this is a step of about -2 Im(eta)/(|b| |eta|^2) of "
+        "the physical flow of H = H_2/2 (run backwards for Im(eta) > 0) composed with a rotation about the field",
+        "Checked here: the O(h) term of the map is -2h X_nu(a) to 1e-34 (and neither h X_nu(a) nor h X_H). "
+        "The large-|eta| form is a consequence (nu = |b| + H_1/(2|b|l) + (H_2/(2|b|) - H_1^2/(8|b|^3))/l^2 + ...): "
+        "tests/test_backlund.py::test_large_eta_limit_is_physical_flow_times_rotation and docs/backlund.md section 6.",
+    ),
+    expect_printed=FAILS,
+)
+def _app2_timestep(ctx):
+    from ._tools import rand_state
+    from .maps import _flat, _pi, _unflat, two_point_real
+    from .structure import lp_constants
+
+    rng = ctx.rng()
+    wp = wh = wc = mp.mpf(0)
+    with mp.workdps(60):
+        h = mp.mpf("1e-17")
+        for k in range(6):
+            N = 1 + k % 3
+            c = lp_constants(N)
+            X = _flat(rand_state(rng, N))
+            b, a = rand_mpf(rng, 0.5, 2), rand_mpf(rng, 0.5, 3)
+            ys = _unflat(X)
+            xi = [[0, 0, b][i] + sum(ys[m][i] * a ** -(m + 1) for m in range(N)) for i in range(3)]
+            nu = mp.sqrt(sum(v * v for v in xi))  # > 0: the default branch at l = Re eta = a
+            grad_nu = [xi[i] * a ** -(m + 1) / nu for m in range(N) for i in range(3)]
+            grad_H = [0] * (3 * N)
+            grad_H[0:3] = ys[0]  # H = |y_0|^2/2 + b y_1^3 (for N = 1: |y_0|^2/2 + 0)
+            if N > 1:
+                grad_H[5] = b
+            Pi = _pi(c, X)
+            V = [sum(Pi[i][j] * grad_nu[j] for j in range(3 * N)) for i in range(3 * N)]
+            VH = [sum(Pi[i][j] * grad_H[j] for j in range(3 * N)) for i in range(3 * N)]
+            Bp, _, _ = two_point_real(X, b, mp.mpc(a, h), nu)
+            Bm, _, _ = two_point_real(X, b, mp.mpc(a, -h), nu)
+            D = [(p - m_) / 2 for p, m_ in zip(Bp, Bm, strict=True)]
+            scale = h * (1 + max(abs(v) for v in V))
+            wc = max(wc, max(abs(d + 2 * h * v) for d, v in zip(D, V, strict=True)) / scale)
+            wp = max(wp, max(abs(d - h * v) for d, v in zip(D, V, strict=True)) / scale)
+            wh = max(wh, max(abs(d - h * v) for d, v in zip(D, VH, strict=True)) / scale)
+    return Outcome(Verdict.from_residual(min(wp, wh), note=f"vs h X_nu: {mp.nstr(wp, 3)}, vs h X_H: {mp.nstr(wh, 3)}"),
+                   Verdict.from_residual(wc))

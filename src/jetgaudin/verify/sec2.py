@@ -315,30 +315,51 @@ def _prop2_inv(ctx):
     return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
 
 
+_PROOF_P = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c y_{N+k-i-2+j}^a"
+_PROOF_C = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c y_{N+k-i-2}^a"
+
+
 @register(
     "Prop2-proof",
     "2",
-    "Proof of Prop. 2: the displayed expressions 2 sum eps y_{i+j}^g y_{N+k-i-2+j}^a and the symmetrised sum "
-    "vanish (terms with an index >= N read as 0), N = 1..5",
-    "exact SymPy",
+    "Proof of Prop. 2: sum_a sum_i [y_i^a {y_{N+k-i-2}^a, y_j^b} + y_{N+k-i-2}^a {y_i^a, y_j^b}] = "
+    "2 sum eps^{ab}_c y_{i+j}^c y_{N+k-i-2+j}^a (brackets {y_i, y_j} = eps y_{i+j} before the truncation of (LP), "
+    "which the proof applies next), and the result vanishes under (LP), N = 1..4",
+    "exact SymPy with y_m symbols for m up to 3N (untruncated brackets), then y_m = 0 for m >= N",
+    erratum=Erratum(
+        _PROOF_P,
+        _PROOF_C + "  (and in the next display y^a_{N+k-i-2}, y^c_{N+k-i'-2} with i' = N+k-i-2-j)",
+        "Harmless: both versions vanish once (LP) truncates the indices >= N, so the conclusion {C_k, y_j^b} = 0 "
+        "stands; but the step itself is wrong for j >= 1 (y_{N+k-i-2}^a multiplies {y_i^a, y_j^b} = eps y_{i+j}; "
+        "no bracket adds j to its index).",
+    ),
+    expect_printed=FAILS,
 )
 def _prop2_proof(ctx):
-    ok = True
-    for N in range(1, 6):
-        ys = sym_state(N)
+    printed_ok = corrected_ok = trunc_ok = True
+    for N in range(1, 5):
+        ys = sym_state(3 * N + 1)
 
-        def y(i, a, ys=ys, N=N):
-            return ys[i][a] if i < N else 0
+        def y(i, a, ys=ys):
+            return ys[i][a]
 
         for k in range(1, N + 1):
             for j in range(N):
                 for be in range(3):
-                    e1 = 2 * sum(eps(a, be, g) * y(i + j, g) * y(N + k - i - 2 + j, a)
-                                 for a in range(3) for g in range(3) for i in range(k - 1, N))
-                    ok = ok and is_zero(e1)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0,
-                           "the displays are 0 = 0 (the index shifts +j in the second factor do not change the "
-                           "value, which vanishes by the i <-> N+k-i-2 antisymmetry)"))
+                    rng_i = range(k - 1, N)
+                    lhs = sum(eps(a, be, g) * (y(i, a) * y(N + k - i - 2 + j, g) + y(N + k - i - 2, a) * y(i + j, g))
+                              for a in range(3) for g in range(3) for i in rng_i)
+                    pr = 2 * sum(eps(a, be, g) * y(i + j, g) * y(N + k - i - 2 + j, a)
+                                 for a in range(3) for g in range(3) for i in rng_i)
+                    co = 2 * sum(eps(a, be, g) * y(i + j, g) * y(N + k - i - 2, a)
+                                 for a in range(3) for g in range(3) for i in rng_i)
+                    printed_ok = printed_ok and sp.expand(lhs - pr) == 0
+                    corrected_ok = corrected_ok and sp.expand(lhs - co) == 0
+                    trunc = {ys[m][a]: 0 for m in range(N, 3 * N + 1) for a in range(3)}
+                    trunc_ok = trunc_ok and sp.expand(co.subs(trunc)) == 0 and sp.expand(pr.subs(trunc)) == 0
+    note = "both displays vanish under (LP): " + str(trunc_ok)
+    return Outcome(Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0, note),
+                   Verdict("holds" if corrected_ok and trunc_ok else FAILS, 0.0 if corrected_ok and trunc_ok else 1.0))
 
 
 # ----------------------------------------------------------------------------- Section 3

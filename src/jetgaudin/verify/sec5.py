@@ -201,3 +201,91 @@ def _xnorm(ctx):
     for X in (printed_realisation(), corrected_realisation()):
         ok = ok and sp.simplify(sp.trigsimp(sum(c**2 for c in X[3:6]) - 2 * pps)) == 0
     return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+
+
+def _chart_points(rng, n, theta_lo, theta_hi, psi_hi):
+    return [[rand_mpf(rng, theta_lo, theta_hi), rand_mpf(rng, 0, 6.28), rand_mpf(rng, 0, psi_hi),
+             rand_mpf(rng), rand_mpf(rng), rand_mpf(rng, 0.2, 2.0)] for _ in range(n)]
+
+
+def _inverse_chart(X):
+    """Standard Euler angles of a leaf state: theta = polar angle of z in (0, pi), phi, psi in [0, 2 pi)."""
+    y, x, z = X[0:3], X[3:6], X[6:9]
+    th = mp.atan2(mp.sqrt(z[0] ** 2 + z[1] ** 2), z[2])
+    ph = mp.atan2(z[1], z[0]) % (2 * mp.pi)
+    e_th = (mp.cos(th) * mp.cos(ph), mp.cos(th) * mp.sin(ph), -mp.sin(th))
+    e_ph = (-mp.sin(ph), mp.cos(ph), 0)
+    ps = mp.atan2(-sum(a * c for a, c in zip(x, e_ph, strict=True)), sum(a * c for a, c in zip(x, e_th, strict=True)))
+    pth = sum(a * c for a, c in zip(y, e_ph, strict=True))
+    return [th, ph, ps % (2 * mp.pi), pth, y[2], sum(a * a for a in x) / 2]
+
+
+@register(
+    "Sec5-ranges",
+    "5",
+    "Section 5: the Euler angles range over theta in [0, 2 pi), phi in [0, 2 pi), psi in [0, pi) (standard Euler "
+    "angles, as the proof says, with theta the polar angle of z)",
+    "mpmath (50 digits) on the corrected realisation: 8 seeded points with theta in (pi, 2 pi) (printed range) and "
+    "8 in the corrected ranges, inverted by the standard formulas",
+    erratum=Erratum(
+        "theta in [0, 2 pi), phi in [0, 2 pi), psi in [0, pi)",
+        "theta in (0, pi), phi in [0, 2 pi), psi in [0, 2 pi)  (the standard Euler angles; theta and psi ranges "
+        "swapped in print), p_psi > 0",
+        "For theta in (pi, 2 pi) theta is not the polar angle of z = (sin th cos phi, sin th sin phi, cos th) (that "
+        "is 2 pi - theta), and with theta in (0, pi) the range psi in [0, pi) reaches only half of the leaf (psi -> "
+        "psi + pi maps x -> -x).  Harmless for the formulas: (th, phi, psi, p_th) -> (2 pi - th, phi + pi, psi + pi, "
+        "-p_th) leaves the state unchanged, so the printed ranges are another fundamental domain of the same "
+        "parametrisation.",
+    ),
+    expect_printed=FAILS,
+)
+def _ranges(ctx):
+    V = Q + P
+    f = sp.lambdify(V, list(corrected_realisation()), "mpmath")
+    rng = ctx.rng()
+    wp = wc = z2 = mp.mpf(0)
+    with mp.workdps(ctx.dps):
+        for pt in _chart_points(rng, 8, 3.2, 6.2, 3.1):  # printed ranges, theta in (pi, 2 pi)
+            X = f(*pt)
+            wp = max(wp, abs(_inverse_chart(X)[0] - pt[0]))  # theta is not the polar angle of z
+            # the Z2 symmetry: the same state from (2 pi - th, phi + pi, psi + pi, -p_th)
+            tw = [2 * mp.pi - pt[0], pt[1] + mp.pi, pt[2] + mp.pi, -pt[3], pt[4], pt[5]]
+            z2 = max(z2, max(abs(a - c) for a, c in zip(f(*tw), X, strict=True)))
+        for pt in _chart_points(rng, 8, 0.2, 2.9, 6.2):  # corrected ranges: the inverse recovers the angles
+            back = _inverse_chart(f(*pt))
+            wc = max(wc, max(abs(a - c) for a, c in zip(back, pt, strict=True)))
+    return Outcome(Verdict.from_residual(wp, note=f"Z2 symmetry residual {mp.nstr(z2, 3)}"),
+                   Verdict.from_residual(max(wc, z2)))
+
+
+@register(
+    "Sec5-momenta",
+    "5",
+    "Sections 4-5: x must depend on the momenta since {x^a, x^b} = eps^{ab}_c z^c (functions of the angles alone "
+    "commute); in the realisation x depends on p_psi only, |x|^2 = 2 p_psi > 0; 'as a consequence H describes a "
+    "non-holonomic dynamics'",
+    "exact SymPy on the corrected realisation: {x^1, x^2} = z^3 != 0, dx/dp_psi != 0, dx/dp_th = dx/dp_phi = 0",
+)
+def _momenta(ctx):
+    X = corrected_realisation()
+    x, z = X[3:6], X[6:9]
+    br = sum(sp.diff(x[0], qi) * sp.diff(x[1], pi) - sp.diff(x[0], pi) * sp.diff(x[1], qi)
+             for qi, pi in zip(Q, P, strict=True))
+    ok = sp.simplify(br - z[2]) == 0 and z[2] != 0
+    ok = ok and all(sp.diff(c, pth) == 0 and sp.diff(c, pph) == 0 for c in x) and any(sp.diff(c, pps) != 0 for c in x)
+    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0,
+                           "the mathematical content only; 'non-holonomic' is an interpretation"))
+
+
+@register(
+    "Sec5-cyclic",
+    "5",
+    "Section 5: in the canonical Hamiltonian phi is cyclic (as in the Lagrange case) while psi enters the potential",
+    "exact SymPy: dH/dphi = 0, dH/dpsi = b sqrt(2 p_psi) sin th sin psi != 0 (corrected and printed H)",
+)
+def _cyclic(ctx):
+    ok = True
+    for H in (H_CORRECTED, H_PRINTED):
+        ok = ok and sp.diff(H, ph) == 0
+        ok = ok and sp.simplify(sp.diff(H, ps) - bsym * sp.sqrt(2 * pps) * S(th) * S(ps)) == 0
+    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
