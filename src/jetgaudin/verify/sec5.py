@@ -52,7 +52,7 @@ def _points(ctx, n):
     return pts
 
 
-def _bracket_residual(X, ctx, npts=3):
+def _bracket_residual(X, ctx, npts=10):
     """max over points of |{X_I, X_J}_can - sum_K c^{IJ}_K X_K| and of the leaf conditions (fo)."""
     V = Q + P
     grads = [[sp.diff(e, v) for v in V] for e in X]
@@ -86,7 +86,7 @@ def _bracket_residual(X, ctx, npts=3):
     "5",
     "Section 5, Proposition: the Euler-angle formulas for y, x, z give a canonical realisation of (algebra) on "
     "the leaf (fo) C^(1) = 0, C^(2) = 0, C^(3) = 1",
-    "SymPy derivatives, canonical brackets at 3 seeded random points with mpmath (50 digits)",
+    "SymPy derivatives, canonical brackets at 10 seeded random points with mpmath (50 digits)",
     erratum=Erratum(
         "y = (sin(phi) p_th + cot(th) cos(phi) p_phi - cos(phi)/sin(th) p_psi, -cos(phi) p_th + cot(th) sin(phi) p_phi "
         "- sin(phi)/sin(th) p_psi, p_phi),  x = sqrt(2p_psi)(sin(psi) sin(phi) - cos(th) cos(psi) cos(phi), "
@@ -111,7 +111,7 @@ def _canonical(ctx):
     return Outcome(printed, Verdict.from_residual(max(br2, leaf2)))
 
 
-def _numeric_compare(ctx, exprs_a, exprs_b, npts=4):
+def _numeric_compare(ctx, exprs_a, exprs_b, npts=12):
     V = Q + P + (bsym,)
     fa = sp.lambdify(V, list(exprs_a), "mpmath")
     fb = sp.lambdify(V, list(exprs_b), "mpmath")
@@ -147,7 +147,7 @@ I2_CORRECTED = bsym * C(th) - sp.sqrt(2 * pps) * (pth * S(ps) + (pph + pps * C(t
     "Section 5: H = p_th^2/2 + (p_psi^2 + p_phi^2 - 2 p_psi p_phi cos th)/(2 sin^2 th) "
     "- b sqrt(2 p_psi) sin th cos psi "
     "equals H_2/2 of the (corrected) realisation",
-    "mpmath (50 digits) at 4 seeded random points of the chart",
+    "mpmath (50 digits) at 12 seeded random points of the chart",
     erratum=Erratum(
         "H = p_th^2/2 + (p_psi^2 + p_phi^2 - 2 p_psi p_phi cos(th))/(2 sin^2(th)) - b sqrt(2p_psi) sin(th) cos(psi)",
         "H = p_th^2/2 + (p_psi^2 + p_phi^2 + 2 p_psi p_phi cos(th))/(2 sin^2(th)) - b sqrt(2p_psi) sin(th) cos(psi)",
@@ -172,7 +172,7 @@ def _sec5_H(ctx):
     "Section 5: I_1 = H_2/2 = p_phi and I_2 = H_3/2 = sqrt(2p_psi)[p_th sin psi "
     "+ (p_psi - p_phi cos th) cot th cos psi "
     "- p_phi sin th cos psi] + b cos th on the (corrected) realisation",
-    "mpmath (50 digits) at 4 seeded random points of the chart",
+    "mpmath (50 digits) at 12 seeded random points of the chart",
     erratum=Erratum(
         "I_1 = H_2/2 = p_phi,  I_2 = H_3/2 = sqrt(2p_psi)[p_th sin(psi) + (p_psi - p_phi cos(th)) cot(th) cos(psi) "
         "- p_phi sin(th) cos(psi)] + b cos(th)",

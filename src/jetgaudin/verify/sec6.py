@@ -34,11 +34,11 @@ from ._tools import (
     uvw_at,
 )
 
-NPTS = 3  # random points per check (10 with --full)
+NPTS = 20  # random points per check (50 with --full): each costs ~1-5 ms at 50 digits
 
 
 def _npts(ctx):
-    return 10 if ctx.full else NPTS
+    return 50 if ctx.full else NPTS
 
 
 def _pm(v):
@@ -110,7 +110,7 @@ def _hh(ctx):
     "6.1",
     "(hhh): q = (u(eta) - mu)/v(eta) = -w(eta)/(u(eta) + mu), (eta, mu) on the curve -mu^2 = (1/4)(<b,b> + H_1/eta "
     "+ ... + C_3/eta^6) displayed after it; the one-point dressing is then exact",
-    "mpmath (50 digits), 3 seeded random complex states and eta",
+    "mpmath (50 digits), 20 (50 with --full) seeded random complex states and eta",
     erratum=Erratum(
         "-mu^2 = (1/4)(<b,b> + H_1/eta + H_2/eta^2 + H_3/eta^3 + C_1/eta^4 + C_2/eta^5 + C_3/eta^6)  (with (hhh))",
         "mu^2 = <b,b> + H_1/eta + ... + C_3/eta^6 = u(eta)^2 + v(eta) w(eta): in (hhh), and in (x), (X), mu is the "
@@ -259,7 +259,7 @@ def _mp_symbolic_ok():
     "mp",
     "6.1",
     "(mp): the explicit one-point map (y, x, z) -> (y~, x~, z~), nine components, at spectral (p, q)",
-    "mpmath (50 digits): compared with the exact dressing M ell adj(M)/(l-eta) at 3 (10) seeded random complex "
+    "mpmath (50 digits): compared with the exact dressing M ell adj(M)/(l-eta) at 20 (50 with --full) seeded random complex "
     "states; the corrected components also symbolically (SymPy) against the top-down division",
     erratum=Erratum(
         "x~- = (2pq-eta) x^- - 2p x^3 - p^2 y^+ + pq(pq-eta) y^- - 2p^2 q y^3;  the terms +eta q(pq-eta) y^- of z~3, "
@@ -297,8 +297,8 @@ def _mp(ctx):
 @register(
     "Prop4-casimirs",
     "6.1",
-    "Proof of Prop. 4: the one-point map preserves C^(1), C^(2), C^(3) (and all the integrals H_k, C_k)",
-    "mpmath (50 digits) at 3 (10) seeded random complex states and their exact one-point images",
+    "Proof of Prop. 6: the one-point map preserves C^(1), C^(2), C^(3) (and all the integrals H_k, C_k)",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random complex states and their exact one-point images",
 )
 def _casimirs_preserved(ctx):
     from ._tools import spectral_kappas
@@ -313,15 +313,15 @@ def _casimirs_preserved(ctx):
     return Outcome(Verdict.from_residual(worst))
 
 
-# ----------------------------------------------------------------------------- Prop. 4 (leaf)
+# ----------------------------------------------------------------------------- Prop. 6 (leaf)
 
 
 @register(
     "Prop4-leaf",
     "6.1",
-    "Proof of Prop. 4: y^+ = [2g1 - 1 - 2y^3 z^3 - (y^-/z^-)(1-(z^3)^2)]/z^-, x^+ = [2g2 - 2x^3 z^3 - (x^-/z^-)"
+    "Proof of Prop. 6: y^+ = [2g1 - 1 - 2y^3 z^3 - (y^-/z^-)(1-(z^3)^2)]/z^-, x^+ = [2g2 - 2x^3 z^3 - (x^-/z^-)"
     "(1-(z^3)^2)]/z^-, z^+ = (1-(z^3)^2)/z^- on the leaf C^(1) = g1, C^(2) = g2, C^(3) = 1 (and the same for ~)",
-    "mpmath (50 digits) at 3 (10) seeded random points of the leaf and their one-point images",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random points of the leaf and their one-point images",
     erratum=Erratum(
         "y^+ = [2 g1 - 1 - 2 y^3 z^3 - (y^-/z^-)(1 - (z^3)^2)]/z^-   (and y~^- likewise)",
         "y^+ = [2 g1 - <x,x> - 2 y^3 z^3 - (y^-/z^-)(1 - (z^3)^2)]/z^-,  <x,x> = (x^3)^2 + x^+ x^-, with x^+ from "
@@ -399,9 +399,9 @@ _PSI_C = ("y^3 = y^- y~^+/(2b) - (1/(2k^3)){ (1/4)[eta(z^- x~^+ - x^- z~^+)]^2 "
 @register(
     "Prop4-Psi",
     "6.1",
-    "Proof of Prop. 4: the map in the variables (Psi, chi^-, Psi~, chi~^+): y^3, x^3, z^3, y~^3, x~^3, z~^3 as "
+    "Proof of Prop. 6: the map in the variables (Psi, chi^-, Psi~, chi~^+): y^3, x^3, z^3, y~^3, x~^3, z~^3 as "
     "printed, with k^2 = 1 + eta z^- z~^+",
-    "mpmath (50 digits) at 3 (10) seeded random points of the leaf C^(3) = 1 and their exact one-point images; k is "
+    "mpmath (50 digits) at 20 (50 with --full) seeded random points of the leaf C^(3) = 1 and their exact one-point images; k is "
     "the root realised by the map, k = z^3 - y~^+ z^-/(2b) (k^2 = 1 + eta z^- z~^+ is checked)",
     erratum=Erratum(
         "y^3 = y^- y^+/(2b) - (1/(2k^3)){ (1/2)[eta(z^- x~^+ + x^- z~^+) - z^- z~^+]^2 + eta^2[...] "
@@ -495,9 +495,9 @@ _F_C = ("F = y^- y~^+/(2b) + k(y^-/z^- + y~^+/z~^+) - [(1 + 2 eta g2)^2 + k^2]/(
 @register(
     "fu",
     "6.1",
-    "Prop. 4, (e1), (e2), (fu): Psi_i = sum_j {Psi_i, chi^-_j} dF/dchi^-_j, Psi~_i = sum_j {chi~^+_j, Psi~_i} "
+    "Prop. 6, (e1), (e2), (fu): Psi_i = sum_j {Psi_i, chi^-_j} dF/dchi^-_j, Psi~_i = sum_j {chi~^+_j, Psi~_i} "
     "dF/dchi~^+_j with F_eta of (fu), on the leaf C^(1) = g1, C^(2) = g2, C^(3) = 1",
-    "mpmath (50 digits): SymPy gradient of F evaluated at 3 (10) seeded leaf points and their exact one-point images",
+    "mpmath (50 digits): SymPy gradient of F evaluated at 20 (50 with --full) seeded leaf points and their exact one-point images",
     erratum=Erratum(
         "(e1) Psi_i = sum_j {Psi_i, chi^-_j} dF/dchi^-_j, (e2) likewise, with F of (fu)",
         "(e1) Psi_i = -i sum_j {Psi_i, chi^-_j} dF/dchi^-_j, (e2) Psi~_i = -i sum_j {chi~^+_j, Psi~_i} dF/dchi~^+_j "
@@ -518,7 +518,7 @@ def _fu(ctx):
     "Rem-spectrality",
     "6.1",
     "Remark (spectrality): mu = u(eta) - y~^+ v(eta)/(2b) = -dF_eta/deta",
-    "mpmath (50 digits) at 3 (10) seeded leaf points; SymPy derivative of F in eta at fixed (chi^-, chi~^+)",
+    "mpmath (50 digits) at 20 (50 with --full) seeded leaf points; SymPy derivative of F in eta at fixed (chi^-, chi~^+)",
     erratum=Erratum(
         "mu = u(eta) - y~^+ v(eta)/(2b) = -dF_eta/deta",
         "nu = u(eta) - y~^+ v(eta)/(2b) = +dF/deta with the corrected F of the check fu (nu the eigenvalue of "
@@ -586,7 +586,7 @@ _MU_ERR = Erratum(
     "6.2",
     "(x): s = (u(eta1) - mu1)/v(eta1) = (u^(eta2) - mu2)/v^(eta2), for the map defined by (128), (mm), (X); "
     "mu_j related to the curve by -(2 mu_j)^2 = u^2 + v w as printed",
-    "mpmath (50 digits): exact two-point dressing at 3 (10) seeded random complex states, eta1, eta2",
+    "mpmath (50 digits): exact two-point dressing at 20 (50 with --full) seeded random complex states, eta1, eta2",
     erratum=_MU_ERR,
     expect_printed=FAILS,
 )
@@ -610,7 +610,7 @@ def _x(ctx):
     "6.2",
     "(X): t = (eta1-eta2)(u(eta1)+mu1)(u(eta2)-mu2)/[(u(eta1)+mu1)w(eta2) - (u(eta2)-mu2)w(eta1)] = the same in "
     "the updated variables (second form), mu_j with -(2 mu_j)^2 = u^2 + v w as printed",
-    "mpmath (50 digits): exact two-point dressing at 3 (10) seeded random complex states, eta1, eta2",
+    "mpmath (50 digits): exact two-point dressing at 20 (50 with --full) seeded random complex states, eta1, eta2",
     erratum=_MU_ERR,
     expect_printed=FAILS,
 )
@@ -637,7 +637,7 @@ def _X(ctx):
     "2p-identity",
     "6.2",
     "Section 6.2: for eta1 = eta2 (and mu1 = mu2) the two-point map is the identity (t = 0, M = (l - eta) 1)",
-    "mpmath (50 digits) at 3 (10) seeded random complex states",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random complex states",
 )
 def _identity(ctx):
     rng = ctx.rng()
@@ -660,7 +660,7 @@ def _identity(ctx):
     "6.2",
     "Section 6.2: B_(eta, -mu) is the inverse of B_(eta, mu) (the two one-point maps are inverse to each other "
     "for eta1 = eta2, mu1 = mu2)",
-    "mpmath (50 digits) at 3 (10) seeded random complex states: compose exact one-point dressings",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random complex states: compose exact one-point dressings",
     erratum=Erratum(
         "B_Q o B_P = id for eta1 = eta2, mu1 = mu2, reading B_(eta,-mu) as the forward map (rr) with -mu in (hhh)",
         "the inverse of B_(eta,nu) is ell = M^-1 ell~ M with q = y~^+/(2b), p = (u~(eta) - nu)/w~(eta) (not the "
@@ -698,7 +698,7 @@ def _inverse(ctx):
     "2p-real",
     "6.2",
     "Section 6.2: with eta1 = conj(eta2) the two-point map is real (maps real states to real states)",
-    "mpmath (50 digits) at 3 (10) seeded random real states: imaginary part of the exact dressing",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random real states: imaginary part of the exact dressing",
     erratum=Erratum(
         "eta1 = conj(eta2) =: eta  (reality condition)",
         "eta1 = conj(eta2) and mu2 = conj(mu1) (mu read as nu; the point Q2 = (eta2, -mu2) is then on the sheet "
@@ -735,7 +735,7 @@ __all__ = ["ell_at", "m_mul"]  # re-exported helpers (keeps linters quiet about 
     "6.2",
     "(128): the two-point map of (mm), (x), (X) is the composite B_(Q2) o B_(P1), P1 = (eta1, mu1), "
     "Q2 = (eta2, -mu2), of one-point maps",
-    "mpmath (50 digits) at 3 (10) seeded random complex states, eta1, eta2: exact dressings composed",
+    "mpmath (50 digits) at 20 (50 with --full) seeded random complex states, eta1, eta2: exact dressings composed",
     erratum=Erratum(
         "B_(P1,Q2) = B_(Q2) o B_(P1) with B_(Q2) = B_(eta2, -mu2) the one-point map (rr) with -mu2 in (hhh)",
         "B_(Q2) is the inverse one-point map at eta2: ell^ = M2^-1 ell~ M2 with q2 = y~^+/(2b), "
