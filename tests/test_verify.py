@@ -169,9 +169,58 @@ def test_cli_json_and_exit_0():
 
 
 def test_cli_table():
-    r = CliRunner().invoke(_local_app(), ["verify", "--only", "mp-w"])
+    r = CliRunner().invoke(_local_app(), ["verify", "--only", "mp-w", "--only", "BT-poisson-one-point", "--long"])
     assert r.exit_code == 0, r.output
     assert "mp-w" in r.output and "[w + 2q u - q^2 v]" in r.output  # markup escaped, not eaten by Rich
+    assert max(len(line) for line in r.output.splitlines()) <= 80  # issue 11 item 10: readable at 80 columns
+
+
+def test_cli_table_fits_80_columns():
+    r = CliRunner().invoke(_local_app(), ["verify", "--only", "Hh", "--only", "BT-integrals", "--only", "App1"])
+    assert r.exit_code == 0, r.output
+    assert "BT-integrals" in r.output and "#" in r.output  # the errata entry number of Hh / App1-*
+    assert max(len(line) for line in r.output.splitlines()) <= 80
+
+
+# ------------------------------------------------------------------------------------------ coverage
+
+
+def test_coverage_map(results):
+    from jetgaudin.verify.coverage import STATEMENTS, Coverage
+
+    assert len(STATEMENTS) >= 80
+    assert not [s.statement for s in STATEMENTS if s.status == Coverage.UNCHECKED]
+    for s in STATEMENTS:
+        if s.status in (Coverage.PARTLY, Coverage.DEFINITION, Coverage.NOT_CHECKABLE):
+            assert s.reason, s.statement  # partly / definition / not checkable only with a reason
+        if s.status in (Coverage.CHECKED, Coverage.PARTLY):
+            assert s.checks, s.statement
+        missing = [c for c in s.checks if c not in results]  # every cited label is a default check
+        assert not missing, (s.statement, missing)
+    # every labelled equation of the paper has an entry (labels as in the LaTeX source)
+    text = " ".join(s.statement for s in STATEMENTS)
+    for label in ("lax", "LP", "er", "yy", "lax2", "curve", "Hh", "C", "kk", "algebra", "cu3", "we", "cas", "kkk",
+                  "H", "em", "fo", "rr", "ansatz", "hh", "hhh", "mp", "leaf", "e1", "e2", "fu", "128", "mm", "x",
+                  "X", "gg", "2p"):
+        assert f"({label})" in text, label
+    for name in ("Prop. 1", "Prop. 2", "Prop. 3", "Prop. 4", "Prop. 5", "Prop. 6", "Prop. 7", "Lemma 1",
+                 "Remark 1", "Remark 2", "Remark 3"):
+        assert name in text, name
+    # every default check is cited somewhere
+    assert set(results) <= {c for s in STATEMENTS for c in s.checks}
+
+
+def test_cli_coverage_json_and_table():
+    r = CliRunner().invoke(_local_app(), ["verify", "--coverage", "--json"])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.output)
+    assert len(data) >= 80
+    assert all(set(d) == {"statement", "section", "status", "checks", "reason"} for d in data)
+    assert {d["status"] for d in data} <= {"checked", "partly", "definition", "not checkable", "unchecked"}
+    r = CliRunner().invoke(_local_app(), ["verify", "--coverage"])
+    assert r.exit_code == 0, r.output
+    assert max(len(line) for line in r.output.splitlines()) <= 80
+    assert f"{len(data)} statements" in r.output
 
 
 def test_cli_unknown_label_exit_2():

@@ -13,14 +13,20 @@ from pathlib import Path
 from . import DEFAULT_SEED, errata_markdown, exit_code, run_checks
 
 
-def main(argv=None) -> int:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m jetgaudin.verify", description=__doc__)
     ap.add_argument("--errata", type=Path, help="write the generated errata markdown to this path and exit")
     ap.add_argument("--only", action="append", help="run only this check label (repeatable)")
     ap.add_argument("--full", action="store_true", help="include the heavier checks")
     ap.add_argument("--seed", type=int, default=DEFAULT_SEED)
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--coverage", action="store_true", help="print the coverage map of the paper (JSON) and exit")
     a = ap.parse_args(argv)
+    if a.coverage:
+        from .coverage import coverage
+
+        print(json.dumps(coverage(), indent=1))
+        return 0
     if a.errata is not None:
         a.errata.parent.mkdir(parents=True, exist_ok=True)
         a.errata.write_text(errata_markdown(), encoding="utf-8")
@@ -31,7 +37,7 @@ def main(argv=None) -> int:
         print(json.dumps([r.to_dict() for r in res], indent=1))
     else:
         for r in res:
-            print(f"{r.label:18s} {r.status:9s} printed={r.printed:9s} corrected={r.corrected!s:9s} {r.seconds:7.2f}s")
+            print(f"{r.label:20s} {r.status:9s} printed={r.printed:9s} corrected={r.corrected!s:9s} {r.seconds:6.2f}s")
     return exit_code(res)
 
 

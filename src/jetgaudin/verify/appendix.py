@@ -198,7 +198,8 @@ _APP1_NOTE = ("Corrected entries are those of jetgaudin.backlund.closed_form.two
     "App1-A",
     "Appendix 1",
     "Appendix 1: the skew matrix A(s,t;eta) (alpha_1 = 2 Im(eta) - s t, alpha_2 = alpha_1 - s t)",
-    "mpmath (50 digits) at the spectral (s, t) of 12 (30 with --full) seeded random real states: entries vs the SymPy derivation",
+    "mpmath (50 digits) at the spectral (s, t) of 12 (30 with --full) seeded random real states: "
+    "entries vs the SymPy derivation",
     erratum=Erratum(
         "alpha_1 = 2 Im(eta) - s t",
         "alpha_1 = eta_1 - eta_2 - s t = 2i Im(eta) - s t  (A itself is then right as printed)",
@@ -214,7 +215,8 @@ def _app1_A(ctx):
     "App1-B",
     "Appendix 1",
     "Appendix 1: the matrix B(s,t;eta)",
-    "mpmath (50 digits) at the spectral (s, t) of 12 (30 with --full) seeded random real states: entries vs the SymPy derivation",
+    "mpmath (50 digits) at the spectral (s, t) of 12 (30 with --full) seeded random real states: "
+    "entries vs the SymPy derivation",
     erratum=Erratum(
         "B_13 = s a1 (a2 + R)/2, B_22 = (1 + s^2)(a1^2 - t^2)/2, B_23 = -(i/2) s a1 (a2 + R), B_32 = (1/2)[t(a2 + 2R) "
         "- s a1 (a2 - 2R)], B_33 = 4 s t a1  (R = Re eta, a1 = 2 Im(eta) - s t)",

@@ -230,3 +230,20 @@ def _constants(ctx):
     ok = is_zero(lp_bracket(y[2], H, ys)) and is_zero(lp_bracket(dot(z, z), H, ys))
     ok = ok and not is_zero(lp_bracket(dot(x, x), H, ys))
     return Outcome(_ok(ok))
+
+
+@register(
+    "Sec4-angle",
+    "4.1",
+    "Section 4.1: since |x| is not preserved, C_2 = 2<x,z> does not imply that the angle between x and z is "
+    "constant",
+    "exact SymPy with (LP): d<x,z>/dt = 0 but d/dt [<x,z>^2/(|x|^2 |z|^2)] is not identically 0 along (em)",
+)
+def _angle(ctx):
+    ys, y, x, z = _yxz()
+    H = dot(y, y) / 2 + b * x[2]
+    xz, xx, zz = dot(x, z), dot(x, x), dot(z, z)
+    cos2_dot = (2 * xz * lp_bracket(xz, H, ys) * xx * zz - xz**2 * (lp_bracket(xx, H, ys) * zz
+                                                                    + xx * lp_bracket(zz, H, ys)))
+    ok = is_zero(lp_bracket(xz, H, ys)) and sp.expand(cos2_dot) != 0  # a polynomial: expand is canonical
+    return Outcome(_ok(ok))

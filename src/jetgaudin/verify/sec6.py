@@ -259,7 +259,8 @@ def _mp_symbolic_ok():
     "mp",
     "6.1",
     "(mp): the explicit one-point map (y, x, z) -> (y~, x~, z~), nine components, at spectral (p, q)",
-    "mpmath (50 digits): compared with the exact dressing M ell adj(M)/(l-eta) at 20 (50 with --full) seeded random complex "
+    "mpmath (50 digits): compared with the exact dressing M ell adj(M)/(l-eta) at 20 (50 with --full) "
+    "seeded random complex "
     "states; the corrected components also symbolically (SymPy) against the top-down division",
     erratum=Erratum(
         "x~- = (2pq-eta) x^- - 2p x^3 - p^2 y^+ + pq(pq-eta) y^- - 2p^2 q y^3;  the terms +eta q(pq-eta) y^- of z~3, "
@@ -401,7 +402,8 @@ _PSI_C = ("y^3 = y^- y~^+/(2b) - (1/(2k^3)){ (1/4)[eta(z^- x~^+ - x^- z~^+)]^2 "
     "6.1",
     "Proof of Prop. 6: the map in the variables (Psi, chi^-, Psi~, chi~^+): y^3, x^3, z^3, y~^3, x~^3, z~^3 as "
     "printed, with k^2 = 1 + eta z^- z~^+",
-    "mpmath (50 digits) at 20 (50 with --full) seeded random points of the leaf C^(3) = 1 and their exact one-point images; k is "
+    "mpmath (50 digits) at 20 (50 with --full) seeded random points of the leaf C^(3) = 1 and their "
+    "exact one-point images; k is "
     "the root realised by the map, k = z^3 - y~^+ z^-/(2b) (k^2 = 1 + eta z^- z~^+ is checked)",
     erratum=Erratum(
         "y^3 = y^- y^+/(2b) - (1/(2k^3)){ (1/2)[eta(z^- x~^+ + x^- z~^+) - z^- z~^+]^2 + eta^2[...] "
@@ -497,7 +499,8 @@ _F_C = ("F = y^- y~^+/(2b) + k(y^-/z^- + y~^+/z~^+) - [(1 + 2 eta g2)^2 + k^2]/(
     "6.1",
     "Prop. 6, (e1), (e2), (fu): Psi_i = sum_j {Psi_i, chi^-_j} dF/dchi^-_j, Psi~_i = sum_j {chi~^+_j, Psi~_i} "
     "dF/dchi~^+_j with F_eta of (fu), on the leaf C^(1) = g1, C^(2) = g2, C^(3) = 1",
-    "mpmath (50 digits): SymPy gradient of F evaluated at 20 (50 with --full) seeded leaf points and their exact one-point images",
+    "mpmath (50 digits): SymPy gradient of F evaluated at 20 (50 with --full) seeded leaf points and "
+    "their exact one-point images",
     erratum=Erratum(
         "(e1) Psi_i = sum_j {Psi_i, chi^-_j} dF/dchi^-_j, (e2) likewise, with F of (fu)",
         "(e1) Psi_i = -i sum_j {Psi_i, chi^-_j} dF/dchi^-_j, (e2) Psi~_i = -i sum_j {chi~^+_j, Psi~_i} dF/dchi~^+_j "
@@ -518,7 +521,8 @@ def _fu(ctx):
     "Rem-spectrality",
     "6.1",
     "Remark (spectrality): mu = u(eta) - y~^+ v(eta)/(2b) = -dF_eta/deta",
-    "mpmath (50 digits) at 20 (50 with --full) seeded leaf points; SymPy derivative of F in eta at fixed (chi^-, chi~^+)",
+    "mpmath (50 digits) at 20 (50 with --full) seeded leaf points; SymPy derivative of F in eta at "
+    "fixed (chi^-, chi~^+)",
     erratum=Erratum(
         "mu = u(eta) - y~^+ v(eta)/(2b) = -dF_eta/deta",
         "nu = u(eta) - y~^+ v(eta)/(2b) = +dF/deta with the corrected F of the check fu (nu the eigenvalue of "
