@@ -218,10 +218,13 @@ def test_canonical_hamiltonian_and_integrals(rng, b):
     np.testing.assert_allclose(cn.canonical_hamiltonian(Q, b), jg.physical_hamiltonian(3, b)(X), rtol=1e-12,
                                atol=1e-12)
     I = cn.canonical_integrals(Q, b)
-    np.testing.assert_allclose(I, ints[:, [0, 2]] / 2, rtol=1e-12, atol=1e-12)
+    # I_1 = p_phi = H_1/(2b) (the paper's value; H_1 = 2<b, y> = 2 b y^3), I_2 = H_3/2
+    np.testing.assert_allclose(I[:, 0], ints[:, 0] / (2 * b), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(I[:, 0], Q[:, 4], rtol=0, atol=0)
+    np.testing.assert_allclose(I[:, 1], ints[:, 2] / 2, rtol=1e-12, atol=1e-12)
     th, ph, ps, pth, pph, pps = Q.T
-    # misprints: printed I_1 = H_2/2 = p_phi (it is H_1/2 = b p_phi); printed I_2 has the opposite sign of
-    # sqrt(2 p_psi)(p_theta sin psi + p_psi cot theta cos psi)
+    # misprints: printed I_1 = H_2/2 = p_phi (p_phi is right, the label is H_1/(2b)); printed I_2 has the opposite
+    # sign of sqrt(2 p_psi)(p_theta sin psi + p_psi cot theta cos psi)
     assert np.abs(ints[:, 1] / 2 - pph).max() > 0.1
     I2_printed = np.sqrt(2 * pps) * (pth * np.sin(ps) + (pps - pph * np.cos(th)) / np.tan(th) * np.cos(ps)
                                      - pph * np.sin(th) * np.cos(ps)) + b * np.cos(th)

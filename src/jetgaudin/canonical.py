@@ -24,7 +24,7 @@ corrections are: the signs of the ``p_θ`` and ``p_φ`` terms of ``y¹, y²`` an
 of ``x¹, x²``.  See ``docs/canonical.md`` and ``docs/errata.md``.  Chart: ``θ ∈ (0, π)``, ``φ, ψ ∈ [0, 2π)``,
 ``p_ψ > 0`` (the printed ranges ``θ ∈ [0, 2π)``, ``ψ ∈ [0, π)`` are not a chart).
 
-Hamiltonian ``H = H_2/2 = |y|²/2 + b x³`` (eq. (H)) and integrals ``I_1 = H_1/2 = b p_φ``,
+Hamiltonian ``H = H_2/2 = |y|²/2 + b x³`` (eq. (H)) and integrals ``I_1 = y³ = p_φ`` (``= H_1/(2b)``),
 ``I_2 = H_3/2 = b z³ + ⟨y, x⟩`` in these variables: :func:`canonical_hamiltonian`,
 :func:`canonical_integrals`; Hamilton's equations: :func:`canonical_vector_field` (derived with SymPy).
 """
@@ -410,21 +410,39 @@ def canonical_hamiltonian(Q, b) -> np.ndarray:
 
 
 def canonical_integrals(Q, b) -> np.ndarray:
-    r"""The integrals ``(I_1, I_2)`` in canonical variables, shape ``(..., 2)``:
+    r"""The integrals ``(I_1, I_2)`` of Section 5 in canonical variables, shape ``(..., 2)``:
 
-    .. math:: I_1 = \tfrac12 H_1 = \langle b, y\rangle = b\,p_\phi, \qquad
+    .. math:: I_1 = y^3 = p_\phi \;(= H_1/(2b) \text{ for } b \ne 0), \qquad
               I_2 = \tfrac12 H_3 = b\cos\theta - \sqrt{2 p_\psi}\Big(p_\theta\sin\psi
                     + \frac{p_\phi + p_\psi\cos\theta}{\sin\theta}\cos\psi\Big).
 
-    The paper prints ``I_1 = H_2/2 = p_φ`` (it is ``H_1/2 = b p_φ``; ``H_2/2`` is the Hamiltonian) and an
-    ``I_2`` with the opposite signs of the ``p_θ sin ψ`` and ``p_ψ cot θ cos ψ`` terms (misprints; see
-    ``docs/errata.md``).  On the leaf the remaining integrals are the Casimirs ``C_1 = C_2 = 0``, ``C_3 = 1``.
+    The paper prints ``I_1 = H_2/2 = p_φ``: the value ``p_φ`` is right (``φ`` is cyclic), the label is not
+    (``H_2/2`` is the Hamiltonian; ``H_1 = 2⟨b, y⟩ = 2b p_φ``, so ``I_1 = H_1/(2b)``, and ``H_1/2 = b p_φ`` only
+    for ``b = 1``).  The printed ``I_2`` has the opposite signs of the ``p_θ sin ψ`` and ``p_ψ cot θ cos ψ``
+    terms.  See ``docs/errata.md`` (check ``Sec5-I``).  On the leaf the remaining integrals are the Casimirs
+    ``C_1 = C_2 = 0``, ``C_3 = 1``.
+
+    Parameters
+    ----------
+    Q : array_like, shape (..., 6)
+        ``(θ, φ, ψ, p_θ, p_φ, p_ψ)`` with ``sin θ ≠ 0``, ``p_ψ ≥ 0``.
+    b : float
+        The field strength (field ``b e_3``); enters ``I_2`` only.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+
+    Raises
+    ------
+    InvalidStateError, InvalidParameterError
+        Bad shape, non-finite entries, ``sin θ = 0``, ``p_ψ < 0``; ``b`` not a finite real number.
     """
     b = _scalar_b(b)
     Q = _as_canonical(Q)
     th, _, ps, pth, pph, pps = Q.reshape(-1, 6).T
     st, ct = np.sin(th), np.cos(th)
-    I1 = b * pph
+    I1 = pph
     I2 = b * ct - np.sqrt(2 * pps) * (pth * np.sin(ps) + (pph + pps * ct) / st * np.cos(ps))
     return np.stack([I1, I2], axis=-1).reshape(Q.shape[:-1] + (2,))
 
