@@ -11,6 +11,7 @@ import jetgaudin as jg
 from jetgaudin import canonical as cn
 from jetgaudin._errors import InvalidParameterError, InvalidStateError, OffLeafError
 from jetgaudin.algebra import casimirs, poisson_tensor, structure_constants
+from jetgaudin.verify import printed
 
 NAMES = [f"{v}{a}" for v in "yxz" for a in (1, 2, 3)]
 PCAN = np.block([[np.zeros((3, 3)), np.eye(3)], [-np.eye(3), np.zeros((3, 3))]])  # {q_i, p_j} = delta_ij
@@ -78,7 +79,7 @@ def test_corrected_realisation_reproduces_algebra_and_leaf_symbolically():
 
 def test_printed_realisation_fails_symbolically():
     # misprint of Section 5 (Proposition): exactly these brackets fail, and the image is off the leaf
-    q, p, X = cn.symbolic_realisation(printed=True)
+    q, p, X = printed.symbolic_realisation()
     th, ph, ps = q
     pth, pph, pps = p
     res = _bracket_residuals(X, q, p)
@@ -94,7 +95,7 @@ def test_printed_realisation_fails_symbolically():
     assert sp.simplify(C1 - 2 * pph * sp.cos(th)) == 0
     assert sp.simplify(C2 + 2 * sp.sqrt(2 * pps) * sp.sin(th) * sp.cos(th) * sp.cos(ps)) == 0
     assert C3 == 0
-    ok, res2 = cn.check_realisation(printed=True)
+    ok, res2 = cn.check_realisation(X)
     assert not ok and set(res2) == set(expected) | {"C1", "C2"}
 
 
@@ -103,9 +104,9 @@ def test_symbolic_hamiltonian_is_H2_over_2_and_printed_one_is_not():
     _, _, b, H = cn.symbolic_hamiltonian()
     H2half = sum(v**2 for v in X[0:3]) / 2 + b * X[5]
     assert sp.simplify(H - H2half) == 0
-    _, _, _, Hp = cn.symbolic_hamiltonian(printed=True)
-    th, _, _ = q
-    _, pph, pps = p
+    th, _, ps = q
+    pth, pph, pps = p
+    Hp = printed.hamiltonian(sp, th, ps, pth, pph, pps, b)
     # printed H misses the sign of the cross term: H - H_printed = 2 p_psi p_phi cos(theta) / sin^2(theta)
     assert sp.simplify(H - Hp - 2 * pps * pph * sp.cos(th) / sp.sin(th) ** 2) == 0
 
@@ -131,18 +132,18 @@ def test_poisson_tensor_pullback_numeric(rng):
 
 def test_printed_realisation_fails_numerically(rng):
     # the printed map's pulled-back tensor differs from Pi(X) by O(1) (entries like 2 cos(theta)): assert > 0.1
-    q, p, X = cn.symbolic_realisation(printed=True)
+    q, p, X = printed.symbolic_realisation()
     f = sp.lambdify((*q, *p), list(X), "numpy")
 
-    def printed(Q):
+    def printed_map(Q):
         return np.array(np.broadcast_arrays(*f(*Q)), dtype=float)
 
     for Q in random_Q(rng, 10):
         Q[0] = rng.uniform(0.3, 1.2)  # keep cos(theta) and sin(theta) away from 0 so the defect is O(1)
-        J = fd_jacobian(printed, Q)
-        resid = np.abs(J @ PCAN @ J.T - poisson_tensor(printed(Q))).max()
+        J = fd_jacobian(printed_map, Q)
+        resid = np.abs(J @ PCAN @ J.T - poisson_tensor(printed_map(Q))).max()
         assert resid > 0.1
-        assert not cn.on_canonical_leaf(printed(Q))
+        assert not cn.on_canonical_leaf(printed_map(Q))
 
 
 def test_image_on_leaf_and_casimirs(rng):
@@ -226,13 +227,11 @@ def test_canonical_hamiltonian_and_integrals(rng, b):
     # misprints: printed I_1 = H_2/2 = p_phi (p_phi is right, the label is H_1/(2b)); printed I_2 has the opposite
     # sign of sqrt(2 p_psi)(p_theta sin psi + p_psi cot theta cos psi)
     assert np.abs(ints[:, 1] / 2 - pph).max() > 0.1
-    I2_printed = np.sqrt(2 * pps) * (pth * np.sin(ps) + (pps - pph * np.cos(th)) / np.tan(th) * np.cos(ps)
-                                     - pph * np.sin(th) * np.cos(ps)) + b * np.cos(th)
+    I2_printed = printed.integral_I2(np, th, ps, pth, pph, pps, b)
     np.testing.assert_allclose(I[:, 1] - I2_printed,
                                -2 * np.sqrt(2 * pps) * (pth * np.sin(ps) + pps / np.tan(th) * np.cos(ps)),
                                rtol=1e-10, atol=1e-10)
-    H_printed = pth**2 / 2 + (pps**2 + pph**2 - 2 * pps * pph * np.cos(th)) / (2 * np.sin(th) ** 2) \
-        - b * np.sqrt(2 * pps) * np.sin(th) * np.cos(ps)
+    H_printed = printed.hamiltonian(np, th, ps, pth, pph, pps, b)
     assert np.abs(H_printed - ints[:, 1] / 2).max() > 0.1
 
 

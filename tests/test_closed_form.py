@@ -9,12 +9,12 @@ from jetgaudin.backlund.closed_form import (
     _one_point_core,
     _two_point_core,
     one_point_closed_form,
-    one_point_closed_form_printed,
     two_point_closed_form,
-    two_point_closed_form_printed,
     two_point_matrices,
-    two_point_matrices_printed,
 )
+from jetgaudin.verify.printed import appendix1_arrays as two_point_matrices_printed  # the paper as printed
+from jetgaudin.verify.printed import appendix1_map as two_point_closed_form_printed
+from jetgaudin.verify.printed import one_point_map_array as one_point_closed_form_printed
 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 

@@ -12,16 +12,16 @@ import jetgaudin as jg
 from jetgaudin.backlund.closed_form import _one_point_core
 from jetgaudin.backlund.generating import (
     _elim_core,
-    _elim_printed_core,
     _F_core,
-    _F_printed_core,
     _psi_core,
-    _psi_printed_core,
     casimir_elimination,
     generating_function,
     generating_psi,
     generating_variables,
 )
+from jetgaudin.verify.printed import casimir_elimination as _elim_printed_core  # the paper as printed
+from jetgaudin.verify.printed import generating_function as _F_printed_core
+from jetgaudin.verify.printed import psi as _psi_printed_core
 
 DPS = 50
 #: identities exact in exact arithmetic: at 50 digits, residuals are ~1e-45 relative; derivatives by a

@@ -85,7 +85,7 @@ def test_errata_file_in_sync():
     assert text == errata_markdown(), "regenerate: python -m jetgaudin.verify --errata docs/errata.md"
     labels = re.findall(r"^## \d+\. `([^`]+)`", text, flags=re.M)
     # the generator's stable order (module, then line), independent of which test imported what first
-    from jetgaudin.verify._errata import _paper_order
+    from jetgaudin.verify._registry import paper_order as _paper_order
 
     assert labels == [c.label for c in sorted(REGISTRY.values(), key=_paper_order) if c.erratum is not None]
 
@@ -270,7 +270,7 @@ def test_errata_cross_references_name_existing_tests():
 def test_errata_links_point_at_their_entries(results):
     """Each misprinted check links its docs/errata.md entry: the anchor is the slug of the entry's heading and
     the heading names the check's label."""
-    from jetgaudin.verify._errata import _slug
+    from jetgaudin.verify._registry import slug as _slug
 
     text = (ROOT / "docs" / "errata.md").read_text(encoding="utf-8")
     headings = {_slug(h): h for h in re.findall(r"^## (.+)$", text, flags=re.M)}

@@ -22,7 +22,8 @@ so ``⟨y, z⟩ = −p_ψ``, ``|x|² = 2 p_ψ``, ``p_θ = ⟨y, e_φ⟩``, ``p_�
 Section 5 is misprinted (its canonical brackets fail (algebra) and its image is off the leaf); the
 corrections are: the signs of the ``p_θ`` and ``p_φ`` terms of ``y¹, y²`` and of the ``cos θ cos ψ`` terms
 of ``x¹, x²``.  See ``docs/canonical.md`` and ``docs/errata.md``.  Chart: ``θ ∈ (0, π)``, ``φ, ψ ∈ [0, 2π)``,
-``p_ψ > 0`` (the printed ranges ``θ ∈ [0, 2π)``, ``ψ ∈ [0, π)`` are not a chart).
+``p_ψ > 0`` (the standard Euler angles; the printed ranges ``θ ∈ [0, 2π)``, ``ψ ∈ [0, π)`` swap those of ``θ`` and
+``ψ``: check ``Sec5-ranges``).
 
 Hamiltonian ``H = H_2/2 = |y|²/2 + b x³`` (eq. (H)) and integrals ``I_1 = y³ = p_φ`` (``= H_1/(2b)``),
 ``I_2 = H_3/2 = b z³ + ⟨y, x⟩`` in these variables: :func:`canonical_hamiltonian`,
@@ -73,49 +74,36 @@ def _symbols():
 
 
 @cache
-def symbolic_realisation(printed: bool = False):
+def symbolic_realisation() -> tuple[tuple, tuple, tuple]:
     r"""The realisation as SymPy expressions: ``(q, p, X)`` with ``q = (θ, φ, ψ)``, ``p = (p_θ, p_φ, p_ψ)``
-    (real symbols) and ``X`` a tuple of the 9 components ``(y¹, y², y³, x¹, x², x³, z¹, z², z³)``.
-
-    ``printed=True`` gives the proposition of Section 5 exactly as printed (it is *not* a realisation:
-    see :func:`check_realisation`); the default is the corrected one of the module docstring.
+    (real symbols) and ``X`` a tuple of the 9 components ``(y¹, y², y³, x¹, x², x³, z¹, z², z³)`` of the corrected
+    realisation of the module docstring (Section 5, Proposition; the printed one is transcribed only in
+    :mod:`jetgaudin.verify.printed`).
     """
     (th, ph, ps), (pth, pph, pps), _ = _symbols()
     s, c, cot = sp.sin, sp.cos, sp.cot
     z = (s(th) * c(ph), s(th) * s(ph), c(th))
     r = sp.sqrt(2 * pps)
-    if printed:
-        y = (s(ph) * pth + cot(th) * c(ph) * pph - c(ph) / s(th) * pps,
-             -c(ph) * pth + cot(th) * s(ph) * pph - s(ph) / s(th) * pps,
-             pph)
-        x = (r * (s(ps) * s(ph) - c(th) * c(ps) * c(ph)),
-             r * (-s(ps) * c(ph) - c(th) * c(ps) * s(ph)),
-             r * (-s(th) * c(ps)))
-    else:
-        y = (-s(ph) * pth - cot(th) * c(ph) * pph - c(ph) / s(th) * pps,
-             c(ph) * pth - cot(th) * s(ph) * pph - s(ph) / s(th) * pps,
-             pph)
-        x = (r * (s(ps) * s(ph) + c(th) * c(ps) * c(ph)),
-             r * (-s(ps) * c(ph) + c(th) * c(ps) * s(ph)),
-             r * (-s(th) * c(ps)))
+    y = (-s(ph) * pth - cot(th) * c(ph) * pph - c(ph) / s(th) * pps,
+         c(ph) * pth - cot(th) * s(ph) * pph - s(ph) / s(th) * pps,
+         pph)
+    x = (r * (s(ps) * s(ph) + c(th) * c(ps) * c(ph)),
+         r * (-s(ps) * c(ph) + c(th) * c(ps) * s(ph)),
+         r * (-s(th) * c(ps)))
     return (th, ph, ps), (pth, pph, pps), tuple(y) + tuple(x) + tuple(z)
 
 
 @cache
-def symbolic_hamiltonian(printed: bool = False):
-    r"""``(q, p, b, H)``: the canonical Hamiltonian as a SymPy expression.
-
-    Corrected (``= H_2/2`` o realisation, eq. (H)):
+def symbolic_hamiltonian() -> tuple[tuple, tuple, sp.Symbol, sp.Expr]:
+    r"""``(q, p, b, H)``: the canonical Hamiltonian (``= H_2/2`` o realisation, eq. (H)) as a SymPy expression:
 
     .. math:: H = \frac{p_\theta^2}{2} + \frac{p_\psi^2 + p_\phi^2 + 2 p_\psi p_\phi\cos\theta}{2\sin^2\theta}
-                  - b\sqrt{2 p_\psi}\,\sin\theta\cos\psi .
+                  - b\sqrt{2 p_\psi}\,\sin\theta\cos\psi
 
-    ``printed=True``: the formula printed in Section 5, with ``−2 p_ψ p_φ cos θ`` (it equals ``H_2/2`` of the
-    printed, non-canonical, realisation).
+    (the paper prints ``− 2 p_ψ p_φ cos θ``: ``docs/errata.md``, check ``Sec5-H``).
     """
     (th, ph, ps), (pth, pph, pps), b = _symbols()
-    sign = -1 if printed else 1
-    H = (pth**2 / 2 + (pps**2 + pph**2 + sign * 2 * pps * pph * sp.cos(th)) / (2 * sp.sin(th) ** 2)
+    H = (pth**2 / 2 + (pps**2 + pph**2 + 2 * pps * pph * sp.cos(th)) / (2 * sp.sin(th) ** 2)
          - b * sp.sqrt(2 * pps) * sp.sin(th) * sp.cos(ps))
     return (th, ph, ps), (pth, pph, pps), b, H
 
@@ -130,29 +118,29 @@ def _simplify(expr):
     return r if r == 0 else sp.simplify(r)
 
 
-def check_realisation(printed: bool = False) -> tuple[bool, dict]:
-    r"""Symbolic check that the realisation reproduces (algebra) and lies on the leaf (fo).
+def check_realisation(X: tuple | None = None) -> tuple[bool, dict]:
+    r"""Symbolic check that a realisation reproduces (algebra) and lies on the leaf (fo).
 
-    Returns ``(ok, residuals)``: ``residuals`` maps a pair of component names (e.g. ``("y1", "z2")``) to the
-    simplified ``{X_I, X_J}_can − Σ_K c^{IJ}_K X_K``, and ``"C1"``, ``"C2"``, ``"C3"`` to
+    ``X``: 9 SymPy expressions in the symbols of :func:`symbolic_realisation` (default: the corrected
+    realisation).  Returns ``(ok, residuals)``: ``residuals`` maps a pair of component names (e.g.
+    ``("y1", "z2")``) to the simplified ``{X_I, X_J}_can − Σ_K c^{IJ}_K X_K``, and ``"C1"``, ``"C2"``, ``"C3"`` to
     ``C^(1)``, ``C^(2)``, ``C^(3) − 1``; only nonzero residuals are listed, so ``ok`` iff it is empty.
     Takes about a second (36 brackets and 3 Casimirs through ``sympy``); the result is cached.
 
-    >>> ok, res = check_realisation(printed=True)
-    >>> ok, sorted(k for k in res if isinstance(k, tuple))
-    (False, [('x1', 'x2'), ('y1', 'z2'), ('y1', 'z3'), ('y2', 'z1'), ('y2', 'z3')])
-    >>> res["C1"]
-    2*p_phi*cos(theta)
+    >>> check_realisation()
+    (True, {})
+
+    ``docs/canonical.md`` applies it to the printed proposition (:mod:`jetgaudin.verify.printed`).
     """
-    ok, res = _check_realisation(bool(printed))
+    ok, res = _check_realisation(symbolic_realisation()[2] if X is None else tuple(X))
     return ok, dict(res)
 
 
 @cache
-def _check_realisation(printed: bool) -> tuple[bool, dict]:
+def _check_realisation(X: tuple) -> tuple[bool, dict]:
     from .algebra import structure_constants
 
-    q, p, X = symbolic_realisation(printed)
+    q, p, _ = symbolic_realisation()
     cst = structure_constants(3)
     names = [f"{v}{a}" for v in "yxz" for a in (1, 2, 3)]
     res = {}
@@ -449,7 +437,7 @@ def canonical_integrals(Q, b) -> np.ndarray:
 
 @cache
 def _vector_field_kernel():
-    q, p, b, H = symbolic_hamiltonian(False)
+    q, p, b, H = symbolic_hamiltonian()
     rhs = [sp.diff(H, pi) for pi in p] + [-sp.diff(H, qi) for qi in q]
     return sp.lambdify((*q, *p, b), rhs, modules="numpy", cse=True)
 

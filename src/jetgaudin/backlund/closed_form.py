@@ -18,9 +18,9 @@ The numerical cores :func:`_one_point_core` and :func:`_two_point_core` use only
 ``.real``/``.imag`` attributes on their scalar arguments, so the same body runs on NumPy arrays and can be
 compiled with ``numba.njit`` on complex scalars.
 
-The printed formulas are kept as :func:`one_point_closed_form_printed` and
-:func:`two_point_closed_form_printed` (and :func:`two_point_matrices_printed`) **only** so that the errata
-tests can show that they are wrong; do not use them.
+The printed (misprinted) formulas are transcribed only in :mod:`jetgaudin.verify.printed`
+(``one_point_map``, ``appendix1``), where the checks ``mp``, ``App1-A``, ``App1-B``, ``App1-X0`` show that they
+are wrong.
 """
 
 from __future__ import annotations
@@ -126,33 +126,6 @@ def one_point_closed_form(X, b, eta, p, q):
     p = _param(p, "p")
     q = _param(q, "q")
     ypt, ymt, y3t, xpt, xmt, x3t, zpt, zmt, z3t = _one_point_core(*_split(X), b, eta, p, q)
-    out = [*_to_real_basis(ypt, ymt, y3t), *_to_real_basis(xpt, xmt, x3t), *_to_real_basis(zpt, zmt, z3t)]
-    return np.stack(np.broadcast_arrays(*out), axis=-1).astype(complex)
-
-
-def one_point_closed_form_printed(X, b, eta, p, q):
-    """The one-point map (mp) **exactly as printed** (misprinted; for the errata tests only)."""
-    X = _state3(X, allow_complex=True)
-    eta = complex(eta)
-    y1, y2, y3, x1, x2, x3, z1, z2, z3 = _split(X)
-    yp, ym = y1 + 1j * y2, y1 - 1j * y2
-    xp, xm = x1 + 1j * x2, x1 - 1j * x2
-    zm = z1 - 1j * z2
-    y3t = y3 + 0 * p
-    ymt = xm + (p * q - eta) * ym - 2 * p * y3
-    ypt = 2 * q * b + 0 * p
-    x3t = x3 + p * yp - q * xm - q * (p * q - eta) * ym + 2 * p * q * y3
-    xmt = (2 * p * q - eta) * xm - 2 * p * x3 - p**2 * yp + p * q * (p * q - eta) * ym - 2 * p**2 * q * y3
-    xpt = yp - q / p * (p * q - eta) * ym + 2 * q * y3
-    z3t = (
-        z3 - q * zm + 2 * p * q * x3 - p * q**2 * xm + p * xp + eta * q * (p * q - eta) * ym + p * eta * yp
-        + 2 * eta * p * q * y3
-    )
-    zpt = 2 * q * x3 - q**2 * xm + xp + eta * q / p * (p * q - eta) * ym + eta * yp + 2 * eta * q * y3
-    zmt = (
-        (2 * p * q - eta) * zm - 2 * p * z3 - 2 * p**2 * q * x3 + p**2 * q**2 * xm - p**2 * xp
-        - eta * p * q * (p * q - eta) * ym - p**2 * eta * yp - 2 * eta * p**2 * q * y3
-    )
     out = [*_to_real_basis(ypt, ymt, y3t), *_to_real_basis(xpt, xmt, x3t), *_to_real_basis(zpt, zmt, z3t)]
     return np.stack(np.broadcast_arrays(*out), axis=-1).astype(complex)
 
@@ -296,61 +269,3 @@ def two_point_matrices(b, eta, s, t):
     )
     X0 = np.stack([b * A13, b * A23, z, b * B13, b * B23, b * B33, c1, c2, c3], -1)
     return A, B, X0
-
-
-def two_point_matrices_printed(b, eta, s, t, *, restore_i=False):
-    """``(A, B, X0)`` of Appendix 1 **exactly as printed** (``α1 = 2 Im η − st``; misprinted, errata
-    tests only).  ``restore_i=True`` corrects only the definition ``α1 = 2i Im η − st``, so that the
-    remaining misprints can be told entry by entry."""
-    eta = complex(eta)
-    s, t = np.broadcast_arrays(np.asarray(s, dtype=complex), np.asarray(t, dtype=complex))
-    R, Im = eta.real, eta.imag
-    a1 = (2j if restore_i else 2) * Im - s * t
-    a2 = a1 - s * t
-    i = 1j
-    z = np.zeros(s.shape, dtype=complex)
-    X0 = np.stack(
-        [
-            b * (s * a1 - t),
-            -b * (s * a1 + t),
-            z,
-            b * (s * a1 / 2 * (a2 + R) + t * (a2 - 2 * R)),
-            i * b * (s * a1 / 2 * (a2 + R) - t * (a2 - 2 * R)),
-            2 * b * t * s * a1,
-            -i * b / 4 * ((Im + R) ** 2 * (t + a1) + 8 * s * t * R * (t - a1)),
-            -b / 4 * ((Im + R) ** 2 * (t - a1) + 8 * s * t * R * (t + a1)),
-            2 * (2 * b * t * s * a1) * R,
-        ],
-        -1,
-    )
-    A = np.stack(
-        [
-            np.stack([z, i * a2, s * a1 - t], -1),
-            np.stack([-i * a2, z, -i * (s * a1 + t)], -1),
-            np.stack([-(s * a1 - t), i * (s * a1 + t), z], -1),
-        ],
-        -2,
-    )
-    B = np.stack(
-        [
-            np.stack([(1 - s**2) * (a1**2 - t**2) / 2, -i / 2 * ((t**2 - s**2 * a1**2) - 2 * a2 * R),
-                      s * a1 * (a2 + R) / 2], -1),
-            np.stack([-i / 2 * ((t**2 - s**2 * a1**2) + 2 * a2 * R), (1 + s**2) * (a1**2 - t**2) / 2,
-                      -i / 2 * s * a1 * (a2 + R)], -1),
-            np.stack([(t * (a2 + 2 * R) + s * a1 * (a2 - 2 * R)) / 2, (t * (a2 + 2 * R) - s * a1 * (a2 - 2 * R)) / 2,
-                      4 * s * t * a1], -1),
-        ],
-        -2,
-    )
-    return A, B, X0
-
-
-def two_point_closed_form_printed(X, b, eta, s, t):
-    """Appendix 1 **as printed**, ``X̆ = Φ X + X0`` (complex; misprinted, errata tests only)."""
-    X = _state3(X, allow_complex=False)
-    A, B, X0 = two_point_matrices_printed(b, eta, s, t)
-    y, x, z = X[..., 0:3], X[..., 3:6], X[..., 6:9]
-    yn = y + X0[..., 0:3]
-    xn = np.einsum("...ij,...j->...i", A, y) + x + X0[..., 3:6]
-    zn = np.einsum("...ij,...j->...i", B, y) + np.einsum("...ij,...j->...i", A, x) + z + X0[..., 6:9]
-    return np.concatenate([yn, xn, zn], axis=-1)

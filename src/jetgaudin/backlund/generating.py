@@ -18,7 +18,8 @@ What holds (tests in ``tests/test_generating.py``):
   printed (e1), (e2)) this reads ``−∂(−iF)/∂η = iν = 2μ``, ``μ = iν/2`` the eigenvalue of ``L(η)``.
 
 The numerical cores use only ``+ − * /`` (and a ``log`` passed in), so they run on NumPy arrays and on
-``mpmath`` numbers (the tests use 50 digits).
+``mpmath`` numbers (the tests use 50 digits).  The printed (misprinted) (fu), Ψ formulas and Casimir elimination
+are transcribed only in :mod:`jetgaudin.verify.printed` (checks ``fu``, ``Prop4-Psi``, ``Prop4-leaf``).
 """
 
 from __future__ import annotations
@@ -61,24 +62,6 @@ def _F_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, k, log):
     )
 
 
-def _F_printed_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, k, log):
-    """(fu) exactly as printed (misprinted; errata tests only)."""
-    bracket = (
-        zpt * xm
-        + zm * xpt
-        - eta * xpt * xm
-        + (xm / zm) * (xm / zm + 0.5 * eta * xm * zpt - g2)
-        + (xpt / zpt) * (xpt / zpt + 0.5 * eta * xpt * zm - g2)
-    )
-    return (
-        ym * ypt / (2 * b)
-        + k * (ym / zm + ypt / zpt)
-        - (1 + eta * g2) ** 2 / (4 * k * eta * eta)
-        + 0.5 * (g2 * g2 / 4 - g1) * log((k + 1) / (k - 1))
-        - bracket / (2 * k)
-    )
-
-
 def _psi_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, k):
     """Corrected displayed Ψ, Ψ̃ formulas of the proof (Ψ̃_1 = Ψ_1)."""
     P = zm * zpt
@@ -105,42 +88,12 @@ def _psi_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, k):
     return y3, x3, z3, y3, x3t, z3t
 
 
-def _psi_printed_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, k, yp_old):
-    """The displayed Ψ, Ψ̃ formulas as printed, with the symbol ``w`` read as ``b`` (errata tests only).
-
-    ``yp_old`` is the old ``y⁺`` that the printed ``Ψ_1`` contains."""
-    P = zm * zpt
-    S = zm * xpt + xm * zpt
-    br = (
-        0.5 * (eta * S - P) ** 2
-        + eta * eta * (zm * zm * zpt * ypt + zpt * zpt * zm * ym)
-        + (1 + 0.5 * eta * g2) * S
-        - (g2 + 2 * eta * g1) * P
-        - eta * (xm * xpt + zm * ypt + zpt * ym)
-        + 0.25 * (g2 * g2 - 4 * g1)
-    )
-    y3 = ym * yp_old / (2 * b) - br / (2 * k * k * k)
-    x3 = (ypt * xm + eta * S - P + g2) / (2 * k)
-    z3 = ypt * zm / (2 * b) + k
-    x3t = (xpt * ym + eta * S - P + g2) / (2 * k)
-    z3t = zpt * ym / (2 * b) + k
-    return y3, x3, z3, y3, x3t, z3t
-
-
 def _elim_core(a3, b3, c3, am, bm, cm, g1, g2):
     """Corrected Casimir elimination: ``(y⁺, x⁺, z⁺)`` from ``Ψ = (y³, x³, z³)``, ``χ⁻``
     (the same formula gives ``(ỹ⁻, x̃⁻, z̃⁻)`` from ``Ψ̃``, ``χ̃⁺``)."""
     cp = (1 - c3 * c3) / cm
     bp = (2 * g2 - 2 * b3 * c3 - bm * cp) / cm
     ap = (2 * g1 - 2 * a3 * c3 - b3 * b3 - bp * bm - am * cp) / cm
-    return ap, bp, cp
-
-
-def _elim_printed_core(a3, b3, c3, am, bm, cm, g1, g2):
-    """Casimir elimination as printed (``2γ1 − 1`` in place of ``2γ1 − (x³)² − x⁺x⁻``; errata tests only)."""
-    cp = (1 - c3 * c3) / cm
-    bp = (2 * g2 - 2 * b3 * c3 - (bm / cm) * (1 - c3 * c3)) / cm
-    ap = (2 * g1 - 1 - 2 * a3 * c3 - (am / cm) * (1 - c3 * c3)) / cm
     return ap, bp, cp
 
 

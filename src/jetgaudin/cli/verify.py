@@ -117,7 +117,7 @@ def verify(
             _console().print(_coverage_table(entries))
             typer.echo(f"{len(entries)} statements: " + ", ".join(f"{n} {k}" for k, n in counts().items() if n))
         raise typer.Exit(0)
-    jv._load_all()
+    jv.load_all()
     if only:
         try:
             jv._registry.select(only)

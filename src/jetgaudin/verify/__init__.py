@@ -16,6 +16,7 @@ from ._registry import (
     DEFAULT_SEED,
     FAILS,
     HOLDS,
+    MODULES,
     REGISTRY,
     UNDECIDED,
     Check,
@@ -23,6 +24,7 @@ from ._registry import (
     Erratum,
     Outcome,
     Verdict,
+    load_all,
     run_checks,
 )
 
@@ -38,26 +40,23 @@ __all__ = [
     "Outcome",
     "Verdict",
     "run_checks",
+    "load_all",
+    "MODULES",
     "errata_markdown",
     "exit_code",
 ]
 
-_MODULES = ("structure", "sec2", "sec4", "sec5", "sec6", "maps", "appendix")
+_MODULES = MODULES  # older name
+_load_all = load_all  # older name (the CLI calls it)
 
 
-def _load_all():
-    import importlib
-
-    for m in _MODULES:
-        importlib.import_module(f"{__name__}.{m}")
-
-
-def exit_code(results) -> int:
+def exit_code(results: list[CheckResult]) -> int:
     """0 iff every check holds as printed or after its documented correction."""
     return 0 if all(r.status == HOLDS for r in results) else 1
 
 
 def errata_markdown() -> str:
+    """The generated text of ``docs/errata.md`` (see :mod:`jetgaudin.verify._errata`)."""
     from ._errata import errata_markdown as _em
 
     return _em()

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-import re
+from ._registry import REGISTRY, errata_entries, load_all
+from ._registry import erratum_heading as _heading
+from ._registry import paper_order as _paper_order
 
-from ._registry import REGISTRY
+__all__ = ["HEADER", "TESTS", "errata_entries", "errata_markdown"]
 
 HEADER = """# Errata: Musso, Petrera, Ragnisco, Satta,
 # *A rigid body dynamics derived from a class of extended Gaudin models*
@@ -67,44 +69,9 @@ TESTS: dict[str, tuple[str, ...]] = {
 }
 
 
-def _paper_order(chk):
-    """Stable order (module order of the registry, then position in the module), independent of the
-    order in which other code happened to import the check modules."""
-    from . import _MODULES
-
-    mod = chk.func.__module__.rsplit(".", 1)[-1]
-    return (_MODULES.index(mod) if mod in _MODULES else len(_MODULES), chk.func.__code__.co_firstlineno)
-
-
-def _heading(n: int, chk) -> str:
-    where = f"Section {chk.section}" if chk.section[:1].isdigit() else chk.section
-    return f"{n}. `{chk.label}` ({where})"
-
-
-def _slug(heading: str) -> str:
-    """The anchor GitHub (and most Markdown renderers) give a heading: lower case, punctuation dropped, spaces
-    to hyphens."""
-    return re.sub(r"[^\w\- ]", "", heading.lower()).replace(" ", "-")
-
-
-def errata_entries() -> dict[str, tuple[int, str]]:
-    """``{label: (entry number, "docs/errata.md#anchor")}`` for every check with an erratum, in the file's order."""
-    from . import _load_all
-
-    _load_all()
-    out = {}
-    n = 0
-    for chk in sorted(REGISTRY.values(), key=_paper_order):
-        if chk.erratum is not None:
-            n += 1
-            out[chk.label] = (n, "docs/errata.md#" + _slug(_heading(n, chk)))
-    return out
-
-
 def errata_markdown() -> str:
-    from . import _load_all
-
-    _load_all()
+    """The text of ``docs/errata.md``, generated from the checks that declare an :class:`Erratum`."""
+    load_all()
     parts = [HEADER]
     n = 0
     for chk in sorted(REGISTRY.values(), key=_paper_order):

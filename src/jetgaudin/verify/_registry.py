@@ -9,7 +9,9 @@ records; ``docs/errata.md`` is generated from the checks that declare an :class:
 
 from __future__ import annotations
 
+import importlib
 import random
+import re
 import time
 import traceback
 from collections.abc import Callable
@@ -30,7 +32,13 @@ __all__ = [
     "run_checks",
     "select",
     "DEFAULT_SEED",
+    "MODULES",
+    "load_all",
+    "errata_entries",
 ]
+
+#: the modules holding the checks, in the paper's order (the order of docs/errata.md)
+MODULES = ("structure", "sec2", "sec4", "sec5", "sec6", "maps", "appendix")
 
 HOLDS, FAILS, UNDECIDED = "holds", "fails", "undecided"
 DEFAULT_SEED = 20261122
@@ -122,12 +130,47 @@ class CheckResult:
 REGISTRY: dict[str, Check] = {}
 
 
+def load_all() -> None:
+    """Import every check module (each registers its checks in :data:`REGISTRY` on import)."""
+    for m in MODULES:
+        importlib.import_module(f"{__package__}.{m}")
+
+
+def paper_order(chk: Check) -> tuple[int, int]:
+    """Stable order (module order of :data:`MODULES`, then position in the module), independent of the
+    order in which other code happened to import the check modules."""
+    mod = chk.func.__module__.rsplit(".", 1)[-1]
+    return (MODULES.index(mod) if mod in MODULES else len(MODULES), chk.func.__code__.co_firstlineno)
+
+
+def erratum_heading(n: int, chk: Check) -> str:
+    """The heading of entry ``n`` of ``docs/errata.md``."""
+    where = f"Section {chk.section}" if chk.section[:1].isdigit() else chk.section
+    return f"{n}. `{chk.label}` ({where})"
+
+
+def slug(heading: str) -> str:
+    """The anchor GitHub (and most Markdown renderers) give a heading: lower case, punctuation dropped, spaces
+    to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.lower()).replace(" ", "-")
+
+
+def errata_entries() -> dict[str, tuple[int, str]]:
+    """``{label: (entry number, "docs/errata.md#anchor")}`` for every check with an erratum, in the file's order."""
+    load_all()
+    out = {}
+    n = 0
+    for chk in sorted(REGISTRY.values(), key=paper_order):
+        if chk.erratum is not None:
+            n += 1
+            out[chk.label] = (n, "docs/errata.md#" + slug(erratum_heading(n, chk)))
+    return out
+
+
 def _erratum_dict(check: Check) -> dict | None:
     """The erratum as printed / corrected, with its entry in ``docs/errata.md`` (``entry``: number, ``link``)."""
     if check.erratum is None:
         return None
-    from ._errata import errata_entries
-
     n, link = errata_entries()[check.label]
     return dict(asdict(check.erratum), entry=n, link=link)
 
@@ -190,9 +233,7 @@ def run_checks(only=None, full: bool = False, seed: int = DEFAULT_SEED, dps: int
     ``full`` adds the heavier checks; ``seed`` makes the random points reproducible.  The overall
     ``status`` is ``holds`` when the formula holds as printed or after its documented correction.
     """
-    from . import _load_all
-
-    _load_all()
+    load_all()
     chosen = None if only is None else set(select(only))
     results = []
     for check in REGISTRY.values():

@@ -16,6 +16,7 @@ from functools import cache
 import mpmath as mp
 import sympy as sp
 
+from . import printed
 from ._registry import FAILS, NUMERIC_TOL, UNDECIDED, Erratum, Outcome, Verdict, register
 from ._tools import ell_from_state, is_zero, nu_at, rand_mpc, rand_mpf, rand_state, state_from_ell, two_point_map
 
@@ -57,24 +58,8 @@ def _derived():
 
 
 def _printed(b, R, Im, s, t, alpha_fix=False):
-    """Appendix 1 exactly as printed: (A, B, X0) as nested lists (alpha_1 = 2 Im(eta) - s t); ``alpha_fix``
-    uses alpha_1 = 2i Im(eta) - s t and changes nothing else (to locate the remaining misprints)."""
-    a1 = (2j * Im if alpha_fix else 2 * Im) - s * t
-    a2 = a1 - s * t
-    i = 1j
-    X0 = [b * (s * a1 - t), -b * (s * a1 + t), 0,
-          b * (s * a1 / 2 * (a2 + R) + t * (a2 - 2 * R)),
-          i * b * (s * a1 / 2 * (a2 + R) - t * (a2 - 2 * R)),
-          2 * b * t * s * a1,
-          -i * b / 4 * ((Im + R) ** 2 * (t + a1) + 8 * s * t * R * (t - a1)),
-          -b / 4 * ((Im + R) ** 2 * (t - a1) + 8 * s * t * R * (t + a1)),
-          2 * (2 * b * t * s * a1) * R]
-    A = [[0, i * a2, s * a1 - t], [-i * a2, 0, -i * (s * a1 + t)], [-(s * a1 - t), i * (s * a1 + t), 0]]
-    B = [[(1 - s**2) * (a1**2 - t**2) / 2, -i / 2 * ((t**2 - s**2 * a1**2) - 2 * a2 * R), s * a1 * (a2 + R) / 2],
-         [-i / 2 * ((t**2 - s**2 * a1**2) + 2 * a2 * R), (1 + s**2) * (a1**2 - t**2) / 2, -i / 2 * s * a1 * (a2 + R)],
-         [(t * (a2 + 2 * R) + s * a1 * (a2 - 2 * R)) / 2, (t * (a2 + 2 * R) - s * a1 * (a2 - 2 * R)) / 2,
-          4 * s * t * a1]]
-    return A, B, X0
+    """Appendix 1 as printed: :func:`jetgaudin.verify.printed.appendix1`."""
+    return printed.appendix1(b, R, Im, s, t, alpha_fix)
 
 
 def _corrected():

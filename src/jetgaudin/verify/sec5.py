@@ -11,6 +11,7 @@ from __future__ import annotations
 import mpmath as mp
 import sympy as sp
 
+from . import printed
 from ._registry import FAILS, NUMERIC_TOL, UNDECIDED, Erratum, Outcome, Verdict, register
 from ._tools import eps, rand_mpf
 
@@ -22,23 +23,15 @@ S, C, COT = sp.sin, sp.cos, sp.cot
 
 
 def printed_realisation():
-    """Section 5, Proposition, exactly as printed: (y, x, z) as 9 expressions."""
-    r = sp.sqrt(2 * pps)
-    y = (S(ph) * pth + COT(th) * C(ph) * pph - C(ph) / S(th) * pps,
-         -C(ph) * pth + COT(th) * S(ph) * pph - S(ph) / S(th) * pps,
-         pph)
-    x = (r * (S(ps) * S(ph) - C(th) * C(ps) * C(ph)),
-         r * (-S(ps) * C(ph) - C(th) * C(ps) * S(ph)),
-         -r * S(th) * C(ps))
-    z = (S(th) * C(ph), S(th) * S(ph), C(th))
-    return y + x + z
+    """Section 5, Proposition, exactly as printed: :func:`jetgaudin.verify.printed.realisation` (9 expressions)."""
+    return printed.realisation(sp, *Q, *P)
 
 
 def corrected_realisation():
     """The corrected realisation of :mod:`jetgaudin.canonical`, re-expressed in this module's symbols."""
     from jetgaudin import canonical
 
-    q, p, X = canonical.symbolic_realisation(printed=False)
+    q, p, X = canonical.symbolic_realisation()
     rep = dict(zip(tuple(q) + tuple(p), Q + P, strict=True))
     return tuple(sp.sympify(e).xreplace(rep) for e in X)
 
@@ -132,12 +125,10 @@ def _integrals_on(X):
     return H1, H2, H3
 
 
-H_PRINTED = pth**2 / 2 + (pps**2 + pph**2 - 2 * pps * pph * C(th)) / (2 * S(th) ** 2) - bsym * sp.sqrt(2 * pps) * S(
-    th) * C(ps)
+H_PRINTED = printed.hamiltonian(sp, th, ps, pth, pph, pps, bsym)
 H_CORRECTED = pth**2 / 2 + (pps**2 + pph**2 + 2 * pps * pph * C(th)) / (2 * S(th) ** 2) - bsym * sp.sqrt(
     2 * pps) * S(th) * C(ps)
-I2_PRINTED = sp.sqrt(2 * pps) * (pth * S(ps) + (pps - pph * C(th)) * COT(th) * C(ps) - pph * S(th) * C(ps)) + bsym * C(
-    th)
+I2_PRINTED = printed.integral_I2(sp, th, ps, pth, pph, pps, bsym)
 I2_CORRECTED = bsym * C(th) - sp.sqrt(2 * pps) * (pth * S(ps) + (pph + pps * C(th)) * C(ps) / S(th))
 
 

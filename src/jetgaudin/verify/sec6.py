@@ -11,6 +11,7 @@ from __future__ import annotations
 import mpmath as mp
 import sympy as sp
 
+from . import printed
 from ._registry import FAILS, NUMERIC_TOL, Erratum, Outcome, Verdict, register
 from ._tools import (
     dress,
@@ -207,24 +208,8 @@ def _wt(ctx):
 
 
 def _mp_formulas(s, corrected):
-    p, q, eta, b = s["p"], s["q"], s["eta"], s["b"]
-    y3, yp, ym, x3, xp, xm, z3, zp, zm = (s[k] for k in ("y3", "yp", "ym", "x3", "xp", "xm", "z3", "zp", "zm"))
-    sg = -1 if corrected else 1  # the sign of the eta q (pq - eta) y^- terms of z~
-    out = {
-        "y~3": y3,
-        "y~-": xm + (p * q - eta) * ym - 2 * p * y3,
-        "y~+": 2 * q * b,
-        "x~3": x3 + p * yp - q * xm - q * (p * q - eta) * ym + 2 * p * q * y3,
-        "x~-": (zm if corrected else 0) + (2 * p * q - eta) * xm - 2 * p * x3 - p**2 * yp + p * q * (p * q - eta) * ym
-        - 2 * p**2 * q * y3,
-        "x~+": yp - q / p * (p * q - eta) * ym + 2 * q * y3,
-        "z~3": z3 - q * zm + 2 * p * q * x3 - p * q**2 * xm + p * xp + sg * eta * q * (p * q - eta) * ym + p * eta * yp
-        + 2 * eta * p * q * y3,
-        "z~+": 2 * q * x3 - q**2 * xm + xp + sg * eta * q / p * (p * q - eta) * ym + eta * yp + 2 * eta * q * y3,
-        "z~-": (2 * p * q - eta) * zm - 2 * p * z3 - 2 * p**2 * q * x3 + p**2 * q**2 * xm - p**2 * xp
-        - sg * eta * p * q * (p * q - eta) * ym - p**2 * eta * yp - 2 * eta * p**2 * q * y3,
-    }
-    return out
+    """(mp): the transcription of :func:`jetgaudin.verify.printed.one_point_map` (``corrected`` applies the erratum)."""
+    return printed.one_point_map(s, corrected)
 
 
 def _mp_true(s):
@@ -346,7 +331,7 @@ def _leaf(ctx):
                 g1, g2 = s["g1"], s["g2"]
                 zc = (1 - c3**2) / cm
                 xc = (2 * g2 - 2 * b3 * c3 - bm / cm * (1 - c3**2)) / cm
-                yprinted = (2 * g1 - 1 - 2 * a3 * c3 - am / cm * (1 - c3**2)) / cm
+                yprinted = printed.casimir_elimination(a3, b3, c3, am, bm, cm, g1, g2)[0]
                 ycorr = (2 * g1 - (b3**2 + xc * bm) - 2 * a3 * c3 - am / cm * (1 - c3**2)) / cm
                 wp = max(wp, rel(yprinted, ap), rel(xc, bp), rel(zc, cp))
                 wc = max(wc, rel(ycorr, ap), rel(xc, bp), rel(zc, cp))
@@ -354,20 +339,8 @@ def _leaf(ctx):
 
 
 def _psi_printed(s):
-    ym, xm, zm, Yp, Xp, Zp = (s[k] for k in ("ym", "xm", "zm", "Yp", "Xp", "Zp"))
-    eta, b, g1, g2, k = s["eta"], s["b"], s["g1"], s["g2"], s["k"]
-    S_ = zm * Xp + xm * Zp
-    br = (mp.mpf(1) / 2 * (eta * S_ - zm * Zp) ** 2 + eta**2 * (zm**2 * Zp * Yp + Zp**2 * zm * ym)
-          + (1 + eta * g2 / 2) * S_ - (g2 + 2 * eta * g1) * zm * Zp - eta * (xm * Xp + zm * Yp + Zp * ym)
-          + (g2**2 - 4 * g1) / 4)
-    return {
-        "y3": ym * s["yp"] / (2 * b) - br / (2 * k**3),  # printed "y^- y^+/(2b)"
-        "x3": (Yp * xm + eta * (xm * Zp + Xp * zm) - Zp * zm + g2) / (2 * k),
-        "z3": Yp * zm / (2 * b) + k,  # printed "/(2w)": read as 2b (w is not defined there)
-        "Y3": s["y3"],
-        "X3": (Xp * ym + eta * (xm * Zp + Xp * zm) - Zp * zm + g2) / (2 * k),
-        "Z3": Zp * ym / (2 * b) + k,
-    }
+    args = [s[k] for k in ("ym", "xm", "zm", "Yp", "Xp", "Zp", "eta", "b", "g1", "g2", "k")]
+    return dict(zip(("y3", "x3", "z3", "Y3", "X3", "Z3"), printed.psi(*args, s["yp"]), strict=True))
 
 
 def _psi_corrected(s):
@@ -442,17 +415,11 @@ _syms = sp.symbols("ym xm zm Yp Xp Zp eta b g1 g2 k")
 
 def _F(corrected):
     ym, xm, zm, Yp, Xp, Zp, eta, b, g1, g2, k = _syms
-    if corrected:  # the printed F is right with gamma_i -> 2 gamma_i, plus -k/(4 eta^2) + b eta
-        G1, G2 = 2 * g1, 2 * g2
-    else:
-        G1, G2 = g1, g2
-    F = (ym * Yp / (2 * b) + k * (ym / zm + Yp / Zp) - (1 + eta * G2) ** 2 / (4 * k * eta**2)
-         + sp.Rational(1, 2) * (G2**2 / 4 - G1) * sp.log((k + 1) / (k - 1))
-         - 1 / (2 * k) * (Zp * xm + zm * Xp - eta * Xp * xm + xm / zm * (xm / zm + eta / 2 * xm * Zp - G2)
-                          + Xp / Zp * (Xp / Zp + eta / 2 * Xp * zm - G2)))
-    if corrected:
-        F += -k / (4 * eta**2) + b * eta
-    return F
+    if not corrected:
+        return printed.generating_function(ym, xm, zm, Yp, Xp, Zp, eta, b, g1, g2, k, sp.log)
+    # the corrected F: the printed one with gamma_i -> 2 gamma_i, plus -k/(4 eta^2) + b eta
+    return printed.generating_function(ym, xm, zm, Yp, Xp, Zp, eta, b, 2 * g1, 2 * g2, k, sp.log) - k / (
+        4 * eta**2) + b * eta
 
 
 def _F_gradient(corrected):
