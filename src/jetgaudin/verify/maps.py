@@ -107,15 +107,20 @@ def _npts(ctx, default):
     "seeded random complex points per N (15 in all)",
 )
 def _bt_poisson_one(ctx):
+    return _poisson_check(ctx, one_point, complex_=True)
+
+
+def _poisson_check(ctx, step, complex_: bool) -> Outcome:
+    """Worst Poisson defect of ``step(X, b, eta, ref)`` at seeded random points, N = 1..5."""
     rng = ctx.rng()
     worst = mp.mpf(0)
     with mp.workdps(JAC_DPS):
         for N in NS:
             c = lp_constants(N)
             for _ in range(_npts(ctx, 3)):
-                X = _flat(rand_state(rng, N, complex_=True))
+                X = _flat(rand_state(rng, N, complex_=complex_))
                 b, eta = rand_mpf(rng, 0.5, 2), rand_mpc(rng)
-                worst = max(worst, _poisson_defect(lambda Z, ref, b=b, eta=eta: one_point(Z, b, eta, ref), X, c))
+                worst = max(worst, _poisson_defect(lambda Z, ref, b=b, eta=eta: step(Z, b, eta, ref), X, c))
     return Outcome(Verdict.from_residual(worst))
 
 
@@ -128,16 +133,7 @@ def _bt_poisson_one(ctx):
     "seeded random real points per N (15 in all)",
 )
 def _bt_poisson_two(ctx):
-    rng = ctx.rng()
-    worst = mp.mpf(0)
-    with mp.workdps(JAC_DPS):
-        for N in NS:
-            c = lp_constants(N)
-            for _ in range(_npts(ctx, 3)):
-                X = _flat(rand_state(rng, N))
-                b, eta = rand_mpf(rng, 0.5, 2), rand_mpc(rng)
-                worst = max(worst, _poisson_defect(lambda Z, ref, b=b, eta=eta: two_point_real(Z, b, eta, ref), X, c))
-    return Outcome(Verdict.from_residual(worst))
+    return _poisson_check(ctx, two_point_real, complex_=False)
 
 
 @register(

@@ -14,7 +14,7 @@ import sympy as sp
 
 from ._registry import FAILS, HOLDS, Outcome, Verdict, register
 from ._tools import SIGMA, dot, eps, is_zero, matrix_is_zero, sym_state
-from .sec2 import _f_partition, lam
+from .sec2 import _f_partition, _HC_prop2, lam
 
 
 def _ok(flag: bool, note: str = "") -> Verdict:
@@ -95,12 +95,6 @@ def _rand_rational(rng):
     return sp.Rational(rng.randint(-999, 999), rng.randint(1, 97))
 
 
-def _integrals_sym(N, ys, bv):
-    H = [2 * dot(bv, ys[k - 1]) + sum(dot(ys[i], ys[k - i - 2]) for i in range(0, k - 1)) for k in range(1, N + 1)]
-    C = [sum(dot(ys[i], ys[N + k - i - 2]) for i in range(k - 1, N)) for k in range(1, N + 1)]
-    return H, C
-
-
 @register(
     "LP-rank",
     "2",
@@ -118,7 +112,7 @@ def _rank(ctx):
         coords = [x for y in ys for x in y]
         bv = sp.symbols("b1:4")
         c = lp_constants(N)
-        H, C = _integrals_sym(N, ys, bv)
+        H, C = _HC_prop2(N, ys, bv)
         grads = [[sp.diff(f, x) for x in coords] for f in H + C]
         for _ in range(npts):
             pt = {x: _rand_rational(rng) for x in coords}
