@@ -36,6 +36,7 @@ from functools import cache
 
 import numpy as np
 import sympy as sp
+from numpy.typing import ArrayLike
 
 from ._errors import InvalidParameterError, InvalidStateError, OffLeafError
 from ._validate import as_state
@@ -204,7 +205,7 @@ def _frame(th, ph):
     return z, e_th, e_ph
 
 
-def euler_to_state(Q) -> np.ndarray:
+def euler_to_state(Q: ArrayLike) -> np.ndarray:
     r"""``(θ, φ, ψ, p_θ, p_φ, p_ψ) ↦ (y, x, z)``, shape ``(..., 6) → (..., 9)`` (Section 5, corrected).
 
     .. math:: z = e_r(\theta, \phi), \quad
@@ -242,7 +243,7 @@ def _as_state3(X) -> np.ndarray:
     return X
 
 
-def leaf_casimirs(X) -> np.ndarray:
+def leaf_casimirs(X: ArrayLike) -> np.ndarray:
     r"""The Casimirs of :math:`\mathfrak g^{(3)}` of Section 3, ``(C^(1), C^(2), C^(3))``, shape ``(..., 3)``:
 
     .. math:: C^{(1)} = \langle y, z\rangle + \tfrac12 |x|^2, \quad C^{(2)} = \langle x, z\rangle, \quad
@@ -259,7 +260,7 @@ def leaf_casimirs(X) -> np.ndarray:
                      np.sum(z * z, axis=-1)], axis=-1)
 
 
-def leaf_residuals(X) -> np.ndarray:
+def leaf_residuals(X: ArrayLike) -> np.ndarray:
     r"""Relative residuals ``(r_1, r_2, r_3)`` of the leaf conditions (fo), shape ``(..., 3)``:
 
     .. math:: r_1 = \frac{|\langle y,z\rangle + |x|^2/2|}{\max(1, |y||z| + |x|^2/2)}, \quad
@@ -286,7 +287,7 @@ def _check_tol(tol) -> float:
     return tol
 
 
-def on_canonical_leaf(X, tol: float = LEAF_TOL) -> np.ndarray:
+def on_canonical_leaf(X: ArrayLike, tol: float = LEAF_TOL) -> np.ndarray:
     r"""``True`` where ``X = (y, x, z)`` lies on the leaf (fo) ``C^(1) = 0, C^(2) = 0, C^(3) = 1``, i.e. where
     every relative residual of :func:`leaf_residuals` is ``<= tol``; shape ``(...)``.
 
@@ -306,7 +307,7 @@ _LEAF_FIXES = (
 )
 
 
-def state_to_euler(X, tol: float = LEAF_TOL) -> np.ndarray:
+def state_to_euler(X: ArrayLike, tol: float = LEAF_TOL) -> np.ndarray:
     r"""Inverse of :func:`euler_to_state` on the leaf: ``(y, x, z) ↦ (θ, φ, ψ, p_θ, p_φ, p_ψ)``, ``(..., 9) → (..., 6)``
     (Section 5).
 
@@ -375,7 +376,7 @@ def _scalar_b(b) -> float:
     return val
 
 
-def canonical_hamiltonian(Q, b) -> np.ndarray:
+def canonical_hamiltonian(Q: ArrayLike, b: float) -> np.ndarray:
     r"""``H = H_2/2`` (eq. (H)) in canonical variables, shape ``(...)``:
 
     .. math:: H = \frac{p_\theta^2}{2} + \frac{p_\psi^2 + p_\phi^2 + 2 p_\psi p_\phi\cos\theta}{2\sin^2\theta}
@@ -397,7 +398,7 @@ def canonical_hamiltonian(Q, b) -> np.ndarray:
     return H.reshape(Q.shape[:-1])
 
 
-def canonical_integrals(Q, b) -> np.ndarray:
+def canonical_integrals(Q: ArrayLike, b: float) -> np.ndarray:
     r"""The integrals ``(I_1, I_2)`` of Section 5 in canonical variables, shape ``(..., 2)``:
 
     .. math:: I_1 = y^3 = p_\phi \;(= H_1/(2b) \text{ for } b \ne 0), \qquad
@@ -442,7 +443,7 @@ def _vector_field_kernel():
     return sp.lambdify((*q, *p, b), rhs, modules="numpy", cse=True)
 
 
-def canonical_vector_field(Q, b) -> np.ndarray:
+def canonical_vector_field(Q: ArrayLike, b: float) -> np.ndarray:
     r"""Hamilton's equations of :func:`canonical_hamiltonian`, shape ``(..., 6)``:
 
     .. math:: \dot q_i = \partial H/\partial p_i, \qquad \dot p_i = -\partial H/\partial q_i,

@@ -26,6 +26,7 @@ are wrong.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._errors import InvalidParameterError
 from .._validate import as_state, nonzero_field, spectral_parameter
@@ -98,7 +99,7 @@ def _one_point_core(y1, y2, y3, x1, x2, x3, z1, z2, z3, b, eta, p, q):
     return ypt, ymt, y3t, xpt, xmt, x3t, zpt, zmt, z3t
 
 
-def one_point_closed_form(X, b, eta, p, q):
+def one_point_closed_form(X: ArrayLike, b: float, eta: complex, p: ArrayLike, q: ArrayLike) -> np.ndarray:
     r"""Closed form of the one-point map ``B_η`` for N = 3 (eq. (mp), **corrected**; ``docs/errata.md``).
 
     With ``a^± = a¹ ± i a²`` and ``r = 2bp`` (``= y⁻`` by (hh)):
@@ -207,7 +208,9 @@ def _two_point_core(y1, y2, y3, x1, x2, x3, z1, z2, z3, b, er, ei, s, t):
     return n1, n2, n3, n4, n5, n6, n7, n8, n9
 
 
-def two_point_closed_form(X, b, eta, s, t, *, return_imag=False):
+def two_point_closed_form(
+    X: ArrayLike, b: float, eta: complex, s: ArrayLike, t: ArrayLike, *, return_imag: bool = False
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     r"""Closed form ``X̆ = Φ(s, t; η) X + X0(s, t; η)`` of the real two-point map (eq. (2p), Appendix 1,
     **corrected**; ``docs/errata.md``), ``Φ = [[1, 0, 0], [A, 1, 0], [B, A, 1]]``.
 
@@ -234,7 +237,9 @@ def two_point_closed_form(X, b, eta, s, t, *, return_imag=False):
     return Xr, imag
 
 
-def two_point_matrices(b, eta, s, t):
+def two_point_matrices(
+    b: float, eta: complex, s: ArrayLike, t: ArrayLike
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     r"""``(A, B, X0)`` of eq. (2p) in the real basis ``(y¹, y², y³)`` per block, shapes ``(..., 3, 3)``,
     ``(..., 3, 3)``, ``(..., 9)`` (complex; real up to round-off on the real reduction).
 

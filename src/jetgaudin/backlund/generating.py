@@ -25,6 +25,7 @@ are transcribed only in :mod:`jetgaudin.verify.printed` (checks ``fu``, ``Prop4-
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .._errors import InvalidParameterError, OffLeafError
 from .._validate import as_state, nonzero_field
@@ -109,7 +110,9 @@ def _vec3(a, name):
     return arr
 
 
-def generating_variables(X, X_new, b, *, leaf_tol=1e-9):
+def generating_variables(
+    X: ArrayLike, X_new: ArrayLike, b: float, *, leaf_tol: float = 1e-9
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     r"""The variables of (fu) from an old state ``X`` and its image ``X_new`` under the one-point map.
 
     Returns ``(chi_minus, chi_plus_new, gamma1, gamma2, k)``: ``χ⁻ = (y⁻, x⁻, z⁻)`` of ``X``,
@@ -140,7 +143,10 @@ def generating_variables(X, X_new, b, *, leaf_tol=1e-9):
     return chi_minus, chi_plus_new, g1, g2, k
 
 
-def generating_function(chi_minus, chi_plus_new, eta, b, gamma1, gamma2, k):
+def generating_function(
+    chi_minus: ArrayLike, chi_plus_new: ArrayLike, eta: complex, b: float, gamma1: ArrayLike, gamma2: ArrayLike,
+    k: ArrayLike,
+) -> np.ndarray:
     r"""The generating function ``F_η(χ⁻ | χ̃⁺)`` of the one-point map on the leaf (eq. (fu), **corrected**).
 
     .. math::
@@ -169,7 +175,10 @@ def generating_function(chi_minus, chi_plus_new, eta, b, gamma1, gamma2, k):
     return _F_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, np.asarray(k, dtype=complex), np.log)
 
 
-def generating_psi(chi_minus, chi_plus_new, eta, b, gamma1, gamma2, k):
+def generating_psi(
+    chi_minus: ArrayLike, chi_plus_new: ArrayLike, eta: complex, b: float, gamma1: ArrayLike, gamma2: ArrayLike,
+    k: ArrayLike,
+) -> tuple[np.ndarray, np.ndarray]:
     r"""``(Ψ, Ψ̃)`` as functions of ``(χ⁻, χ̃⁺)`` (the displayed formulas of the proof, **corrected**).
 
     With ``P = z⁻z̃⁺``, ``S = x⁻z̃⁺ + x̃⁺z⁻``, ``D = x⁻z̃⁺ − x̃⁺z⁻``, ``T = z̃⁺y⁻ + z⁻ỹ⁺``:
@@ -193,7 +202,7 @@ def generating_psi(chi_minus, chi_plus_new, eta, b, gamma1, gamma2, k):
     return np.stack(out[:3], axis=-1), np.stack(out[3:], axis=-1)
 
 
-def casimir_elimination(psi, chi, gamma1, gamma2):
+def casimir_elimination(psi: ArrayLike, chi: ArrayLike, gamma1: ArrayLike, gamma2: ArrayLike) -> np.ndarray:
     r"""``(y⁺, x⁺, z⁺)`` from ``Ψ`` and ``χ⁻`` on the leaf (proof of the Proposition, **corrected**); the
     same function gives ``(ỹ⁻, x̃⁻, z̃⁻)`` from ``Ψ̃`` and ``χ̃⁺``.
 

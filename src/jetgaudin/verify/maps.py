@@ -48,7 +48,7 @@ def _closest(nu, ref):
     return nu if ref is None or abs(nu - ref) <= abs(nu + ref) else -nu
 
 
-def one_point(X, b, eta, ref=None):
+def one_point(X: list, b: mp.mpf, eta: mp.mpc, ref: mp.mpc | None = None) -> tuple[list, mp.mpc, mp.mpf]:
     """The one-point map (rr) at ``(eta, nu)``, ``nu`` the root closest to ``ref``: ``(image, nu, residual)``."""
     ell = ell_from_state(_unflat(X), b)
     nu = _closest(nu_at(ell, eta), ref)
@@ -56,7 +56,7 @@ def one_point(X, b, eta, ref=None):
     return _flat(state_from_ell(new)), nu, res
 
 
-def two_point_real(X, b, eta, ref=None):
+def two_point_real(X: list, b: mp.mpf, eta: mp.mpc, ref: mp.mpc | None = None) -> tuple[list, mp.mpc, mp.mpf]:
     """The real two-point map (128) with ``eta1 = eta``, ``eta2 = conj(eta)``, ``nu2 = conj(nu1)``."""
     ell = ell_from_state(_unflat(X), b)
     nu = _closest(nu_at(ell, eta), ref)
