@@ -148,6 +148,35 @@ def _uvw(ctx):
 
 
 @register(
+    "Sec2-uvw-general",
+    "2",
+    "Section 2: (er) <=> the (corrected) brackets of u(l), v(l), w(l) for general c_k: {u,u} = {v,v} = {w,w} = 0, "
+    "{u(l),v(m)} = i/(l-m) [v(m)-v(l)], {u(l),w(m)} = i/(l-m) [w(l)-w(m)], {v(l),w(m)} = 2i/(l-m) [u(m)-u(l)], "
+    "N = 3 (N = 2, 3 with --full), general b",
+    "exact SymPy with (LP) and the partition formula for f_1, f_2 (symbols c_1, c_2)",
+)
+def _uvw_general(ctx):
+    ok = True
+    for N in ((2, 3) if ctx.full else (3,)):
+        c = sp.symbols(f"c1:{N}")
+        fs = [_f_partition(i, c) for i in range(N)]
+        ys = sym_state(N)
+        bv = sp.symbols("b1:4")
+
+        def uvw(at, ys=ys, bv=bv, fs=fs):
+            xi = _xi(ys, bv, fs, at)
+            return xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
+
+        (ul, vl, wl), (um, vm, wm) = uvw(lam), uvw(mu)
+        d = lam - mu
+        exprs = [lp_bracket(ul, um, ys), lp_bracket(vl, vm, ys), lp_bracket(wl, wm, ys),
+                 lp_bracket(ul, vm, ys) - sp.I / d * (vm - vl), lp_bracket(ul, wm, ys) - sp.I / d * (wl - wm),
+                 lp_bracket(vl, wm, ys) - 2 * sp.I / d * (um - ul)]
+        ok = ok and all(is_zero(e) for e in exprs)
+    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+
+
+@register(
     "Sec2-iso",
     "2",
     "xi -> (1/2)[[i xi3, i xi1 + xi2], [i xi1 - xi2, -i xi3]] = sum xi^a sigma^a is a Lie algebra isomorphism "
