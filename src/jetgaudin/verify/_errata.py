@@ -18,6 +18,9 @@ Every entry below is a formula of the paper that fails **as printed** and holds 
 both verdicts being computed by the check named in the entry (`jetgaudin verify --only LABEL`), derived
 independently of the numpy implementation (exact SymPy, or mpmath at 50 digits at seeded random points).
 
+The account of the whole paper, statement by statement (checked, partly checked with the reason, definition, or
+not checkable with the reason), is `jetgaudin verify --coverage` (`--json` for a JSON array).
+
 Conventions: `ell(l) = [[u, v], [w, -u]] = -2i L(l)`, `nu` its eigenvalue (`nu^2 = u^2 + v w`); the paper's `mu`
 in (curve) is an eigenvalue of `L` (`mu = +-i nu/2`), while in (hhh), (x), (X) it must be read as `nu`.
 """
