@@ -139,7 +139,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
     :func:`jetgaudin.interpolating_flow_hamiltonian`), or any object with ``vector_field(X)``
-    (then give the field ``b`` for the recorded integrals).  ``t_eval`` (default: ``0`` and ``T``)
+    (then give the field ``b`` for the recorded integrals, unless ``H.record_integrals(X)`` gives them, as for
+    :class:`jetgaudin.gaudin.ChainHamiltonian`).  ``t_eval`` (default: ``0`` and ``T``)
     are the sample times, strictly monotone, between ``0`` and ``T``.  ``method``: ``"DOP853"``
     (SciPy, tolerances ``rtol``/``atol``) or ``"heyoka"`` (Taylor method, tolerance ``rtol``; needs
     ``pip install jetgaudin[heyoka]``).  ``X0`` may be a batch ``(..., 3N)`` for DOP853 (integrated
@@ -162,8 +163,9 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
         raise InvalidParameterError("H must be an IntegralHamiltonian or have a vector_field(X) method")
     if is_integral:
         H._check(X0)  # N of the Hamiltonian matches the state
+    record = getattr(H, "record_integrals", None)  # a Hamiltonian of another model (e.g. a chain) records its own
     bb = getattr(H, "b", None) if b is None else b
-    if bb is None:
+    if bb is None and not callable(record):
         raise InvalidParameterError("give the field b (H has no attribute b) to record the integrals")
     cc = getattr(H, "c", None)
     shape = X0.shape
@@ -206,4 +208,5 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
         Xs = np.asarray(res[-1])[len(grid) - len(t_eval):]
     if not np.all(np.isfinite(Xs)):
         raise IntegrationError(f"{method} produced non-finite states (the orbit blew up); reduce T or the tolerances")
-    return Trajectory(t=t_eval, X=Xs, integrals=integrals(Xs, bb, cc), method=method)
+    recorded = record(Xs) if callable(record) else integrals(Xs, bb, cc)
+    return Trajectory(t=t_eval, X=Xs, integrals=recorded, method=method)
