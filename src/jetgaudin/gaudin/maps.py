@@ -152,7 +152,7 @@ class _ChainMap:
         """``ν1 = ±ν(η)`` at ``X`` by the branch rule (the carry of an orbit), shape ``(...)``."""
         X = self.model.check_state(X, allow_complex=not self.properties.real)
         shape = X.shape[:-1]
-        return self._nu_rule(X.reshape(-1, X.shape[-1])).reshape(shape)
+        return self._setup(X.reshape(-1, X.shape[-1]), None)[2].reshape(shape)
 
     def __call__(self, X):
         return self.step(X, None)[0]
@@ -192,14 +192,14 @@ class ChainTwoPointBacklund(_ChainMap):
     ----------
     model : GaudinModel
     eta : complex
-        ``Re η`` off the sites; ``Im η = 0`` gives the identity.
+        ``Re η`` off the sites, ``Im η ≠ 0``.
     branch : {"default", "opposite"}
         ``ν1 = ±ν(η)`` by the branch rule; ``"opposite"`` is the inverse map.
 
     Raises
     ------
     InvalidParameterError
-        ``Re η`` at a site, a non-finite ``η``, an unknown branch.
+        ``Re η`` at a site, ``Im η = 0``, a non-finite ``η``, an unknown branch.
     """
 
     model: GaudinModel
@@ -219,30 +219,42 @@ class ChainTwoPointBacklund(_ChainMap):
         if not isinstance(self.model, GaudinModel):
             raise InvalidParameterError(f"model must be a GaudinModel, got {type(self.model).__name__}")
         object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
+        if self.eta.imag == 0:
+            raise InvalidParameterError(
+                f"Im(eta) = 0 (eta = {self.eta.real}): the real two-point map needs eta1 = eta != eta2 = conj(eta) "
+                "(at Im eta = 0 it degenerates to the identity); give Im(eta) != 0, its time step is -2 Im(eta)"
+            )
         _sheet(self.branch)
 
     def inverse(self) -> ChainTwoPointBacklund:
         """The same ``η`` on the other branch."""
         return ChainTwoPointBacklund(self.model, self.eta, "opposite" if self.sheet == 1 else "default")
 
+    def _setup(self, X, carry):
+        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X``."""
+        ell = ell_coefficients(X, self.model.b)
+        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta)
+        # the root of ν(η)² (from ℓ(η)) closest to the carry, or to the branch rule's value: step(X) and
+        # step(X, start(X)) are the same bits
+        ref = self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1)
+        nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], ref)
+        k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
+        return ell, L, nu1, real_two_point_M0(self.eta, k1, k2)
+
+    def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
+        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``."""
+        X = self.model.check_state(X)
+        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3].reshape(X.shape[:-1] + (2, 2))
+        return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
+
     def step(self, X, carry=None):
         """One step: ``(X̆, ν1, imag_residue)``; ``carry=None``: ``ν1`` by the branch rule, else the root of
         ``ν(η)²`` closest to ``carry``.  ``X̆`` is real (imaginary part dropped, its size relative to
         ``1 + |X̆|`` returned)."""
         X = self.model.check_state(X)
-        if self.eta.imag == 0:
-            return X.copy(), carry, np.zeros(X.shape[:-1])
         shape = X.shape
         X = X.reshape(-1, shape[-1])  # 2-D batch: a single orbit equals its ensemble member bit for bit
-        ell = ell_coefficients(X, self.model.b)
-        parts = ell[..., 1:, :, :]
-        L = _ell_at(self.model, parts, self.eta)
-        if carry is None:
-            nu1 = self._nu_rule(X)
-        else:
-            nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], np.asarray(carry).reshape(-1))
-        k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
-        M0 = real_two_point_M0(self.eta, k1, k2)
+        ell, L, nu1, M0 = self._setup(X, carry)
         A0 = adj(M0)
         scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
         res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
@@ -251,7 +263,7 @@ class ChainTwoPointBacklund(_ChainMap):
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
-        new = dress_parts(self.model, parts, M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
         Xr = Xc.real
         if not np.all(np.isfinite(Xr)):
@@ -301,17 +313,14 @@ class ChainOnePointBacklund(_ChainMap):
     def describe(self) -> dict:
         return {**super().describe(), "inverse_map": self.inverse_map}
 
-    def step(self, X, carry=None):
-        """One step: ``(X̃, ν, zeros)`` with ``X̃`` complex."""
-        X = self.model.check_state(X, allow_complex=True)
-        shape = X.shape
-        X = X.reshape(-1, shape[-1])
+    def _setup(self, X, carry):
+        """``(ell, L(η), ν, K0, E, A0, Ea)`` for a 2-D batch ``X`` (``K = λE + K0``, ``adj K = λEa + A0``)."""
         b = self.model.b
         ell = ell_coefficients(X, b)
         parts = ell[..., 1:, :, :]
         L = _ell_at(self.model, parts, self.eta)
         u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
-        nu = self._nu_rule(X) if carry is None else _continue(u * u + v * w, np.asarray(carry).reshape(-1))
+        nu = _continue(u * u + v * w, self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1))
         # ℓ's 1/λ coefficient at infinity, [[S3, S^-], [S^+, −S3]]: the y_0 of every site
         S = np.sum(parts[..., list(self.model.offsets), :, :], axis=-3)
         if self.inverse_map:
@@ -326,9 +335,22 @@ class ChainOnePointBacklund(_ChainMap):
         M0[..., 1, 0] = q
         M0[..., 1, 1] = 1.0
         if self.inverse_map:
-            K0, E, A0, Ea = adj(M0), _E22, M0, _E11
-        else:
-            K0, E, A0, Ea = M0, _E11, adj(M0), _E22
+            return ell, L, nu, adj(M0), _E22, M0, _E11
+        return ell, L, nu, M0, _E11, adj(M0), _E22
+
+    def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
+        """``K(λ)`` at ``X``: ``M = [[λ − η + pq, p], [q, 1]]`` of (ansatz), or ``adj M`` for the inverse map (whose
+        image ``X̃`` has ``ℓ(X̃) = M^{-1} ℓ(X) M``), shape ``(..., 2, 2)``; ``K ℓ(X) = ℓ(X̃) K``."""
+        X = self.model.check_state(X, allow_complex=True)
+        _, _, _, K0, E, _, _ = self._setup(X.reshape(-1, X.shape[-1]), carry)
+        return K0.reshape(X.shape[:-1] + (2, 2)) + np.asarray(lam, dtype=complex)[..., None, None] * E
+
+    def step(self, X, carry=None):
+        """One step: ``(X̃, ν, zeros)`` with ``X̃`` complex."""
+        X = self.model.check_state(X, allow_complex=True)
+        shape = X.shape
+        X = X.reshape(-1, shape[-1])
+        ell, L, nu, K0, E, A0, Ea = self._setup(X, carry)
         scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
         res = _residual(K0 + self.eta * E, L, A0 + self.eta * Ea, scale)
         if np.any(res > _RESIDUAL_TOL):
@@ -336,7 +358,7 @@ class ChainOnePointBacklund(_ChainMap):
                 f"one-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
                 f"{np.max(res):.2e}); change eta"
             )
-        new = dress_parts(self.model, parts, K0, E, A0, Ea, (self.eta,))
+        new = dress_parts(self.model, ell[..., 1:, :, :], K0, E, A0, Ea, (self.eta,))
         out = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
         if not np.all(np.isfinite(out)):
             raise SingularStepError("one-point Bäcklund step of the chain produced non-finite values; change eta")
