@@ -208,3 +208,17 @@ def test_flows_of_any_combination(rng, seed):
     assert np.abs(flow(e1, flow(e2, X)) - flow(e2, flow(e1, X))).max() <= 1e-9 * (1 + np.abs(X).max())
     with pytest.raises(jg.InvalidParameterError, match="2M"):
         m.hamiltonian(np.ones(3))
+
+
+def test_symbolic_chain_checks_can_fail(monkeypatch):
+    """The verify checks Chain-r and Chain-integrals hold (also run by tests/test_verify.py with the registry), and
+    Chain-r is not vacuous: with the bracket's sign flipped it fails."""
+    import sympy as sp
+
+    import jetgaudin.verify.chains as vc
+    from jetgaudin.verify import run_checks
+
+    assert [r.status for r in run_checks(only=["Chain-r", "Chain-integrals"])] == ["holds", "holds"]
+    orig = vc.eps
+    monkeypatch.setattr(vc, "eps", lambda a, b, c: -orig(a, b, c))
+    assert not vc._r_matrix_holds([(-1, 1), (sp.Rational(1, 2), 2)])

@@ -42,7 +42,7 @@ __all__ = [
     "exit_code",
 ]
 
-_MODULES = ("sec2", "sec4", "sec5", "sec6", "appendix")
+_MODULES = ("sec2", "sec4", "sec5", "sec6", "appendix", "chains")
 
 
 def _load_all():
