@@ -32,6 +32,7 @@ from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..backlund import MapProperties
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
+from ..backlund.maps import _check_steps
 from ..lax import ell_coefficients, state_from_ell
 from ._curve import _component_poles, nu_with_roots
 from .model import GaudinModel
@@ -51,6 +52,11 @@ def _sheet(branch) -> int:
     if branch in _BRANCHES:
         return _BRANCHES[branch]
     raise InvalidParameterError(f"branch must be 'default' or 'opposite', got {branch!r}")
+
+
+def _check_model(model) -> None:
+    if not isinstance(model, GaudinModel):
+        raise InvalidParameterError(f"model must be a GaudinModel, got {type(model).__name__}")
 
 
 def _check_eta(model: GaudinModel, eta) -> complex:
@@ -161,8 +167,7 @@ class _ChainMap:
         """Orbit ``X_0, X_k, …`` (``k = save_every``), shape ``(steps//k + 1, ..., 3M)``; ``ν(η)`` by the branch
         rule at ``X_0`` (or continued from ``carry``) and continued along the orbit.  ``return_carry=True``
         returns ``(orbit, carry)``."""
-        if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-            raise InvalidParameterError(f"steps must be a non-negative integer, got {steps!r}")
+        steps = _check_steps(steps)
         if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
             raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
         X = self.model.check_state(X0, allow_complex=not self.properties.real)
@@ -216,8 +221,7 @@ class ChainTwoPointBacklund(_ChainMap):
     )
 
     def __post_init__(self):
-        if not isinstance(self.model, GaudinModel):
-            raise InvalidParameterError(f"model must be a GaudinModel, got {type(self.model).__name__}")
+        _check_model(self.model)
         object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
         if self.eta.imag == 0:
             raise InvalidParameterError(
@@ -297,8 +301,7 @@ class ChainOnePointBacklund(_ChainMap):
     )
 
     def __post_init__(self):
-        if not isinstance(self.model, GaudinModel):
-            raise InvalidParameterError(f"model must be a GaudinModel, got {type(self.model).__name__}")
+        _check_model(self.model)
         if self.model.b == 0.0:
             raise InvalidParameterError(
                 "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "
