@@ -26,6 +26,11 @@ def _mm(a00, a01, a10, a11, b00, b01, b10, b11):
     return (a00 * b00 + a01 * b10, a00 * b01 + a01 * b11, a10 * b00 + a11 * b10, a10 * b01 + a11 * b11)
 
 
+@njit(cache=True, inline="always")
+def _abs2(z):
+    return z.real * z.real + z.imag * z.imag
+
+
 @njit(cache=True)
 def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
@@ -49,15 +54,15 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
     a2 = nu - u
     c1 = u + nu
     c2 = w
-    if abs(a1) ** 2 + abs(a2) ** 2 >= abs(c1) ** 2 + abs(c2) ** 2:
+    if _abs2(a1) + _abs2(a2) >= _abs2(c1) + _abs2(c2):
         k1 = a1
         k2 = a2
     else:
         k1 = c1
         k2 = c2
-    n2 = abs(k1) ** 2 + abs(k2) ** 2
+    n2 = _abs2(k1) + _abs2(k2)
     cc = 2j * eta.imag / n2
-    ak2 = abs(k2) ** 2
+    ak2 = _abs2(k2)
     m00 = -eta + cc * ak2
     m01 = -cc * k1 * k2.conjugate()
     m10 = -cc * k1.conjugate() * k2

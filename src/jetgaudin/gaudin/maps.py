@@ -282,7 +282,7 @@ class ChainTwoPointBacklund(_ChainMap):
         M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3].reshape(X.shape[:-1] + (2, 2))
         return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
 
-    def step(self, X, carry=None):
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One step: ``(X̆, ν1, imag_residue)``; ``carry=None``: ``ν1`` by the branch rule, else the root of
         ``ν(η)²`` closest to ``carry``.  ``X̆`` is real (imaginary part dropped, its size relative to
         ``1 + |X̆|`` returned)."""
@@ -379,7 +379,7 @@ class ChainOnePointBacklund(_ChainMap):
         _, _, _, K0, E, _, _ = self._setup(X.reshape(-1, X.shape[-1]), carry)
         return K0.reshape(X.shape[:-1] + (2, 2)) + np.asarray(lam, dtype=complex)[..., None, None] * E
 
-    def step(self, X, carry=None):
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """One step: ``(X̃, ν, zeros)`` with ``X̃`` complex."""
         X = self.model.check_state(X, allow_complex=True)
         shape = X.shape

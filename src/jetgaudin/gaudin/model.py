@@ -30,12 +30,16 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from math import comb
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..algebra import structure_constants
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
 
 __all__ = [
     "GaudinModel",
@@ -307,12 +311,12 @@ class GaudinModel:
 
         return lax_vector(self, X, lam)
 
-    def nu_squared(self, X, lam):
+    def nu_squared(self, X, lam) -> np.ndarray:
         """``ν²(λ) = u² + vw = ⟨ξ(λ), ξ(λ)⟩`` evaluated directly, shape ``(...)``."""
         xi = self.xi(X, lam)
         return np.sum(xi * xi, axis=-1)
 
-    def nu(self, X, eta, *, sheet: int = 1):
+    def nu(self, X, eta, *, sheet: int = 1) -> np.ndarray:
         """``ν(η)`` on the default branch (positive at ``Re η``, continued vertically); see
         :func:`jetgaudin.gaudin._curve.nu`."""
         from ._curve import nu
@@ -330,7 +334,7 @@ class GaudinModel:
         """``H = Σ w_{i,m} h_{i,m}`` as an object for :func:`jetgaudin.integrate`."""
         return ChainHamiltonian(self, weights)
 
-    def interpolating_hamiltonian(self, X, eta):
+    def interpolating_hamiltonian(self, X, eta) -> np.ndarray:
         r"""``G_η(X) = i∫_{η̄}^{η} ν dλ = −2∫_0^{Im η} Re ν(Re η + is) ds``, shape ``(...)``."""
         from ._curve import interpolating_hamiltonian
 
@@ -348,13 +352,16 @@ class GaudinModel:
 
     # ---- maps ---------------------------------------------------------------------------------
 
-    def two_point_backlund(self, eta, branch: str = "default"):
-        """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`)."""
+    def two_point_backlund(self, eta, branch: str = "default", compiled: bool = False) -> ChainTwoPointBacklund:
+        """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
+        ``compiled=True``: ``iterate`` runs in the Numba kernel)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, branch)
+        return ChainTwoPointBacklund(self, eta, branch, compiled)
 
-    def one_point_backlund(self, eta, branch: str = "default", inverse_map: bool = False):
+    def one_point_backlund(
+        self, eta, branch: str = "default", inverse_map: bool = False
+    ) -> ChainOnePointBacklund:
         """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0``."""
         from .maps import ChainOnePointBacklund
 
@@ -389,17 +396,17 @@ class ChainHamiltonian:
     def b(self) -> float:
         return self.model.b
 
-    def __call__(self, X):
+    def __call__(self, X) -> np.ndarray:
         return np.sum(self.weights * self.model.integrals(X), axis=-1)
 
-    def gradient(self, X):
+    def gradient(self, X) -> np.ndarray:
         return np.einsum("...m,...mi->...i", self.weights, self.model.integral_gradients(X))
 
-    def vector_field(self, X):
+    def vector_field(self, X) -> np.ndarray:
         r"""``Ẋ = Π(X) ∇H``, shape ``(..., 3M)``."""
         return self.model.vector_field(self.gradient(X), X)
 
-    def record_integrals(self, X):
+    def record_integrals(self, X) -> np.ndarray:
         """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``)."""
         return self.model.integrals(X)
 
