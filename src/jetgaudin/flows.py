@@ -52,7 +52,7 @@ def _heyoka_system(H: IntegralHamiltonian, n: int):
         if g0[J] != 0.0:
             terms.append(hy.expression(float(g0[J])))
         grads.append(hy.sum(terms) if terms else hy.expression(0.0))
-    c = structure_constants(n // 3)
+    c = _structure(H, n)
     rhs = []
     for i in range(n):
         terms = []
@@ -62,6 +62,13 @@ def _heyoka_system(H: IntegralHamiltonian, n: int):
                     terms.append(float(c[i, J, K]) * xs[K] * grads[J])
         rhs.append(hy.sum(terms) if terms else hy.expression(0.0))
     return list(zip(xs, rhs, strict=True))
+
+
+def _structure(H, n: int) -> np.ndarray:
+    """The structure constants of the Poisson bracket ``H`` lives on: ``H.structure_constants`` if it has them (a
+    chain, :class:`jetgaudin.gaudin.ChainHamiltonian`), else those of g^(N), N = n/3 (eq. (LP))."""
+    c = getattr(H, "structure_constants", None)
+    return structure_constants(n // 3) if c is None else np.asarray(c)
 
 
 def _affine_gradient(H: IntegralHamiltonian, X0: np.ndarray):
@@ -80,7 +87,7 @@ def _fast_rhs(H: IntegralHamiltonian, X0: np.ndarray):
     """
     n = X0.shape[-1]
     A, g0 = _affine_gradient(H, X0)
-    C = structure_constants(n // 3).reshape(n * n, n)
+    C = _structure(H, n).reshape(n * n, n)
     shape = X0.shape
 
     def rhs(_t, y):
@@ -159,6 +166,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     if method not in ("DOP853", "heyoka"):
         raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {method!r}")
     is_integral = isinstance(H, IntegralHamiltonian)
+    # quadratic Hamiltonians on another Lie-Poisson space (a chain) declare their structure constants
+    affine = is_integral or getattr(H, "structure_constants", None) is not None
     if not is_integral and not callable(getattr(H, "vector_field", None)):
         raise InvalidParameterError("H must be an IntegralHamiltonian or have a vector_field(X) method")
     if is_integral:
@@ -172,7 +181,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     if T == 0:
         Xs = np.broadcast_to(X0, (len(t_eval),) + shape).copy()
     elif method == "DOP853":
-        if is_integral:
+        if affine:
             rhs = _fast_rhs(H, X0)
         else:
             def rhs(_t, y):
@@ -193,7 +202,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
             ) from None
         if X0.ndim != 1:
             raise InvalidParameterError("method='heyoka' integrates one orbit: X0 must have shape (3N,)")
-        if not is_integral:
+        if not affine:
             raise InvalidParameterError(
                 "method='heyoka' needs an IntegralHamiltonian (its vector field is built symbolically)"
             )

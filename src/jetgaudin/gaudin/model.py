@@ -396,6 +396,11 @@ class ChainHamiltonian:
     def b(self) -> float:
         return self.model.b
 
+    @property
+    def structure_constants(self) -> np.ndarray:
+        """The chain's structure constants (lets :func:`jetgaudin.integrate` use its fast and heyoka routes)."""
+        return self.model.structure_constants
+
     def __call__(self, X) -> np.ndarray:
         return np.sum(self.weights * self.model.integrals(X), axis=-1)
 
