@@ -251,3 +251,23 @@ def test_flow_routes_agree(rng):
     h = jg.integrate(H, X, 2.0, method="heyoka", rtol=1e-15)
     assert np.abs(a.X[-1] - h.X[-1]).max() <= 1e-10 * (1 + np.abs(X).max())
     assert h.drift.max() <= 1e-12
+
+
+def test_named_systems_match_their_classical_forms(rng):
+    """Gaudin magnet: h_(i,1) = 2 b S_i^3 + 2 sum_(j != i) <S_i, S_j> / (lam_i - lam_j) (the rational Gaudin
+    Hamiltonians with a field; h_(i,2) = |S_i|^2 the Casimirs).  Lagrange top (one site, N = 2): the flow of
+    h_2/2 is KPR's Euler-Poisson system J' = P x x, x' = J x x with J = y_0, x = y_1, P = b e_3.  Round-off: 1e-13."""
+    pos = np.array([-1.2, 0.3, 0.9, 2.0])
+    b = -0.7
+    m = jg.gaudin_magnet(b, pos)
+    S = rng.normal(size=(4, 3))
+    h = m.integrals(S.reshape(-1)).reshape(4, 2)
+    for i in range(4):
+        ref = 2 * b * S[i, 2] + 2 * sum(S[i] @ S[j] / (pos[i] - pos[j]) for j in range(4) if j != i)
+        assert abs(h[i, 0] - ref) <= 1e-13 * (1 + abs(ref))
+        assert abs(h[i, 1] - S[i] @ S[i]) <= 1e-13 * (1 + S[i] @ S[i])
+    top = jg.lagrange_chain(b, [0.0])
+    J, x = rng.normal(size=3), rng.normal(size=3)
+    V = top.hamiltonian([0.0, 0.5, 0.0, 0.0]).vector_field(np.concatenate([J, x]))
+    P = np.array([0.0, 0.0, b])
+    assert np.allclose(V, np.concatenate([np.cross(P, x), np.cross(J, x)]), rtol=0, atol=1e-13)

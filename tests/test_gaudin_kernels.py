@@ -48,3 +48,12 @@ def test_compiled_batch_and_split_runs_bit_for_bit(rng):
     assert B.inverse().compiled
     back = B.inverse().iterate(full[-1], 40)[-1]
     assert np.abs(back - X).max() <= 1e-10 * (1 + np.abs(X).max())
+
+
+def test_compiled_one_site_equals_todays_compiled_map(rng):
+    """One site at 0 (N = 3, Appendix 2's eta): the chain kernel gives the orbit of jetgaudin's one-site map (NumPy
+    route) to round-off (1e-10 relative over 200 steps: different operation orders)."""
+    X = rng.normal(size=9)
+    a = jg.ChainTwoPointBacklund(jg.GaudinModel(1.0, [(0.0, 3)]), 5 + 0.1j, compiled=True).iterate(X, 200)
+    o = jg.TwoPointBacklund(1.0, 5 + 0.1j).iterate(X, 200, kernel="numpy")
+    assert np.abs(a - o).max() <= 1e-10 * (1 + np.abs(o).max())
