@@ -130,6 +130,14 @@ class _ChainMap:
     model: GaudinModel
     eta: complex
     branch: str
+    properties: MapProperties
+    kind: str
+
+    def _setup(self, X, carry) -> tuple:  # pragma: no cover - every concrete map defines it
+        raise NotImplementedError
+
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+        raise NotImplementedError
 
     @property
     def b(self) -> float:
