@@ -14,6 +14,16 @@ from ._errors import (
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
 from .flows import Trajectory, integrate
+from .gaudin import (
+    ChainHamiltonian,
+    ChainOnePointBacklund,
+    ChainTwoPointBacklund,
+    GaudinModel,
+    gaudin_magnet,
+    lagrange_chain,
+    parse_sites,
+    twisted_chain,
+)
 from .hamiltonians import (
     IntegralHamiltonian,
     interpolating_flow_hamiltonian,
@@ -66,6 +76,14 @@ __all__ = [
     "lagrange_top",
     "generalized_lagrange_top",
     "material_point",
+    "GaudinModel",
+    "ChainHamiltonian",
+    "ChainTwoPointBacklund",
+    "ChainOnePointBacklund",
+    "gaudin_magnet",
+    "lagrange_chain",
+    "twisted_chain",
+    "parse_sites",
     "euler_to_state",
     "state_to_euler",
     "on_canonical_leaf",

@@ -52,7 +52,7 @@ def _heyoka_system(H: IntegralHamiltonian, n: int):
         if g0[J] != 0.0:
             terms.append(hy.expression(float(g0[J])))
         grads.append(hy.sum(terms) if terms else hy.expression(0.0))
-    c = structure_constants(n // 3)
+    c = _structure(H, n)
     rhs = []
     for i in range(n):
         terms = []
@@ -62,6 +62,13 @@ def _heyoka_system(H: IntegralHamiltonian, n: int):
                     terms.append(float(c[i, J, K]) * xs[K] * grads[J])
         rhs.append(hy.sum(terms) if terms else hy.expression(0.0))
     return list(zip(xs, rhs, strict=True))
+
+
+def _structure(H, n: int) -> np.ndarray:
+    """The structure constants of the Poisson bracket ``H`` lives on: ``H.structure_constants`` if it has them (a
+    chain, :class:`jetgaudin.gaudin.ChainHamiltonian`), else those of g^(N), N = n/3 (eq. (LP))."""
+    c = getattr(H, "structure_constants", None)
+    return structure_constants(n // 3) if c is None else np.asarray(c)
 
 
 def _affine_gradient(H: IntegralHamiltonian, X0: np.ndarray):
@@ -80,7 +87,7 @@ def _fast_rhs(H: IntegralHamiltonian, X0: np.ndarray):
     """
     n = X0.shape[-1]
     A, g0 = _affine_gradient(H, X0)
-    C = structure_constants(n // 3).reshape(n * n, n)
+    C = _structure(H, n).reshape(n * n, n)
     shape = X0.shape
 
     def rhs(_t, y):
@@ -139,7 +146,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
     :func:`jetgaudin.interpolating_flow_hamiltonian`), or any object with ``vector_field(X)``
-    (then give the field ``b`` for the recorded integrals).  ``t_eval`` (default: ``0`` and ``T``)
+    (then give the field ``b`` for the recorded integrals, unless ``H.record_integrals(X)`` gives them, as for
+    :class:`jetgaudin.gaudin.ChainHamiltonian`).  ``t_eval`` (default: ``0`` and ``T``)
     are the sample times, strictly monotone, between ``0`` and ``T``.  ``method``: ``"DOP853"``
     (SciPy, tolerances ``rtol``/``atol``) or ``"heyoka"`` (Taylor method, tolerance ``rtol``; needs
     ``pip install jetgaudin[heyoka]``).  ``X0`` may be a batch ``(..., 3N)`` for DOP853 (integrated
@@ -158,19 +166,22 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     if method not in ("DOP853", "heyoka"):
         raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {method!r}")
     is_integral = isinstance(H, IntegralHamiltonian)
+    # quadratic Hamiltonians on another Lie-Poisson space (a chain) declare their structure constants
+    affine = is_integral or getattr(H, "structure_constants", None) is not None
     if not is_integral and not callable(getattr(H, "vector_field", None)):
         raise InvalidParameterError("H must be an IntegralHamiltonian or have a vector_field(X) method")
     if is_integral:
         H._check(X0)  # N of the Hamiltonian matches the state
+    record = getattr(H, "record_integrals", None)  # a Hamiltonian of another model (e.g. a chain) records its own
     bb = getattr(H, "b", None) if b is None else b
-    if bb is None:
+    if bb is None and not callable(record):
         raise InvalidParameterError("give the field b (H has no attribute b) to record the integrals")
     cc = getattr(H, "c", None)
     shape = X0.shape
     if T == 0:
         Xs = np.broadcast_to(X0, (len(t_eval),) + shape).copy()
     elif method == "DOP853":
-        if is_integral:
+        if affine:
             rhs = _fast_rhs(H, X0)
         else:
             def rhs(_t, y):
@@ -191,7 +202,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
             ) from None
         if X0.ndim != 1:
             raise InvalidParameterError("method='heyoka' integrates one orbit: X0 must have shape (3N,)")
-        if not is_integral:
+        if not affine:
             raise InvalidParameterError(
                 "method='heyoka' needs an IntegralHamiltonian (its vector field is built symbolically)"
             )
@@ -206,4 +217,5 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
         Xs = np.asarray(res[-1])[len(grid) - len(t_eval):]
     if not np.all(np.isfinite(Xs)):
         raise IntegrationError(f"{method} produced non-finite states (the orbit blew up); reduce T or the tolerances")
-    return Trajectory(t=t_eval, X=Xs, integrals=integrals(Xs, bb, cc), method=method)
+    recorded = record(Xs) if callable(record) else integrals(Xs, bb, cc)
+    return Trajectory(t=t_eval, X=Xs, integrals=recorded, method=method)

@@ -1,0 +1,19 @@
+"""Multi-site jet-extended rational su(2) Gaudin models (chains) and their Bäcklund maps (issue 12).
+
+See ``docs/chains.md``: the model, the state layout, the integrals (Casimirs and Hamiltonians), the maps,
+the field ``b = 0``, the checks and the matching with the literature.
+"""
+
+from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
+from .model import ChainHamiltonian, GaudinModel, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
+
+__all__ = [
+    "GaudinModel",
+    "ChainHamiltonian",
+    "ChainTwoPointBacklund",
+    "ChainOnePointBacklund",
+    "parse_sites",
+    "gaudin_magnet",
+    "lagrange_chain",
+    "twisted_chain",
+]

@@ -1,0 +1,166 @@
+r"""Compiled (Numba) kernel of the real two-point map of a chain, any sites and orders.
+
+The same arithmetic as :class:`jetgaudin.gaudin.maps.ChainTwoPointBacklund.step` (the site-wise dressing of the
+principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the quantities that are constant along an
+orbit hoisted out of the loop: ``f_c = (η − λ_c)^{−(k_c+1)}`` (the weights of ``ℓ(η)``) and the Taylor
+coefficients ``g_d`` of ``1/((λ_i − η + z)(λ_i − η̄ + z))`` per site.  For ``K = λ + M0``, ``adj K = λ + adj M0``
+the four terms of the dressing sum collapse to
+
+.. math:: \breve\ell_k = \sum_{j \ge k} g_{j-k} K' \ell_j A' + g_{j-k-1} (K' \ell_j + \ell_j A') + g_{j-k-2}\, \ell_j,
+          \qquad K' = M_0 + \lambda_i,\ A' = \operatorname{adj} M_0 + \lambda_i .
+
+``ν1`` is continued along the orbit as the root of ``ν(η)² = u² + vw`` closest to the previous one (the branch rule
+at the first state is applied by the caller, on the NumPy route).  The residual check and the imaginary residue
+of the NumPy route are not computed here; the orbits agree with the NumPy route to round-off
+(``tests/test_gaudin_kernels.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True, inline="always")
+def _mm(a00, a01, a10, a11, b00, b01, b10, b11):
+    return (a00 * b00 + a01 * b10, a00 * b01 + a01 * b11, a10 * b00 + a11 * b10, a10 * b01 + a11 * b11)
+
+
+@njit(cache=True, inline="always")
+def _abs2(z):
+    return z.real * z.real + z.imag * z.imag
+
+
+@njit(cache=True)
+def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
+    """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
+    # ℓ(η) = diag(b, −b) + Σ_c f_c P_c,  P = [[y3, y1 − i y2], [y1 + i y2, −y3]]
+    u = complex(b)
+    v = 0j
+    w = 0j
+    for c in range(M):
+        y1 = x[3 * c]
+        y2 = x[3 * c + 1]
+        y3 = x[3 * c + 2]
+        u += f[c] * y3
+        v += f[c] * complex(y1, -y2)
+        w += f[c] * complex(y1, y2)
+    r = np.sqrt(u * u + v * w)
+    if (r.conjugate() * nu_prev).real < 0:
+        r = -r
+    nu = r
+    # eigenvector of ℓ(η) for ν: (v, ν − u) or (u + ν, w), whichever is larger
+    a1 = v
+    a2 = nu - u
+    c1 = u + nu
+    c2 = w
+    if _abs2(a1) + _abs2(a2) >= _abs2(c1) + _abs2(c2):
+        k1 = a1
+        k2 = a2
+    else:
+        k1 = c1
+        k2 = c2
+    n2 = _abs2(k1) + _abs2(k2)
+    cc = 2j * eta.imag / n2
+    ak2 = _abs2(k2)
+    m00 = -eta + cc * ak2
+    m01 = -cc * k1 * k2.conjugate()
+    m10 = -cc * k1.conjugate() * k2
+    m11 = -eta.conjugate() - cc * ak2
+    for i in range(site_pos.shape[0]):
+        lam = site_pos[i]
+        o = site_off[i]
+        N = site_n[i]
+        K00 = m00 + lam
+        K11 = m11 + lam
+        A00 = m11 + lam
+        A11 = m00 + lam
+        A01 = -m01
+        A10 = -m10
+        # per component: P, K'P + PA', K'PA' (each once), then the O(N²) combination with the g's
+        for j in range(N):
+            c = o + j
+            y1 = x[3 * c]
+            y2 = x[3 * c + 1]
+            y3 = x[3 * c + 2]
+            p00 = complex(y3)
+            p01 = complex(y1, -y2)
+            p10 = complex(y1, y2)
+            p11 = complex(-y3)
+            kp = _mm(K00, m01, m10, K11, p00, p01, p10, p11)
+            pa = _mm(p00, p01, p10, p11, A00, A01, A10, A11)
+            kpa = _mm(kp[0], kp[1], kp[2], kp[3], A00, A01, A10, A11)
+            wp[j, 0] = p00
+            wp[j, 1] = p01
+            wp[j, 2] = p10
+            wp[j, 3] = p11
+            for e in range(4):
+                w1[j, e] = kp[e] + pa[e]
+                w0[j, e] = kpa[e]
+        for k in range(N):
+            s00 = 0j
+            s01 = 0j
+            s11 = 0j
+            s10 = 0j
+            for j in range(k, N):
+                d = j - k
+                gd = g[i, d]
+                s00 += gd * w0[j, 0]
+                s01 += gd * w0[j, 1]
+                s10 += gd * w0[j, 2]
+                s11 += gd * w0[j, 3]
+                if d >= 1:
+                    g1 = g[i, d - 1]
+                    s00 += g1 * w1[j, 0]
+                    s01 += g1 * w1[j, 1]
+                    s10 += g1 * w1[j, 2]
+                    s11 += g1 * w1[j, 3]
+                if d >= 2:
+                    g2 = g[i, d - 2]
+                    s00 += g2 * wp[j, 0]
+                    s01 += g2 * wp[j, 1]
+                    s10 += g2 * wp[j, 2]
+                    s11 += g2 * wp[j, 3]
+            c = o + k
+            out[3 * c] = 0.5 * (s01.real + s10.real)
+            out[3 * c + 1] = 0.5 * (s10.imag - s01.imag)
+            out[3 * c + 2] = s00.real
+    return nu
+
+
+@njit(cache=True)
+def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_every):
+    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), last ν1)``."""
+    n = x0.shape[0]
+    M = n // 3
+    rows = np.empty((steps // save_every + 1, n))
+    rows[0] = x0
+    x = x0.copy()
+    y = np.empty(n)
+    Nmax = g.shape[1]
+    w0 = np.empty((Nmax, 4), dtype=np.complex128)
+    w1 = np.empty((Nmax, 4), dtype=np.complex128)
+    wp = np.empty((Nmax, 4), dtype=np.complex128)
+    nu = nu0
+    for s in range(steps):
+        nu = _step(x, y, b, eta, nu, f, g, site_pos, site_off, site_n, M, w0, w1, wp)
+        x, y = y, x
+        if (s + 1) % save_every == 0:
+            rows[(s + 1) // save_every] = x
+    return rows, nu
+
+
+def orbit_constants(model, eta):
+    """``(f, g, site_pos, site_off, site_n)``: the per-orbit constants of the kernel (see module docstring)."""
+    from ._curve import _component_poles
+
+    pos, power = _component_poles(model.sites)
+    f = (complex(eta) - pos) ** (-power)
+    Nmax = max(model.orders)
+    g = np.zeros((len(model.sites), Nmax), dtype=complex)
+    for i, (lam, N) in enumerate(model.sites):
+        s1 = np.array([(-1) ** p * (lam - eta) ** (-(p + 1)) for p in range(N)])
+        s2 = np.array([(-1) ** p * (lam - np.conj(eta)) ** (-(p + 1)) for p in range(N)])
+        g[i, :N] = np.convolve(s1, s2)[:N]
+    return (np.asarray(f, dtype=complex), g, model.positions.astype(float),
+            np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))

@@ -1,0 +1,407 @@
+r"""Bäcklund maps of a chain (Section 6 of the paper, for any sites and orders).
+
+The dressing ``ℓ̆ = K ℓ adj(K) / det K`` (``ℓ = −2iL = [[u, v], [w, −u]]``) with ``K(λ) = λE + K_0`` is
+computed **site by site on the principal parts**: ``K``, ``adj K`` and ``1/det K`` are analytic at every
+site ``λ_i``, so the principal part of ``ℓ̆`` at ``λ_i`` is that of ``K ℓ^{(i)}_{sing} adj(K)/det K`` with
+``ℓ^{(i)}_{sing} = Σ_k ℓ^{(i)}_k (λ − λ_i)^{-(k+1)}``:
+
+.. math:: \breve\ell^{(i)}_k = \sum_{j=k}^{N_i-1} \sum_{a+c+d=j-k} K_a\, \ell^{(i)}_j\, A_c\, g_d,
+          \qquad K(\lambda_i+z) = K_0' + zE,\ \operatorname{adj}K(\lambda_i+z) = A_0' + zE',\
+          \frac{1}{\det K(\lambda_i+z)} = \sum_d g_d z^d.
+
+The poles at the zeros of ``det K`` cancel by spectrality (their would-be residues ``K ℓ adj K`` at ``η`` are
+returned as the step's residual) and ``ℓ̆(∞) = ℓ(∞) = b σ_3``-part by the choice of ``K`` (automatic for
+the two-point map, ``p = S^-/(2b)`` with ``S = Σ_i y^{(i)}_0`` for the one-point map).  So ``ℓ̆`` is
+``ℓ(∞)`` plus these principal parts: no polynomial division, for any sites.
+
+* **Real two-point map** (eqs. (128), (mm), (x), (X) with ``η_1 = η``, ``η_2 = η̄``, ``ν_2 = conj ν_1``;
+  ``docs/backlund.md`` §4): ``K = λ + M_0``, ``M_0`` from the eigenvector of ``ℓ(η)`` for ``ν_1``
+  (:func:`jetgaudin.backlund._dressing.real_two_point_M0`).  ``branch="opposite"`` (``−ν_1``) is the inverse.
+* **One-point map** (eqs. (rr), (ansatz), (hh), (hhh)): ``K = [[λ − η + pq, p], [q, 1]]``,
+  ``p = S^-/(2b)``, ``q = (u(η) − ν)/v(η)``; the inverse map uses ``adj K`` with ``q = S̃^+/(2b)``,
+  ``p = (ũ(η) − ν)/w̃(η)``.  Needs ``b ≠ 0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._errors import InvalidParameterError, SingularStepError
+from .._validate import spectral_parameter
+from ..backlund import MapProperties
+from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
+from ..backlund.maps import _check_steps
+from ..lax import ell_coefficients, state_from_ell
+from ._curve import _component_poles, nu_with_roots
+from .model import GaudinModel
+
+__all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
+
+_BRANCHES = {"default": 1, "opposite": -1}
+#: relative size of the would-be residue at eta above which a step is refused (as backlund.maps: round-off
+#: level in exact arithmetic zero; larger means eta is numerically at a branch point)
+_RESIDUAL_TOL = 1e-8
+_E11 = np.array([[1.0, 0.0], [0.0, 0.0]], dtype=complex)
+_E22 = np.array([[0.0, 0.0], [0.0, 1.0]], dtype=complex)
+_ID = np.eye(2, dtype=complex)
+
+
+def _sheet(branch) -> int:
+    if branch in _BRANCHES:
+        return _BRANCHES[branch]
+    raise InvalidParameterError(f"branch must be 'default' or 'opposite', got {branch!r}")
+
+
+def _check_model(model) -> None:
+    if not isinstance(model, GaudinModel):
+        raise InvalidParameterError(f"model must be a GaudinModel, got {type(model).__name__}")
+
+
+def _check_eta(model: GaudinModel, eta) -> complex:
+    eta = spectral_parameter(eta)
+    for p, _ in model.sites:
+        if eta.real == p:
+            raise InvalidParameterError(
+                f"Re(eta) = {p} is a site: the branch rule of nu starts at the real point Re(eta), a pole of the "
+                "Lax matrix there; choose Re(eta) off the sites"
+            )
+    return eta
+
+
+def _ell_at(model, parts, lam):
+    """``ℓ(λ) = ℓ(∞) + Σ_c P_c (λ − λ_c)^{-(k_c+1)}`` for scalar ``λ``; ``parts`` ``(B, M, 2, 2)``."""
+    pos, power = _component_poles(model.sites)
+    f = (lam - pos) ** (-power)
+    out = np.einsum("c,...cij->...ij", f, parts)
+    out[..., 0, 0] += model.b
+    out[..., 1, 1] -= model.b
+    return out
+
+
+def _inv_series(d, order):
+    """Taylor coefficients of ``1/(d + z)``: ``(−1)^p d^{−(p+1)}``, ``p < order``."""
+    return [(-1) ** p * d ** (-(p + 1)) for p in range(order)]
+
+
+def dress_parts(model, parts, K0, E, A0, Ea, zeros):
+    r"""Principal parts of ``K ℓ adj(K)/Π_r(λ − ζ_r)`` at every site (module docstring), ``(B, M, 2, 2)``.
+
+    ``K = λE + K0``, ``adj K = λE_a + A0`` (``K0``, ``A0``: ``(B, 2, 2)``), ``zeros``: the scalars ``ζ_r``."""
+    out = np.empty_like(parts)
+    for i, (lam_i, N) in enumerate(model.sites):
+        o = model.offsets[i]
+        Ka = (K0 + lam_i * E, np.broadcast_to(E, K0.shape))
+        Aa = (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape))
+        g = np.zeros(N, dtype=complex)
+        g[0] = 1.0
+        for z in zeros:
+            g = np.convolve(g, _inv_series(lam_i - z, N))[:N]
+        for k in range(N):
+            acc = np.zeros(parts.shape[:-3] + (2, 2), dtype=complex)
+            for j in range(k, N):
+                Pj = parts[..., o + j, :, :]
+                for a in (0, 1):
+                    KP = mm(Ka[a], Pj)
+                    for c in (0, 1):
+                        e = j - k - a - c
+                        if e >= 0:
+                            acc = acc + g[e] * mm(KP, Aa[c])
+            out[..., o + k, :, :] = acc
+    return out
+
+
+def _residual(K, L, A, scale):
+    """``max |K ℓ adj K|`` at a zero of ``det K``, relative to ``1 + max|ℓ coefficients|`` (zero if exact)."""
+    R = mm(mm(K, L), A)
+    return np.max(np.abs(R), axis=(-2, -1)) / scale
+
+
+def _continue(nu2, nu_prev):
+    r = np.sqrt(nu2)
+    return np.where((np.conj(r) * nu_prev).real >= 0, r, -r)
+
+
+class _ChainMap:
+    """Shared surface of the chain maps (the Map contract of the BRIEF; the lead re-bases them on
+    ``jetgaudin.maps.Map`` at merge)."""
+
+    model: GaudinModel
+    eta: complex
+    branch: str
+    properties: MapProperties
+    kind: str
+
+    def _setup(self, X, carry) -> tuple:  # pragma: no cover - every concrete map defines it
+        raise NotImplementedError
+
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
+        raise NotImplementedError
+
+    @property
+    def b(self) -> float:
+        return self.model.b
+
+    @property
+    def sheet(self) -> int:
+        return _sheet(self.branch)
+
+    @property
+    def n_state(self) -> int:
+        return self.model.n_state
+
+    def integrals(self, X) -> np.ndarray:
+        """The ``2M`` preserved integrals ``h_{i,m}``, shape ``(..., 2M)``."""
+        return self.model.integrals(X)
+
+    def _nu_rule(self, X):
+        """``±ν(η)`` by the branch rule at each state of the batch ``X`` ``(B, 3M)``."""
+        from ._curve import branch_points
+
+        lam = np.full(X.shape[:-1], self.eta, dtype=complex)
+        return nu_with_roots(self.model, X, lam, branch_points(self.model, X), self.sheet)
+
+    def start(self, X) -> np.ndarray:
+        """``ν1 = ±ν(η)`` at ``X`` by the branch rule (the carry of an orbit), shape ``(...)``."""
+        X = self.model.check_state(X, allow_complex=not self.properties.real)
+        shape = X.shape[:-1]
+        return self._setup(X.reshape(-1, X.shape[-1]), None)[2].reshape(shape)
+
+    def __call__(self, X):
+        return self.step(X, None)[0]
+
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
+        """Orbit ``X_0, X_k, …`` (``k = save_every``), shape ``(steps//k + 1, ..., 3M)``; ``ν(η)`` by the branch
+        rule at ``X_0`` (or continued from ``carry``) and continued along the orbit.  ``return_carry=True``
+        returns ``(orbit, carry)``."""
+        steps = _check_steps(steps)
+        if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
+            raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
+        X = self.model.check_state(X0, allow_complex=not self.properties.real)
+        if carry is not None:
+            carry = np.broadcast_to(np.asarray(carry, dtype=complex), X.shape[:-1])
+            if not np.all(np.isfinite(carry)):
+                raise InvalidParameterError("carry (nu1) must be finite")
+        dtype = float if self.properties.real else complex
+        orbit = np.empty((int(steps) // int(save_every) + 1,) + X.shape, dtype=dtype)
+        orbit[0] = X
+        for n in range(int(steps)):
+            X, carry, _ = self.step(X, carry)
+            if (n + 1) % save_every == 0:
+                orbit[(n + 1) // save_every] = X
+        return (orbit, carry) if return_carry else orbit
+
+    def describe(self) -> dict:
+        return {"kind": self.kind, "b": self.model.b, "eta": [self.eta.real, self.eta.imag], "branch": self.branch,
+                "sites": [[p, N] for p, N in self.model.sites]}
+
+
+@dataclass(frozen=True)
+class ChainTwoPointBacklund(_ChainMap):
+    r"""The real two-point Bäcklund map ``B_η`` of a chain (module docstring); the time-1 flow of ``G_η``.
+
+    Parameters
+    ----------
+    model : GaudinModel
+    eta : complex
+        ``Re η`` off the sites, ``Im η ≠ 0``.
+    branch : {"default", "opposite"}
+        ``ν1 = ±ν(η)`` by the branch rule; ``"opposite"`` is the inverse map.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``Re η`` at a site, ``Im η = 0``, a non-finite ``η``, an unknown branch.
+    """
+
+    model: GaudinModel
+    eta: complex
+    branch: str = "default"
+    compiled: bool = False
+    kind = "chain_two_point"
+    properties: MapProperties = field(
+        default=MapProperties(
+            preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
+        ),
+        init=False,
+        repr=False,
+        compare=False,
+    )
+
+    def __post_init__(self):
+        _check_model(self.model)
+        object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
+        if self.eta.imag == 0:
+            raise InvalidParameterError(
+                f"Im(eta) = 0 (eta = {self.eta.real}): the real two-point map needs eta1 = eta != eta2 = conj(eta) "
+                "(at Im eta = 0 it degenerates to the identity); give Im(eta) != 0, its time step is -2 Im(eta)"
+            )
+        _sheet(self.branch)
+
+    def inverse(self) -> ChainTwoPointBacklund:
+        """The same ``η`` on the other branch."""
+        return ChainTwoPointBacklund(self.model, self.eta, "opposite" if self.sheet == 1 else "default", self.compiled)
+
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
+        """As :meth:`_ChainMap.iterate`; with ``compiled=True`` the steps run in the Numba kernel of
+        :mod:`jetgaudin.gaudin._kernels` (the same orbits to round-off; ``ν1`` at ``X0`` by the NumPy branch rule;
+        the residual check and imaginary residue are not computed).  A batch member equals its single run bit for
+        bit on both routes."""
+        if not self.compiled:
+            return super().iterate(X0, steps, save_every=save_every, carry=carry, return_carry=return_carry)
+        from . import _kernels
+
+        steps = _check_steps(steps)
+        if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
+            raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
+        X = self.model.check_state(X0)
+        shape = X.shape
+        Xb = X.reshape(-1, shape[-1])
+        nu = self.start(Xb) if carry is None else np.broadcast_to(np.asarray(carry, dtype=complex), shape[:-1])
+        nu = np.reshape(nu, -1)
+        consts = _kernels.orbit_constants(self.model, self.eta)
+        b = float(self.model.b)
+        rows = np.empty((steps // save_every + 1,) + Xb.shape)
+        last = np.empty(Xb.shape[0], dtype=complex)
+        for n in range(Xb.shape[0]):
+            rows[:, n], last[n] = _kernels.run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
+                                                      *consts, steps, save_every)
+        if not np.all(np.isfinite(rows)):
+            raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")
+        orbit = rows.reshape((rows.shape[0],) + shape)
+        last = last.reshape(shape[:-1])
+        return (orbit, last) if return_carry else orbit
+
+    def _setup(self, X, carry):
+        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X``."""
+        ell = ell_coefficients(X, self.model.b)
+        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta)
+        # the root of ν(η)² (from ℓ(η)) closest to the carry, or to the branch rule's value: step(X) and
+        # step(X, start(X)) are the same bits
+        ref = self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1)
+        nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], ref)
+        k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
+        return ell, L, nu1, real_two_point_M0(self.eta, k1, k2)
+
+    def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
+        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``."""
+        X = self.model.check_state(X)
+        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3].reshape(X.shape[:-1] + (2, 2))
+        return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
+
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One step: ``(X̆, ν1, imag_residue)``; ``carry=None``: ``ν1`` by the branch rule, else the root of
+        ``ν(η)²`` closest to ``carry``.  ``X̆`` is real (imaginary part dropped, its size relative to
+        ``1 + |X̆|`` returned)."""
+        X = self.model.check_state(X)
+        shape = X.shape
+        X = X.reshape(-1, shape[-1])  # 2-D batch: a single orbit equals its ensemble member bit for bit
+        ell, L, nu1, M0 = self._setup(X, carry)
+        A0 = adj(M0)
+        scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
+        res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
+        if np.any(res > _RESIDUAL_TOL):
+            raise SingularStepError(
+                f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
+                f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
+            )
+        new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
+        Xr = Xc.real
+        if not np.all(np.isfinite(Xr)):
+            raise SingularStepError("two-point Bäcklund step of the chain produced non-finite values; change eta")
+        imag = np.max(np.abs(Xc.imag), axis=-1) / (1.0 + np.max(np.abs(Xr), axis=-1))
+        return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
+
+
+@dataclass(frozen=True)
+class ChainOnePointBacklund(_ChainMap):
+    r"""The complex one-point map ``B_(η, ν)`` of a chain (or its inverse, ``inverse_map=True``); needs ``b ≠ 0``.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``b = 0`` (``p = S^-/(2b)``: the normalisation ``ℓ̃(∞) = ℓ(∞)`` has no solution), ``Re η`` at a site.
+    """
+
+    model: GaudinModel
+    eta: complex
+    branch: str = "default"
+    inverse_map: bool = False
+    kind = "chain_one_point"
+    properties: MapProperties = field(
+        default=MapProperties(
+            preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
+        ),
+        init=False,
+        repr=False,
+        compare=False,
+    )
+
+    def __post_init__(self):
+        _check_model(self.model)
+        if self.model.b == 0.0:
+            raise InvalidParameterError(
+                "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "
+                "without field (b = 0) has only the real two-point map; give b != 0"
+            )
+        object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
+        _sheet(self.branch)
+
+    def inverse(self) -> ChainOnePointBacklund:
+        return ChainOnePointBacklund(self.model, self.eta, self.branch, not self.inverse_map)
+
+    def describe(self) -> dict:
+        return {**super().describe(), "inverse_map": self.inverse_map}
+
+    def _setup(self, X, carry):
+        """``(ell, L(η), ν, K0, E, A0, Ea)`` for a 2-D batch ``X`` (``K = λE + K0``, ``adj K = λEa + A0``)."""
+        b = self.model.b
+        ell = ell_coefficients(X, b)
+        parts = ell[..., 1:, :, :]
+        L = _ell_at(self.model, parts, self.eta)
+        u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
+        nu = _continue(u * u + v * w, self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1))
+        # ℓ's 1/λ coefficient at infinity, [[S3, S^-], [S^+, −S3]]: the y_0 of every site
+        S = np.sum(parts[..., list(self.model.offsets), :, :], axis=-3)
+        if self.inverse_map:
+            q = S[..., 1, 0] / (2.0 * b)
+            p = spectral_s(u, w, v, nu)  # (ũ − ν)/w̃ = −ṽ/(ũ + ν)
+        else:
+            p = S[..., 0, 1] / (2.0 * b)
+            q = spectral_s(u, v, w, nu)
+        M0 = np.empty(p.shape + (2, 2), dtype=complex)
+        M0[..., 0, 0] = -self.eta + p * q
+        M0[..., 0, 1] = p
+        M0[..., 1, 0] = q
+        M0[..., 1, 1] = 1.0
+        if self.inverse_map:
+            return ell, L, nu, adj(M0), _E22, M0, _E11
+        return ell, L, nu, M0, _E11, adj(M0), _E22
+
+    def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
+        """``K(λ)`` at ``X``: ``M = [[λ − η + pq, p], [q, 1]]`` of (ansatz), or ``adj M`` for the inverse map (whose
+        image ``X̃`` has ``ℓ(X̃) = M^{-1} ℓ(X) M``), shape ``(..., 2, 2)``; ``K ℓ(X) = ℓ(X̃) K``."""
+        X = self.model.check_state(X, allow_complex=True)
+        _, _, _, K0, E, _, _ = self._setup(X.reshape(-1, X.shape[-1]), carry)
+        return K0.reshape(X.shape[:-1] + (2, 2)) + np.asarray(lam, dtype=complex)[..., None, None] * E
+
+    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One step: ``(X̃, ν, zeros)`` with ``X̃`` complex."""
+        X = self.model.check_state(X, allow_complex=True)
+        shape = X.shape
+        X = X.reshape(-1, shape[-1])
+        ell, L, nu, K0, E, A0, Ea = self._setup(X, carry)
+        scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
+        res = _residual(K0 + self.eta * E, L, A0 + self.eta * Ea, scale)
+        if np.any(res > _RESIDUAL_TOL):
+            raise SingularStepError(
+                f"one-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
+                f"{np.max(res):.2e}); change eta"
+            )
+        new = dress_parts(self.model, ell[..., 1:, :, :], K0, E, A0, Ea, (self.eta,))
+        out = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
+        if not np.all(np.isfinite(out)):
+            raise SingularStepError("one-point Bäcklund step of the chain produced non-finite values; change eta")
+        return out.reshape(shape), nu.reshape(shape[:-1]), np.zeros(shape[:-1])

@@ -1,0 +1,440 @@
+r"""Multi-site jet-extended rational su(2) Gaudin models ("chains"), issue 12.
+
+Sites ``[(λ_1, N_1), …, (λ_n, N_n)]`` (distinct real ``λ_i``, integer orders ``N_i ≥ 1``), field ``b e_3``:
+
+.. math:: L(\lambda) = b\,\sigma^3 + \sum_i \sum_{k<N_i} \sum_a \sigma^a\,
+          \frac{y^{(i)a}_k}{(\lambda-\lambda_i)^{k+1}},
+
+the Lax matrix (lax2) of the paper with ``λ^{-(k+1)}`` replaced by ``(λ − λ_i)^{-(k+1)}`` and summed over
+sites.  State ``(..., 3M)``, ``M = Σ N_i``: site by site, inside a site ``y_0, …, y_{N_i−1}``, each
+``(y^1, y^2, y^3)`` (one site ``[(0, N)]`` is the one-site layout of :mod:`jetgaudin.algebra`).
+Sites commute; inside a site the bracket is that of ``g^(N_i)``, eq. (LP).
+
+``ν²(λ) = ⟨ξ(λ), ξ(λ)⟩ = b² + Σ_i Σ_{m=1}^{2N_i} h_{i,m} (λ − λ_i)^{-m}`` exactly (``ν² − b²`` is rational,
+vanishes at infinity and has poles only at the sites, so it is the sum of its principal parts).  With
+``R_i(λ) = b e_3 + Σ_{j≠i} ξ_j(λ) = Σ_n r^{(i)}_n (λ − λ_i)^n`` (Taylor at ``λ_i``):
+
+.. math:: h_{i,m} = \sum_{k+l=m-2} \langle y^{(i)}_k, y^{(i)}_l\rangle
+          + 2 \sum_{n \ge 0} \langle y^{(i)}_{m-1+n}, r^{(i)}_n\rangle,\qquad
+          r^{(i)}_n = b e_3 \delta_{n0} + \sum_{j\ne i}\sum_k (-1)^n \binom{k+n}{n}
+          \frac{y^{(j)}_k}{(\lambda_i-\lambda_j)^{k+n+1}}.
+
+For ``m > N_i`` the second sum is empty and ``h_{i,m}`` is the Casimir ``C_{m−N_i}`` of ``g^(N_i)`` at site
+``i`` (Prop. 2); the ``h_{i,m}``, ``m ≤ N_i``, are ``M`` Poisson-commuting Hamiltonians (the r-matrix
+structure (er) of the sum).  One site at 0 gives ``h_m = H_m`` and ``h_{N+k} = C_k`` of Prop. 2.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cached_property
+from math import comb
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._errors import InvalidParameterError, InvalidStateError
+from .._validate import as_state, check_gradient, finite_result
+from ..algebra import structure_constants
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
+
+__all__ = [
+    "GaudinModel",
+    "ChainHamiltonian",
+    "parse_sites",
+    "gaudin_magnet",
+    "lagrange_chain",
+    "twisted_chain",
+]
+
+
+def _check_sites(sites) -> tuple[tuple[float, int], ...]:
+    try:
+        items = list(sites)
+    except TypeError:
+        raise InvalidParameterError(
+            f"sites must be a sequence of (position, order) pairs, e.g. [(-1.0, 2), (0.5, 3)]; got {sites!r}"
+        ) from None
+    if not items:
+        raise InvalidParameterError("sites must contain at least one (position, order) pair")
+    out = []
+    for s in items:
+        try:
+            lam, N = s
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"each site must be a pair (position, order), got {s!r}") from None
+        if isinstance(lam, (complex, np.complexfloating)) and complex(lam).imag != 0:
+            raise InvalidParameterError(f"site positions must be real (the poles of L lie on the real axis), "
+                                        f"got {lam!r}")
+        try:
+            lamf = float(np.real(lam))
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"a site position must be a real number, got {lam!r}") from None
+        if not np.isfinite(lamf):
+            raise InvalidParameterError(f"site positions must be finite, got {lamf}")
+        if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+            raise InvalidParameterError(f"the order N_i of the site at {lamf} must be an integer >= 1, got {N!r}")
+        out.append((lamf, int(N)))
+    pos = [p for p, _ in out]
+    if len(set(pos)) != len(pos):
+        dup = sorted({p for p in pos if pos.count(p) > 1})
+        raise InvalidParameterError(
+            f"site positions must be distinct, got {dup} more than once; merge them into one site of higher order"
+        )
+    return tuple(out)
+
+
+def parse_sites(text: str) -> list[tuple[float, int]]:
+    """Parse ``"λ1:N1,λ2:N2,…"`` (e.g. ``"-1:2,0.5:3,2:1"``) into ``[(λ1, N1), …]``.
+
+    Raises
+    ------
+    InvalidParameterError
+        On any malformed item, a non-integer or non-positive order, or repeated positions.
+
+    >>> parse_sites("-1:2, 0.5:3,2:1")
+    [(-1.0, 2), (0.5, 3), (2.0, 1)]
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise InvalidParameterError('sites: give "position:order" pairs separated by commas, e.g. "-1:2,0.5:3"')
+    out = []
+    for item in text.split(","):
+        item = item.strip()
+        m = re.fullmatch(r"([^:]+):([^:]+)", item)
+        if m is None:
+            raise InvalidParameterError(f'sites: "{item}" is not of the form position:order (e.g. "0.5:3")')
+        try:
+            lam = float(m.group(1))
+        except ValueError:
+            raise InvalidParameterError(f'sites: the position "{m.group(1).strip()}" in "{item}" is not a real '
+                                        "number") from None
+        order = m.group(2).strip()
+        if not re.fullmatch(r"\+?\d+", order):
+            raise InvalidParameterError(f'sites: the order "{order}" in "{item}" must be an integer >= 1')
+        out.append((lam, int(order)))
+    return list(_check_sites(out))
+
+
+def _taylor_coefficient(k: int, n: int, d: float) -> float:
+    """``[z^n] (z + d)^{-(k+1)} = (−1)^n C(k+n, n) d^{−(k+n+1)}``."""
+    return (-1) ** n * comb(k + n, n) * d ** (-(k + n + 1))
+
+
+@dataclass(frozen=True)
+class GaudinModel:
+    r"""The chain with ``sites = [(λ_i, N_i), …]`` in the field ``b e_3`` (see the module docstring).
+
+    Parameters
+    ----------
+    b : float
+        Field strength (any real; ``b = 0`` is the magnet without field, see ``docs/chains.md``).
+    sites : sequence of (float, int)
+        Distinct real positions and integer orders ``N_i ≥ 1``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Non-real, non-finite or repeated positions; orders not integers ``≥ 1``; ``b`` not a finite real.
+    """
+
+    b: float
+    sites: tuple = field(default=((0.0, 1),))
+
+    def __post_init__(self):
+        if np.iscomplexobj(self.b) or isinstance(self.b, bool):
+            raise InvalidParameterError(f"the field strength b must be a real number, got {self.b!r}")
+        try:
+            b = float(self.b)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"the field strength b must be a real number, got {self.b!r}") from None
+        if not np.isfinite(b):
+            raise InvalidParameterError(f"the field strength b must be finite, got {b}")
+        object.__setattr__(self, "b", b)
+        object.__setattr__(self, "sites", _check_sites(self.sites))
+
+    # ---- layout ---------------------------------------------------------------------------
+
+    @property
+    def M(self) -> int:
+        """``M = Σ N_i`` (number of 3-vectors in a state)."""
+        return sum(N for _, N in self.sites)
+
+    @property
+    def n_state(self) -> int:
+        """Length ``3M`` of a state."""
+        return 3 * self.M
+
+    @property
+    def positions(self) -> np.ndarray:
+        return np.array([p for p, _ in self.sites])
+
+    @property
+    def orders(self) -> tuple[int, ...]:
+        return tuple(N for _, N in self.sites)
+
+    @cached_property
+    def offsets(self) -> tuple[int, ...]:
+        """Index of ``y_0`` of each site among the ``M`` 3-vectors."""
+        return tuple(int(x) for x in np.concatenate([[0], np.cumsum(self.orders)[:-1]]))
+
+    def labels(self) -> list[str]:
+        """Column names ``s{i}_y{k}^{a}`` of the ``3M`` state components (site ``i`` from 1)."""
+        return [f"s{i + 1}_y{k}^{a}" for i, (_, N) in enumerate(self.sites) for k in range(N) for a in (1, 2, 3)]
+
+    def check_state(self, X, *, allow_complex: bool = False) -> np.ndarray:
+        """``X`` as a float (or complex) array ``(..., 3M)``; :class:`InvalidStateError` otherwise."""
+        X, _ = as_state(X, allow_complex=allow_complex)
+        if X.shape[-1] != self.n_state:
+            raise InvalidStateError(
+                f"a state of the chain with sites {list(self.sites)} has 3M = {self.n_state} components "
+                f"(M = sum of the orders = {self.M}), got {X.shape[-1]}; give one 3-vector per site and order"
+            )
+        return X
+
+    def describe(self) -> dict:
+        return {"b": self.b, "sites": [[p, N] for p, N in self.sites]}
+
+    # ---- integrals as quadratic forms --------------------------------------------------------
+
+    @cached_property
+    def _forms(self):
+        """``(q, l)``: ``h_{i,m}(X) = Σ_{c,d} q[I, c, d] ⟨y_c, y_d⟩ + 2 b Σ_c l[I, c] y_c^3`` over the ``M``
+        3-vectors ``y_c`` (``I`` runs over ``(i, m)`` in the order of :meth:`integrals`)."""
+        M = self.M
+        q = np.zeros((2 * M, M, M))
+        lin = np.zeros((2 * M, M))
+        row = 0
+        for i, (lam_i, N_i) in enumerate(self.sites):
+            oi = self.offsets[i]
+            for m in range(1, 2 * N_i + 1):
+                for k in range(N_i):
+                    l_ = m - 2 - k
+                    if 0 <= l_ < N_i:
+                        q[row, oi + k, oi + l_] += 1.0
+                if m <= N_i:
+                    lin[row, oi + m - 1] = 1.0
+                    for n in range(N_i - m + 1):
+                        c_i = oi + m - 1 + n
+                        for j, (lam_j, N_j) in enumerate(self.sites):
+                            if j == i:
+                                continue
+                            for k in range(N_j):
+                                c = _taylor_coefficient(k, n, lam_i - lam_j)
+                                q[row, c_i, self.offsets[j] + k] += c
+                                q[row, self.offsets[j] + k, c_i] += c
+                row += 1
+        q.setflags(write=False)
+        lin.setflags(write=False)
+        return q, lin
+
+    def integral_labels(self) -> list[str]:
+        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1)."""
+        return [f"h{i + 1},{m}" for i, (_, N) in enumerate(self.sites) for m in range(1, 2 * N + 1)]
+
+    def casimir_mask(self) -> np.ndarray:
+        """Boolean ``(2M,)``: ``True`` for the Casimirs ``h_{i,m}``, ``m > N_i``; ``False`` for the ``M``
+        commuting Hamiltonians ``h_{i,m}``, ``m ≤ N_i``."""
+        return np.array([m > N for _, N in self.sites for m in range(1, 2 * N + 1)])
+
+    def integrals(self, X) -> np.ndarray:
+        r"""``(h_{1,1}, …, h_{1,2N_1}, h_{2,1}, …)``, shape ``(..., 2M)``: the exact partial-fraction
+        coefficients of ``ν²(λ) − b²`` (module docstring).  One site at 0: ``(H_1..H_N, C_1..C_N)``.
+
+        Parameters
+        ----------
+        X : array_like, shape (..., 3M)
+
+        Returns
+        -------
+        ndarray, shape (..., 2M)
+        """
+        X = self.check_state(X, allow_complex=True)
+        y = X.reshape(X.shape[:-1] + (self.M, 3))
+        q, lin = self._forms
+        gram = np.einsum("...ca,...da->...cd", y, y)
+        out = np.einsum("Icd,...cd->...I", q, gram) + 2.0 * self.b * np.einsum("Ic,...c->...I", lin, y[..., 2])
+        return finite_result(out, "the chain integrals h_{i,m}")
+
+    def integral_gradients(self, X) -> np.ndarray:
+        """Gradients of the ``2M`` integrals, shape ``(..., 2M, 3M)`` (exact: the ``h`` are quadratic)."""
+        X = self.check_state(X, allow_complex=True)
+        y = X.reshape(X.shape[:-1] + (self.M, 3))
+        q, lin = self._forms
+        g = 2.0 * np.einsum("Icd,...da->...Ica", q, y)
+        g[..., 2] += 2.0 * self.b * lin
+        return g.reshape(X.shape[:-1] + (2 * self.M, 3 * self.M))
+
+    # ---- Poisson structure -----------------------------------------------------------------
+
+    @cached_property
+    def structure_constants(self) -> np.ndarray:
+        r"""``c[I, J, K]`` with ``{X_I, X_J} = Σ_K c[I, J, K] X_K``: block diagonal, ``g^(N_i)`` (LP) per site,
+        shape ``(3M, 3M, 3M)``, read-only."""
+        n = self.n_state
+        c = np.zeros((n, n, n))
+        for i, (_, N) in enumerate(self.sites):
+            s = slice(3 * self.offsets[i], 3 * (self.offsets[i] + N))
+            c[s, s, s] = structure_constants(N)
+        c.setflags(write=False)
+        return c
+
+    def poisson_tensor(self, X) -> np.ndarray:
+        r"""``Π(X)_{IJ} = {X_I, X_J}``, shape ``(..., 3M, 3M)`` (block diagonal over sites)."""
+        X = self.check_state(X, allow_complex=True)
+        return np.einsum("ijk,...k->...ij", self.structure_constants, X)
+
+    def vector_field(self, grad_H, X) -> np.ndarray:
+        """``Ẋ = Π(X) ∇H``, shape ``(..., 3M)``."""
+        X = self.check_state(X, allow_complex=True)
+        grad_H = check_gradient(grad_H, self.n_state, name="grad_H")
+        out = np.empty(np.broadcast_shapes(X.shape, grad_H.shape), dtype=np.result_type(X, grad_H))
+        for i, (_, N) in enumerate(self.sites):
+            s = slice(3 * self.offsets[i], 3 * (self.offsets[i] + N))
+            out[..., s] = np.einsum("ijk,...k,...j->...i", structure_constants(N), X[..., s], grad_H[..., s])
+        return out
+
+    # ---- Lax matrix, spectral curve, Hamiltonians -------------------------------------------
+
+    def lax_matrix(self, X, lam) -> np.ndarray:
+        r"""``L(λ) = Σ_a σ^a ξ^a(λ)``, ``ξ(λ) = b e_3 + Σ_i Σ_k y^{(i)}_k (λ − λ_i)^{-(k+1)}``, shape
+        ``(..., 2, 2)`` (``lam`` broadcast against ``X[..., 0]``)."""
+        from ..lax import SIGMA
+
+        return np.einsum("...a,aij->...ij", self.xi(X, lam), SIGMA)
+
+    def xi(self, X, lam) -> np.ndarray:
+        """``ξ(λ)`` (the coefficient vector of ``L``), shape ``(..., 3)``."""
+        from ._curve import lax_vector
+
+        return lax_vector(self, X, lam)
+
+    def nu_squared(self, X, lam) -> np.ndarray:
+        """``ν²(λ) = u² + vw = ⟨ξ(λ), ξ(λ)⟩`` evaluated directly, shape ``(...)``."""
+        xi = self.xi(X, lam)
+        return np.sum(xi * xi, axis=-1)
+
+    def nu(self, X, eta, *, sheet: int = 1) -> np.ndarray:
+        """``ν(η)`` on the default branch (positive at ``Re η``, continued vertically); see
+        :func:`jetgaudin.gaudin._curve.nu`."""
+        from ._curve import nu
+
+        return nu(self, X, eta, sheet=sheet)
+
+    def branch_points(self, X) -> np.ndarray:
+        """The zeros of ``ν²``: roots of ``D(λ)² ν²(λ)``, ``D = Π (λ − λ_i)^{N_i}``, shape ``(..., 2M)``
+        (``(..., 2M − 2)`` for ``b = 0``)."""
+        from ._curve import branch_points
+
+        return branch_points(self, X)
+
+    def hamiltonian(self, weights) -> ChainHamiltonian:
+        """``H = Σ w_{i,m} h_{i,m}`` as an object for :func:`jetgaudin.integrate`."""
+        return ChainHamiltonian(self, weights)
+
+    def interpolating_hamiltonian(self, X, eta) -> np.ndarray:
+        r"""``G_η(X) = i∫_{η̄}^{η} ν dλ = −2∫_0^{Im η} Re ν(Re η + is) ds``, shape ``(...)``."""
+        from ._curve import interpolating_hamiltonian
+
+        return interpolating_hamiltonian(self, X, eta)
+
+    def interpolating_weights(self, X, eta) -> np.ndarray:
+        r"""``ω_{i,m} = ∂G_η/∂h_{i,m} = −2∫_0^{Im η} Re[(λ − λ_i)^{-m} / (2ν(λ))] ds``, shape ``(..., 2M)``."""
+        from ._curve import interpolating_weights
+
+        return interpolating_weights(self, X, eta)
+
+    def interpolating_flow_hamiltonian(self, X, eta) -> ChainHamiltonian:
+        """``Σ ω_{i,m}(X) h_{i,m}``: its flow from ``X`` is the flow of ``G_η`` (the ``ω`` are constant on it)."""
+        return ChainHamiltonian(self, self.interpolating_weights(X, eta))
+
+    # ---- maps ---------------------------------------------------------------------------------
+
+    def two_point_backlund(self, eta, branch: str = "default", compiled: bool = False) -> ChainTwoPointBacklund:
+        """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
+        ``compiled=True``: ``iterate`` runs in the Numba kernel)."""
+        from .maps import ChainTwoPointBacklund
+
+        return ChainTwoPointBacklund(self, eta, branch, compiled)
+
+    def one_point_backlund(
+        self, eta, branch: str = "default", inverse_map: bool = False
+    ) -> ChainOnePointBacklund:
+        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0``."""
+        from .maps import ChainOnePointBacklund
+
+        return ChainOnePointBacklund(self, eta, branch, inverse_map)
+
+
+@dataclass(frozen=True)
+class ChainHamiltonian:
+    r"""``H(X) = Σ_I w_I h_I(X)``, a linear combination of the chain integrals (weights ``(2M,)`` or
+    ``(..., 2M)``).  Usable with :func:`jetgaudin.integrate` (``vector_field`` and ``record_integrals``)."""
+
+    model: GaudinModel
+    weights: np.ndarray
+
+    def __post_init__(self):
+        if np.iscomplexobj(self.weights):
+            raise InvalidParameterError("weights must be real (complex given)")
+        try:
+            w = np.asarray(self.weights, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"weights must be real numbers, got {self.weights!r}") from None
+        if w.ndim == 0 or w.shape[-1] != 2 * self.model.M:
+            raise InvalidParameterError(
+                f"weights must have a trailing axis of length 2M = {2 * self.model.M} (one per h_(i,m)), "
+                f"got shape {w.shape}"
+            )
+        if not np.all(np.isfinite(w)):
+            raise InvalidParameterError("weights must be finite")
+        object.__setattr__(self, "weights", w)
+
+    @property
+    def b(self) -> float:
+        return self.model.b
+
+    @property
+    def structure_constants(self) -> np.ndarray:
+        """The chain's structure constants (lets :func:`jetgaudin.integrate` use its fast and heyoka routes)."""
+        return self.model.structure_constants
+
+    def __call__(self, X) -> np.ndarray:
+        return np.sum(self.weights * self.model.integrals(X), axis=-1)
+
+    def gradient(self, X) -> np.ndarray:
+        return np.einsum("...m,...mi->...i", self.weights, self.model.integral_gradients(X))
+
+    def vector_field(self, X) -> np.ndarray:
+        r"""``Ẋ = Π(X) ∇H``, shape ``(..., 3M)``."""
+        return self.model.vector_field(self.gradient(X), X)
+
+    def record_integrals(self, X) -> np.ndarray:
+        """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``)."""
+        return self.model.integrals(X)
+
+
+def _uniform(b, positions, N, name):
+    try:
+        pos = list(positions)
+    except TypeError:
+        raise InvalidParameterError(f"{name}: positions must be a sequence of real numbers, got {positions!r}") \
+            from None
+    return GaudinModel(b, [(p, N) for p in pos])
+
+
+def gaudin_magnet(b: float, positions) -> GaudinModel:
+    """The rational su(2) Gaudin magnet: one spin (``N_i = 1``) at each position."""
+    return _uniform(b, positions, 1, "gaudin_magnet")
+
+
+def lagrange_chain(b: float, positions) -> GaudinModel:
+    """The Lagrange chain of ``⊕ e(3)``: ``N_i = 2`` at each position."""
+    return _uniform(b, positions, 2, "lagrange_chain")
+
+
+def twisted_chain(b: float, positions) -> GaudinModel:
+    """The twisted (generalised Lagrange) chain: ``N_i = 3`` at each position."""
+    return _uniform(b, positions, 3, "twisted_chain")
