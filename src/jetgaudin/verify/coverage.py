@@ -60,7 +60,9 @@ STATEMENTS: tuple[Statement, ...] = (
     _s("Intro: N = 1 is the Euler top on su(2); N = 2 the Lagrange top on e(3) = su(2) (+)_s R^3", "1", C,
        "Intro-algebras"),
     _s("Intro: direct sums give n-body chains (Gaudin model, Lagrange chain) with rational, trigonometric, "
-       "elliptic r-matrices", "1", NC, (), _CITED + " (no chain appears in this paper's formulas)"),
+       "elliptic r-matrices", "1", P, ("Chain-r", "Chain-integrals"),
+       "the rational case is checked (r-matrix structure of the sum over sites, integrals in involution); the "
+       "trigonometric and elliptic cases are cited, not derived in this paper"),
     _s("Intro: the construction generalises to any simple Lie algebra", "1", NC, (), _CITED),
     _s("Intro: the N = 3 algebra includes su(2) and R^3 as proper subalgebras but is no longer a semidirect sum",
        "1", P, ("Sec3-structure", "Sec3-cocycle"),
@@ -233,7 +235,9 @@ STATEMENTS: tuple[Statement, ...] = (
        "Sec3-cocycle"),
     _s("Conclusions: r-matrix formulation, Lax formulation, canonical realisation, explicit BTs", "7", C,
        ("Prop1", "Prop-Lax", "Prop-canonical", "mp", "2p")),
-    _s("Conclusions: n-body chains for each N (done for N = 2 in [MPRS])", "7", NC, (), _CITED),
+    _s("Conclusions: n-body chains for each N (done for N = 2 in [MPRS])", "7", P, ("Chain-r", "Chain-integrals"),
+       "the rational chains of any sites and orders are built and checked (jetgaudin.GaudinModel); the content of "
+       "[MPRS] is cited"),
     # ------------------------------------------------------------------------------------------- Appendices
     _s("Appendix 1: the form X^ = Phi X + X0 recalled", "Appendix 1", C, "2p"),
     _s("Appendix 1: s, t recalled from (x), (X)", "Appendix 1", C, ("x", "X")),
