@@ -1,7 +1,8 @@
 r"""Figures of runs, orbits, the λ-plane and the map against its flow; animations of the moving top.
 
-Uses the Agg backend (no display needed).  No mathematics here: everything numerical comes from the public
-API (:func:`jetgaudin.integrals`, :func:`jetgaudin.material_point`, :func:`jetgaudin.nu`, …).  Every quantity
+Figures are made on Matplotlib's Agg canvas outside pyplot (no display needed, nothing to close; a notebook
+shows them as they are).  No mathematics here: everything numerical comes from the public API
+(:func:`jetgaudin.integrals`, :func:`jetgaudin.material_point`, :func:`jetgaudin.nu`, …).  Every quantity
 drawn is dimensionless (the paper's variables carry no units); the axes are named ``e₁, e₂, e₃``.
 
 Run directories are read in slices (constant memory) by one function, :func:`open_run`; long runs are thinned
@@ -11,13 +12,9 @@ max_points)`` and the last row; the drift figure shows, per bin of ``k`` rows, t
 
 from __future__ import annotations
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-from ._animate import AnimationFormat, animate_run  # noqa: E402
-from ._compare import figure_compare_drift, figure_map_flow_distance, save_compare_figures  # noqa: E402
-from ._files import (  # noqa: E402
+from ._animate import AnimationFormat, animate_run
+from ._compare import figure_compare_drift, figure_map_flow_distance, save_compare_figures
+from ._files import (
     DEFAULT_MAX_POINTS,
     FigureFormat,
     run_title,
@@ -25,7 +22,7 @@ from ._files import (  # noqa: E402
     save_orbit_figures,
     save_run_figures,
 )
-from ._orbit import (  # noqa: E402
+from ._orbit import (
     figure_integral_drift,
     figure_points_3d,
     figure_projection,
@@ -33,8 +30,8 @@ from ._orbit import (  # noqa: E402
     point_sets,
     sphere_label,
 )
-from ._runs import RunRows, open_run, thin_step  # noqa: E402
-from ._spectral import default_region, figure_spectral_plane, nu_on_grid  # noqa: E402
+from ._runs import RunRows, open_run, thin_step
+from ._spectral import default_region, figure_spectral_plane, nu_on_grid
 
 __all__ = [
     "AnimationFormat",

@@ -17,13 +17,12 @@ from collections import deque
 from enum import StrEnum
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import to_rgba
 
 from .._errors import InvalidParameterError, RecordingError
 from ._files import run_title
-from ._orbit import AXIS_LABELS, POINT_COLORS, point_sets, sphere_label
+from ._orbit import AXIS_LABELS, POINT_COLORS, new_figure, point_sets, sphere_label
 from ._runs import open_run
 
 __all__ = ["AnimationFormat", "animate_run", "frame_rows"]
@@ -199,7 +198,7 @@ def animate_run(
     lo, hi = np.minimum(lo, -r), np.maximum(hi, r)
     mid, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-12) * 1.05
 
-    fig = plt.figure(figsize=(6, 6.4), dpi=dpi)
+    fig = new_figure(figsize=(6, 6.4), dpi=dpi)
     ax = fig.add_subplot(projection="3d", computed_zorder=False)
     ax.set_xlim(mid[0] - half, mid[0] + half)
     ax.set_ylim(mid[1] - half, mid[1] + half)
@@ -268,6 +267,9 @@ def animate_run(
                     sink = _GifSink(path, fps) if fmt is AnimationFormat.gif else _Mp4Sink(path, fps, (w_px, h_px))
                 sink.add(rgba_img)
         sink.close()
-    finally:
-        plt.close(fig)
+    except BaseException:
+        if isinstance(sink, _Mp4Sink):  # do not leave ffmpeg waiting on its pipe
+            sink.proc.kill()
+            sink.proc.wait()
+        raise
     return path

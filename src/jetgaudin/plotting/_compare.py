@@ -8,13 +8,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib.pyplot as plt
+import matplotlib as mpl
 import numpy as np
 
 import jetgaudin as jg
 
 from ._files import save_figure
-from ._orbit import integral_labels
+from ._orbit import integral_labels, new_figure
 
 __all__ = ["figure_compare_drift", "figure_map_flow_distance", "save_compare_figures"]
 
@@ -50,8 +50,9 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
     df, dm = _drift(X_flow, b), _drift(X_map, b)
     t_flow, n_map = np.asarray(t_flow, dtype=float), np.asarray(n_map, dtype=float)
     N = df.shape[-1] // 2
-    fig, ax = plt.subplots(figsize=(9.5, 5))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig = new_figure(figsize=(9.5, 5))
+    ax = fig.subplots()
+    colors = mpl.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, name in enumerate(integral_labels(N)):
         c = colors[k % len(colors)]
         mf, mm = df[:, k] > 0, dm[:, k] > 0
@@ -82,7 +83,8 @@ def figure_map_flow_distance(n, distance, *, title: str = ""):
     matplotlib.figure.Figure
     """
     n, distance = np.asarray(n, dtype=float), np.asarray(distance, dtype=float)
-    fig, ax = plt.subplots(figsize=(8, 4.5))
+    fig = new_figure(figsize=(8, 4.5))
+    ax = fig.subplots()
     m = distance > 0
     ax.semilogy(
         n[m], distance[m], ".-", markersize=2.5, linewidth=0.6, color="tab:purple", label="|X_map(n) − X_flow(n)|"

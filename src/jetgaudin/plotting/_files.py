@@ -12,7 +12,6 @@ import os
 from enum import StrEnum
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 import jetgaudin as jg
@@ -61,14 +60,12 @@ def save_figure(fig, path, dpi: int) -> Path:
     """Write ``fig`` to ``path`` atomically (a temporary file renamed into place) and close it."""
     path = Path(path)
     if path.suffix.lower().lstrip(".") not in {f.value for f in FigureFormat}:
-        plt.close(fig)
         raise InvalidParameterError(f"the figure file must end in .png, .pdf or .svg, got {path.name!r}")
     tmp = path.with_name(path.name + ".tmp")
     try:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lower().lstrip("."))
         os.replace(tmp, path)
     finally:
-        plt.close(fig)
         tmp.unlink(missing_ok=True)
     return path
 

@@ -9,8 +9,9 @@ integrals from :func:`jetgaudin.integrals`.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 import jetgaudin as jg
 
@@ -23,11 +24,20 @@ __all__ = [
     "integral_labels",
     "AXIS_LABELS",
     "POINT_COLORS",
+    "new_figure",
 ]
 
 AXIS_LABELS = ("e₁ (dimensionless)", "e₂ (dimensionless)", "e₃ (dimensionless)")
 POINT_COLORS = ("tab:blue", "tab:red")
 SPHERE_STYLE = {"color": "0.15", "linewidth": 0.6, "alpha": 0.55}
+
+
+def new_figure(**kwargs) -> Figure:
+    """A Matplotlib figure on the Agg canvas, outside pyplot: no global state, nothing to close, and any backend
+    (a notebook's inline one included) can display it."""
+    fig = Figure(**kwargs)
+    FigureCanvasAgg(fig)
+    return fig
 
 
 def point_sets(X) -> list[tuple[str, np.ndarray]]:
@@ -107,7 +117,7 @@ def figure_points_3d(X, *, title: str = "", overlay=None, overlay_label: str = "
     """
     X = np.asarray(X, dtype=float)
     N = X.shape[-1] // 3
-    fig = plt.figure(figsize=(7.5, 7.8))
+    fig = new_figure(figsize=(7.5, 7.8))
     ax = fig.add_subplot(projection="3d", computed_zorder=False)
     r = float(np.linalg.norm(_sphere_block(X[0])))
     sets = point_sets(X)
@@ -166,7 +176,8 @@ def figure_projection(X, *, title: str = "", overlay=None, overlay_label: str = 
     """
     X = np.asarray(X, dtype=float)
     N = X.shape[-1] // 3
-    fig, ax = plt.subplots(figsize=(8.8, 6.2))
+    fig = new_figure(figsize=(8.8, 6.2))
+    ax = fig.subplots()
     r = float(np.linalg.norm(_sphere_block(X[0])))
     sets = point_sets(X)
     for (label, P), c in zip(sets, POINT_COLORS, strict=False):
@@ -223,7 +234,8 @@ def figure_integral_drift(n, X=None, b=None, *, title: str = "", xlabel: str = "
         drift = np.abs(I - I[0])
     d = np.asarray(drift, dtype=float)
     N = d.shape[-1] // 2
-    fig, ax = plt.subplots(figsize=(9, 4.8))
+    fig = new_figure(figsize=(9, 4.8))
+    ax = fig.subplots()
     for k, name in enumerate(integral_labels(N)):
         mask = d[:, k] > 0
         label = name if mask.any() else f"{name} (exactly conserved)"

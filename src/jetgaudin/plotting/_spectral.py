@@ -10,10 +10,11 @@ segment) are left blank.  All quantities are dimensionless.
 
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
 import numpy as np
 
 import jetgaudin as jg
+
+from ._orbit import new_figure
 
 __all__ = ["nu_on_grid", "figure_spectral_plane", "default_region"]
 
@@ -99,7 +100,8 @@ def figure_spectral_plane(X, b, eta, *, region=None, resolution: int = 241, site
         logabs = np.log10(np.abs(nu2))
     nu = nu_on_grid(lam, X, b)
     bp = np.ravel(jg.branch_points(X, b))
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.6), sharey=True)
+    fig = new_figure(figsize=(13, 5.6))
+    axes = fig.subplots(1, 2, sharey=True)
     ext = (re[0], re[-1], im[0], im[-1])
     finite = logabs[np.isfinite(logabs)]
     vmin, vmax = (np.percentile(finite, 1), np.percentile(finite, 99)) if finite.size else (None, None)
