@@ -16,8 +16,10 @@ import math
 from collections import deque
 from enum import StrEnum
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
 
 from .._errors import InvalidParameterError, RecordingError
@@ -71,7 +73,8 @@ class _GifSink:
     """Collect palette frames (one byte per pixel) and write an animated GIF with Pillow."""
 
     def __init__(self, path: Path, fps: float):
-        self.path, self.frames, self.duration = path, [], max(20, round(1000 / fps))
+        self.path, self.duration = path, max(20, round(1000 / fps))
+        self.frames: list[Any] = []
 
     def add(self, rgba: np.ndarray) -> None:
         from PIL import Image
@@ -116,12 +119,14 @@ class _Mp4Sink:
             str(path),
         ]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE)
+        assert self.proc.stdin is not None
+        self.stdin = self.proc.stdin
 
     def add(self, rgba: np.ndarray) -> None:
-        self.proc.stdin.write(np.ascontiguousarray(rgba[..., :3]).tobytes())
+        self.stdin.write(np.ascontiguousarray(rgba[..., :3]).tobytes())
 
     def close(self) -> None:
-        self.proc.stdin.close()
+        self.stdin.close()
         if self.proc.wait() != 0:
             raise RecordingError("ffmpeg failed to write the .mp4 animation")
 
@@ -189,9 +194,9 @@ def animate_run(
     N = run.N
     # pass 1 over the frame rows only: the bounds of the picture
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    r = None
+    r = -1.0
     for _, X in _frame_slices(run, stride, count):
-        if r is None:
+        if r < 0:
             r = float(np.linalg.norm(X[0, 3 * N - 3 :]))
         for _, P in point_sets(X):
             lo, hi = np.minimum(lo, P.min(axis=0)), np.maximum(hi, P.max(axis=0))
@@ -238,8 +243,10 @@ def animate_run(
     fig.subplots_adjust(left=0.02, right=0.98, bottom=0.1, top=0.88)
 
     path = out
-    sink = None
-    hist = [deque(maxlen=trail + 1) for _ in labels]
+    canvas = fig.canvas
+    assert isinstance(canvas, FigureCanvasAgg)
+    sink: _GifSink | _Mp4Sink | None = None
+    hist: list[deque[np.ndarray]] = [deque(maxlen=trail + 1) for _ in labels]
     try:
         for idx, X in _frame_slices(run, stride, count):
             for i_row, x in zip(idx, X, strict=True):
@@ -260,12 +267,13 @@ def animate_run(
                 mp_line.set_data_3d([0, m[0]], [0, m[1]], [0, m[2]])
                 label = "t" if run.index_name == "t" else "n"
                 step_text.set_text(f"{label} = {i_row:g}" if label == "t" else f"step n = {int(i_row)}")
-                fig.canvas.draw()
-                rgba_img = np.asarray(fig.canvas.buffer_rgba())
+                canvas.draw()
+                rgba_img = np.asarray(canvas.buffer_rgba())
                 if sink is None:
                     h_px, w_px = rgba_img.shape[:2]
                     sink = _GifSink(path, fps) if fmt is AnimationFormat.gif else _Mp4Sink(path, fps, (w_px, h_px))
                 sink.add(rgba_img)
+        assert sink is not None  # count >= 1 frame was drawn
         sink.close()
     except BaseException:
         if isinstance(sink, _Mp4Sink):  # do not leave ffmpeg waiting on its pipe

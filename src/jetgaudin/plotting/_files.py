@@ -34,7 +34,9 @@ class FigureFormat(StrEnum):
     svg = "svg"
 
 
-def _eta_text(eta: complex) -> str:
+def _eta_text(eta: complex | None) -> str:
+    if eta is None:
+        return "(none)"
     return f"{eta.real:g} {'+' if eta.imag >= 0 else '−'} {abs(eta.imag):g}i"
 
 

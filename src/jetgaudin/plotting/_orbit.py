@@ -9,6 +9,8 @@ integrals from :func:`jetgaudin.integrals`.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -29,7 +31,7 @@ __all__ = [
 
 AXIS_LABELS = ("e₁ (dimensionless)", "e₂ (dimensionless)", "e₃ (dimensionless)")
 POINT_COLORS = ("tab:blue", "tab:red")
-SPHERE_STYLE = {"color": "0.15", "linewidth": 0.6, "alpha": 0.55}
+SPHERE_STYLE: dict[str, Any] = {"color": "0.15", "linewidth": 0.6, "alpha": 0.55}
 
 
 def new_figure(**kwargs) -> Figure:

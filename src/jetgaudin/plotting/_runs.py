@@ -163,7 +163,7 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
                 rows = int(f["X"].shape[0])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {path}: {exc}") from None
-        eta = complex(*inp["eta"]) if inp.get("hamiltonian") == "interpolating" else None
+        eta_flow = complex(*inp["eta"]) if inp.get("hamiltonian") == "interpolating" else None
         return RunRows(
             run_dir,
             "map" if map_of_flow else "flow",
@@ -173,7 +173,7 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
             rows,
             int(inp["N"]),
             float(inp["b"]),
-            eta,
+            eta_flow,
             None,
             status,
             inp,
