@@ -104,8 +104,9 @@ def _generate(app) -> None:
             lines += [f".. autofunction:: {name}", ""]
     _write_if_changed(gen / "api.rst", "\n".join(lines))
     arch = ROOT / "docs" / "architecture.md"
-    if arch.exists():
-        text = "```{include} ../../architecture.md\n```\n"
+    if arch.exists():  # the page itself is listed by the index's glob toctree; link to it (an include would
+        # rebase its relative links)
+        text = "# Architecture\n\nThe architecture of jetgaudin is described in {doc}`../../architecture`.\n"
     else:
         text = (
             "# Architecture\n\nThe architecture page (`docs/architecture.md`: system, method and recording; the run "

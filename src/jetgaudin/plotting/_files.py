@@ -204,6 +204,7 @@ def save_run_figures(
         mrun = open_run(run_dir, map_of_flow=True)
         _, overlay = thinned_rows(mrun, max_points)
         overlay, X = X, overlay  # the map as points, the flow as lines (as `flow --compare` draws them)
+        title += "\npoints: the map, n = 0, 1, …; lines: the flow of G_η at t = n"
     kw = {"title": title, "note": note}
     paths = [
         save_figure(

@@ -96,7 +96,8 @@ def figure_spectral_plane(X, b, eta, *, region=None, resolution: int = 241, site
     im = np.linspace(im0, im1, resolution)
     lam = re[None, :] + 1j * im[:, None]
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        nu2 = np.asarray(jg.nu_squared(lam, X, b))
+        pole = lam == 0  # the site itself: ν² has its pole there (left blank)
+        nu2 = np.where(pole, np.nan, np.asarray(jg.nu_squared(np.where(pole, 1.0, lam), X, b)))
         logabs = np.log10(np.abs(nu2))
     nu = nu_on_grid(lam, X, b)
     bp = np.ravel(jg.branch_points(X, b))
