@@ -94,7 +94,7 @@ def figure_map_flow_distance(n, distance, *, title: str = ""):
     ax.set_xlabel("step n (dimensionless)")
     ax.set_ylabel("Euclidean distance in R^3N (dimensionless)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="lower right", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax.set_title((title + "\n" if title else "") + "distance between the map and the time-n flow of G_η", fontsize=8)
     fig.tight_layout()
     return fig

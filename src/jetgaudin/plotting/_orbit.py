@@ -82,8 +82,8 @@ def integral_labels(N: int) -> list[str]:
 
 
 def _marker_size(T: int) -> float:
-    """Scatter marker area: 3 pt² for up to 1000 points, shrinking as ``3000 / T`` to 0.3 pt² for dense clouds."""
-    return float(np.clip(3000.0 / max(T, 1), 0.3, 3.0))
+    """Scatter marker area ``3000 / T`` pt², clipped to [0.3, 10]: large for a few points, small for dense clouds."""
+    return float(np.clip(3000.0 / max(T, 1), 0.3, 10.0))
 
 
 def _equal_limits(ax, pts, r, dims=3):
