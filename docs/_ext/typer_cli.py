@@ -12,7 +12,7 @@ from docutils.parsers.rst import Directive
 
 
 def _help(cmd, name: str, parent=None) -> str:
-    ctx = cmd.context_class(cmd, info_name=name, parent=parent, terminal_width=100, max_content_width=100)
+    ctx = cmd.context_class(cmd, info_name=name, parent=parent, terminal_width=80, max_content_width=80)
     return cmd.get_help(ctx)
 
 
@@ -25,7 +25,7 @@ class TyperCli(Directive):
         from jetgaudin.cli import app
 
         root = typer.main.get_command(app)
-        root_ctx = root.context_class(root, info_name="jetgaudin", terminal_width=100, max_content_width=100)
+        root_ctx = root.context_class(root, info_name="jetgaudin", terminal_width=80, max_content_width=80)
         out = [nodes.literal_block(text=_help(root, "jetgaudin"), language="text")]
         for name in sorted(root.commands):
             cmd = root.commands[name]
