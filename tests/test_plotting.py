@@ -1,16 +1,25 @@
-"""The figures show what the caption of the paper's Figure 1 describes: the N + N points x - z (material point) and
-z (centre of mass) in 3D with the sphere |z| = const, their x-y projection, and the integral drift."""
+"""The figures show what they claim, checked on their content (the plotted data, the labels), not on file existence.
+
+The paper's Figure 1 shows the N + N points x - z (material point) and z (centre of mass) in 3D with the sphere
+|z| = const; Figure 2 its x-y projection.  Run directories are read in slices; a long run is thinned by the stated
+rule (every k-th saved row, k = ceil(rows / max_points), and the last) and drawn in bounded memory.
+"""
+
+import tracemalloc
 
 import matplotlib
 
 matplotlib.use("Agg")
 
+import h5py  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import jetgaudin as jg  # noqa: E402
 from jetgaudin import plotting  # noqa: E402
+from jetgaudin.plotting import _files  # noqa: E402
+from jetgaudin.recording import OrbitSpec, RecordOptions, load_orbit, run_orbit  # noqa: E402
 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0  # noqa: E402
 
@@ -20,36 +29,75 @@ def orbit():
     return jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA).iterate(APPENDIX2_X0, 1000)
 
 
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    """The Appendix 2 run (1000 steps, every row saved) written by the run layer."""
+    d = tmp_path_factory.mktemp("runs") / "appendix2"
+    spec = OrbitSpec(b=APPENDIX2_B, eta=APPENDIX2_ETA, steps=1000, X0=tuple(APPENDIX2_X0))
+    assert run_orbit(spec, d, options=RecordOptions(csv=False)).status == "completed"
+    return d
+
+
 def _scatter_points(ax):
     """{label: (n, dim) array of the plotted points} of the scatter collections of an axes."""
     out = {}
     for c in ax.collections:
-        if c.get_label() and not c.get_label().startswith("_") and hasattr(c, "_offsets3d"):
-            out[c.get_label()] = np.column_stack([np.asarray(a, dtype=float) for a in c._offsets3d])
-        elif c.get_label() and not c.get_label().startswith("_") and len(c.get_offsets()):
-            out[c.get_label()] = np.asarray(c.get_offsets(), dtype=float)
+        lab = c.get_label()
+        if not lab or lab.startswith("_"):
+            continue
+        if hasattr(c, "_offsets3d"):
+            out[lab] = np.column_stack([np.asarray(a, dtype=float) for a in c._offsets3d])
+        elif len(c.get_offsets()):
+            out[lab] = np.asarray(c.get_offsets(), dtype=float)
     return out
 
 
-def test_figure1_shows_material_point_and_centre_of_mass_on_the_sphere(orbit):
+def _capture(monkeypatch):
+    """Record every figure that the plotting package writes (its content is checked, then it is saved)."""
+    seen = {}
+    real = _files.save_figure
+
+    def spy(fig, path, dpi):
+        seen[path.name] = fig
+        fig_copy = {"axes": fig.axes, "texts": [t.get_text() for t in fig.texts]}
+        seen[path.name + ":content"] = fig_copy
+        return real(fig, path, dpi)
+
+    monkeypatch.setattr(_files, "save_figure", spy)
+    import jetgaudin.plotting._compare as cmp
+
+    monkeypatch.setattr(cmp, "save_figure", spy)
+    return seen
+
+
+# ------------------------------------------------------------------------------------------------ figure 1 and 2
+def test_figure1_shows_material_point_and_centre_of_mass_with_the_sphere_on_top(orbit):
     fig = plotting.figure_points_3d(orbit)
     try:
         (ax,) = fig.axes
         pts = _scatter_points(ax)
-        assert set(pts) == {"material point x − z", "centre of mass z"}
         # 1000 + 1000 points (and the initial one): exactly the orbit's x - z and z
         np.testing.assert_array_equal(pts["material point x − z"], orbit[:, 3:6] - orbit[:, 6:9])
         np.testing.assert_array_equal(pts["centre of mass z"], orbit[:, 6:9])
-        # the faint sphere: a wireframe of radius |z(0)| = 1 (every vertex at distance 1 from the origin)
-        (wire,) = [c for c in ax.collections if not hasattr(c, "_offsets3d")]
+        # the sphere: a wireframe of radius |z(0)| = 1 (every vertex at distance 1 from the origin, to rounding),
+        # drawn after and above the points in a visible (not faint) style
+        (wire,) = [c for c in ax.collections if c.get_label().startswith("sphere")]
         seg = np.concatenate([np.asarray(s) for s in wire._segments3d])
         np.testing.assert_allclose(np.linalg.norm(seg, axis=1), 1.0, rtol=1e-12)
-        assert wire.get_alpha() < 0.5
+        assert wire.get_label() == "sphere |z| = 1 (invariant)"
+        assert wire.get_alpha() >= 0.5 and ax.computed_zorder is False
+        point_sets = [c for c in ax.collections if c.get_label() in ("material point x − z", "centre of mass z")]
+        assert len(point_sets) == 2 and wire.get_zorder() > max(c.get_zorder() for c in point_sets)
+        assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == plotting._orbit.AXIS_LABELS
+        assert all("dimensionless" in lab for lab in plotting._orbit.AXIS_LABELS)
+        # the legend is outside the axes (below them): it cannot cover a point
+        (leg,) = fig.legends
+        assert fig.transFigure.inverted().transform(leg.get_window_extent(fig.canvas.get_renderer()))[1, 1] < 0.12
     finally:
         plt.close(fig)
 
 
-def test_figure2_is_the_xy_projection(orbit):
+def test_figure2_is_the_e1_e2_projection(orbit):
     fig = plotting.figure_projection(orbit)
     try:
         (ax,) = fig.axes
@@ -58,6 +106,8 @@ def test_figure2_is_the_xy_projection(orbit):
         np.testing.assert_array_equal(pts["centre of mass z"], orbit[:, 6:8])
         (circle,) = ax.lines
         np.testing.assert_allclose(np.hypot(*circle.get_data()), 1.0, rtol=1e-12)
+        assert circle.get_zorder() > 1 and "|z| = 1" in circle.get_label()
+        assert ax.get_legend().get_bbox_to_anchor().x0 > ax.get_window_extent().x1 - 1  # legend right of the axes
     finally:
         plt.close(fig)
 
@@ -75,19 +125,274 @@ def test_integral_drift_figure_has_the_2N_curves(orbit):
             x, y = ln.get_data()
             np.testing.assert_array_equal(y, d[d[:, k] > 0, k])
             np.testing.assert_array_equal(x, n[d[:, k] > 0])
+        assert "dimensionless" in ax.get_ylabel() and "dimensionless" in ax.get_xlabel()
     finally:
         plt.close(fig)
 
 
 @pytest.mark.parametrize("N", [2, 4])
-def test_other_N_plot_y0_and_the_last_block(N):
+def test_other_N_plot_y0_and_the_last_block_with_labels_that_fit(N):
     rng = np.random.default_rng(N)
     X = rng.normal(size=(20, 3 * N))
     labels = [lab for lab, _ in plotting.point_sets(X)]
-    assert labels == ["y_0", f"y_{N - 1}"]
-    fig = plotting.figure_points_3d(X)
+    assert labels == ["y₀", f"y_{N - 1}"]
+    r = np.linalg.norm(X[0, 3 * N - 3 :])
+    for make in (plotting.figure_points_3d, plotting.figure_projection):
+        fig = make(X)
+        try:
+            ax = fig.axes[0]
+            pts = _scatter_points(ax)
+            np.testing.assert_array_equal(pts[f"y_{N - 1}"][:, :2], X[:, 3 * N - 3 : 3 * N - 1])
+            legend_text = " ".join(
+                t.get_text() for leg in [*fig.legends, ax.get_legend()] if leg is not None for t in leg.get_texts()
+            )
+            assert "|z|" not in legend_text and f"|y_{N - 1}| = {r:.6g}" in legend_text
+        finally:
+            plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------------ run directories
+def test_thinning_rule_every_kth_row_and_the_last(run_dir):
+    run = plotting.open_run(run_dir)
+    assert (run.kind, run.rows, run.N) == ("orbit", 1001, 3)
+    k = plotting.thin_step(1001, 100)
+    assert k == 11  # ceil(1001 / 100)
+    idx, X = plotting._runs.thinned_rows(run, 100)
+    n_all, X_all = load_orbit(run_dir)  # the run layer's own loader: an independent route to the same rows
+    expect = np.r_[np.arange(0, 1001, 11), 1000]
+    np.testing.assert_array_equal(idx, n_all[expect])
+    np.testing.assert_array_equal(X, X_all[expect])
+
+
+def test_drift_envelope_is_the_bin_maximum(run_dir, monkeypatch):
+    n_all, X_all = load_orbit(run_dir)
+    I = jg.integrals(X_all, APPENDIX2_B)
+    d = np.abs(I - I[0])
+    monkeypatch.setattr(_files, "_BLOCK_ROWS", 64)  # several blocks, so that bins meet block ends
+    run = plotting.open_run(run_dir)
+    for k in (1, 7, 64):
+        idx, env = _files.drift_envelope(run, k)
+        bins = [slice(i, min(i + k, len(d))) for i in range(0, len(d), k)]
+        np.testing.assert_array_equal(idx, n_all[[b.start for b in bins]])
+        np.testing.assert_array_equal(env, np.array([d[b].max(axis=0) for b in bins]))
+
+
+def test_redraw_of_a_run_draws_its_rows(run_dir, tmp_path, monkeypatch):
+    seen = _capture(monkeypatch)
+    paths = plotting.save_run_figures(run_dir, tmp_path, max_points=300, fmt="pdf", dpi=50)
+    assert [p.name for p in paths] == ["figure1.pdf", "figure2.pdf", "integrals.pdf"]
+    assert all(p.read_bytes()[:4] == b"%PDF" for p in paths)
+    _, X_all = load_orbit(run_dir)
+    k = plotting.thin_step(1001, 300)
+    rows = np.unique(np.r_[np.arange(0, 1001, k), 1000])  # the last row is included once
+    pts = _scatter_points(seen["figure1.pdf"].axes[0])
+    # after drawing, a 3D scatter holds its points in depth order: compare them as sets of rows
+    np.testing.assert_array_equal(np.unique(pts["centre of mass z"], axis=0), np.unique(X_all[rows, 6:9], axis=0))
+    assert len(pts["centre of mass z"]) == len(rows)
+    title = seen["figure1.pdf"]._suptitle.get_text()
+    assert "b = 1" in title and "η = 5 + 0.1i" in title and "1000 steps" in title
+    assert f"one saved row in {k} drawn" in seen["figure1.pdf"].axes[0].get_title()
+
+
+def test_redraw_of_an_interrupted_run_uses_only_the_safe_rows(run_dir, tmp_path):
+    """Only the rows run.json declares safe are drawn (a killed run may have more rows in its HDF5 file)."""
+    import json
+    import shutil
+
+    from jetgaudin.recording import read_run
+
+    d = tmp_path / "cut"
+    shutil.copytree(run_dir, d)
+    run = read_run(d)
+    run["checkpoint"]["rows"] = 500
+    run["status"] = "interrupted"
+    run.pop("sha256", None)
+    (d / "run.json").write_text(json.dumps(run))
+    rr = plotting.open_run(d)
+    assert rr.rows == 500
+    idx, X = plotting._runs.thinned_rows(rr, 10_000)
+    assert idx[-1] == 499 and len(X) == 500
+
+
+@pytest.mark.slow
+def test_constant_memory_for_longer_runs(tmp_path):
+    """Drawing a 400001-row run takes about the memory of a 100001-row one: their data differ by 21.6 MB, their
+    peaks by less than 5 MB (the allowance covers matplotlib's and the garbage collector's noise; loading the
+    rows whole would add the 21.6 MB).  The rows are read in slices of 16384 and thinned."""
+    import gc
+
+    peaks = []
+    for steps in (100_000, 400_000):
+        d = tmp_path / f"r{steps}"
+        spec = OrbitSpec(b=APPENDIX2_B, eta=APPENDIX2_ETA, steps=steps, X0=tuple(APPENDIX2_X0))
+        run_orbit(spec, d, options=RecordOptions(csv=False, kernel="compiled"))
+        plotting.save_run_figures(d, tmp_path / f"warm{steps}", max_points=500, dpi=40)  # imports, caches
+        gc.collect()
+        tracemalloc.start()
+        plotting.save_run_figures(d, tmp_path / f"f{steps}", max_points=500, dpi=40)
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    assert peaks[1] - peaks[0] < 5e6, peaks
+
+
+@pytest.mark.slow
+def test_a_million_row_run_is_drawn_in_bounded_memory(tmp_path):
+    d = tmp_path / "big"
+    spec = OrbitSpec(b=APPENDIX2_B, eta=APPENDIX2_ETA, steps=1_000_000, X0=tuple(APPENDIX2_X0))
+    run_orbit(spec, d, options=RecordOptions(csv=False, kernel="compiled"))
+    tracemalloc.start()
+    plotting.save_run_figures(d, tmp_path / "f")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 40e6  # the run's rows are 72 MB
+
+
+def test_bad_run_directories_are_refused(tmp_path):
+    with pytest.raises(jg.RecordingError, match="run.json"):
+        plotting.save_run_figures(tmp_path)
+    with pytest.raises(jg.InvalidParameterError, match="max_points"):
+        plotting.save_run_figures(tmp_path, max_points=1)
+
+
+# ------------------------------------------------------------------------------------------------ animation
+def test_animation_of_the_default_run(run_dir, tmp_path):
+    from PIL import Image
+
+    assert plotting._animate.frame_rows(1001, 100, None) == (10, 100)  # floor(1000 / 99) rows between frames
+    assert plotting._animate.frame_rows(1001, 100, 50) == (50, 21)
+    out = plotting.animate_run(run_dir, tmp_path / "top.gif", frames=12, dpi=40)
+    with Image.open(out) as im:
+        assert im.n_frames == 12
+        frames = []
+        for j in (0, 6, 11):
+            im.seek(j)
+            frames.append(np.asarray(im.convert("RGB"), dtype=int))
+    # the body moves: successive frames differ (and not only in the step counter)
+    assert np.count_nonzero(np.abs(frames[0] - frames[1]).sum(axis=-1)) > 100
+    assert np.count_nonzero(np.abs(frames[1] - frames[2]).sum(axis=-1)) > 100
+
+
+def test_animation_refuses_bad_input(run_dir, tmp_path):
+    with pytest.raises(jg.InvalidParameterError, match=r"\.gif or \.mp4"):
+        plotting.animate_run(run_dir, tmp_path / "x.avi")
+    with pytest.raises(jg.InvalidParameterError, match="frames"):
+        plotting.animate_run(run_dir, tmp_path / "x.gif", frames=1)
+    with pytest.raises(jg.RecordingError, match="orbit"):
+        plotting.animate_run(run_dir, tmp_path / "x.gif", orbit=3)
+
+
+def test_mp4_when_imageio_ffmpeg_is_installed(run_dir, tmp_path):
+    pytest.importorskip("imageio_ffmpeg")
+    out = plotting.animate_run(run_dir, tmp_path / "top.mp4", frames=10, dpi=40)
+    head = out.read_bytes()[:12]
+    assert head[4:8] == b"ftyp"  # an ISO base media (MP4) file
+
+
+# ------------------------------------------------------------------------------------------------ λ-plane
+def test_nu_on_grid_is_nu_where_the_branch_rule_is_defined():
+    X, b = APPENDIX2_X0, APPENDIX2_B
+    re = np.array([-1.0, 0.0, 0.31231881, 2.0])  # a column on Re λ = 0 and one near a branch point
+    lam = re[None, :] + 1j * np.array([-2.0, -0.3, 0.05, 1.0])[:, None]
+    got = plotting.nu_on_grid(lam, X, b)
+    for i in range(lam.shape[0]):
+        for j in range(lam.shape[1]):
+            try:
+                want = jg.nu(lam[i, j], X, b)
+            except jg.JetGaudinError:
+                assert np.isnan(got[i, j])
+            else:
+                assert got[i, j] == want
+    assert np.all(np.isnan(got[:, 1]))  # Re λ = 0: the rule is undefined
+
+
+def test_spectral_plane_marks_branch_points_site_eta_and_segment():
+    X, b, eta = APPENDIX2_X0, APPENDIX2_B, 5 + 0.1j
+    fig = plotting.figure_spectral_plane(X, b, eta, resolution=40)
     try:
-        pts = _scatter_points(fig.axes[0])
-        np.testing.assert_array_equal(pts[f"y_{N - 1}"], X[:, 3 * N - 3 :])
+        ax0, ax1 = fig.axes[0], fig.axes[1]  # the two panels (the colour bars come after)
+        for ax in (ax0, ax1):
+            lines = {ln.get_label(): ln for ln in ax.lines}
+            bp = np.ravel(jg.branch_points(X, b))
+            (bpl,) = [ln for lab, ln in lines.items() if "branch points" in lab]
+            np.testing.assert_array_equal(bpl.get_xdata() + 1j * bpl.get_ydata(), bp)
+            seg = lines["segment [η̄, η] of the branch rule"]
+            np.testing.assert_array_equal(seg.get_xdata(), [5.0, 5.0])
+            np.testing.assert_array_equal(seg.get_ydata(), [-0.1, 0.1])
+            assert list(lines["site λ = 0 (pole)"].get_xdata()) == [0.0]
+            assert list(lines["η = 5 + 0.1i"].get_ydata()) == [0.1] and list(lines["η̄"].get_ydata()) == [-0.1]
+            assert "dimensionless" in ax.get_xlabel()
+            x0, x1 = ax.get_xlim()
+            y0, y1 = ax.get_ylim()
+            assert x0 < bp.real.min() and x1 > 5 and y0 < bp.imag.min() and y1 > bp.imag.max()
+        # the |ν²| panel shows log10 |ν²| of the grid
+        img = ax0.images[0].get_array()
+        assert img.shape[0] == 40 and np.isfinite(img).mean() > 0.99
     finally:
         plt.close(fig)
+
+
+# ------------------------------------------------------------------------------------------------ map against flow
+def test_compare_figures_show_the_flow_as_lines_and_the_map_as_points(tmp_path, monkeypatch):
+    X0, b, eta, steps = APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, 20
+    H = jg.interpolating_flow_hamiltonian(X0, b, eta)
+    t = np.arange(steps + 1.0)
+    flow = jg.integrate(H, X0, float(steps), t_eval=t, rtol=1e-12, atol=1e-12).X
+    orb = jg.TwoPointBacklund(b, eta).iterate(X0, steps)
+    seen = _capture(monkeypatch)
+    paths = plotting.save_compare_figures(tmp_path, t, flow, np.arange(steps + 1), orb, b)
+    assert [p.name for p in paths] == ["compare_drift.png", "compare_distance.png"]
+    ax = seen["compare_drift.png"].axes[0]
+    df = np.abs(jg.integrals(flow, b) - jg.integrals(flow[0], b))
+    dm = np.abs(jg.integrals(orb, b) - jg.integrals(orb[0], b))
+    by_label = {ln.get_label(): ln for ln in ax.lines}
+    for k, name in enumerate(plotting.integral_labels(3)):
+        fl, mp = by_label[f"{name}: flow of G_η (line)"], by_label[f"{name}: map (points)"]
+        assert fl.get_linestyle() == "-" and mp.get_linestyle() == "None" and mp.get_marker() == "."
+        np.testing.assert_array_equal(fl.get_ydata(), df[df[:, k] > 0, k])
+        np.testing.assert_array_equal(mp.get_ydata(), dm[dm[:, k] > 0, k])
+    ax = seen["compare_distance.png"].axes[0]
+    dist = np.linalg.norm(orb - flow, axis=-1)
+    np.testing.assert_array_equal(ax.lines[0].get_ydata(), dist[dist > 0])
+    assert dist.max() < 1e-9  # the map is the time-1 flow of G_eta (docs/backlund.md; 2.5e-11 over 1000 steps)
+
+
+# ------------------------------------------------------------------------------------------------ command line
+def _cli(*args):
+    from jetgaudin.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(list(args))
+    return exc.value.code
+
+
+def test_cli_plot_animate_and_info_plot(run_dir, tmp_path, capsys):
+    assert _cli("plot", str(run_dir), "--out", str(tmp_path / "p"), "--format", "svg", "--max-points", "200") == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["figure1.svg", "figure2.svg", "integrals.svg"]
+    assert (tmp_path / "p" / "figure1.svg").read_text().lstrip().startswith("<?xml")
+    assert _cli("animate", str(run_dir), "--out", str(tmp_path / "a.gif"), "--frames", "5", "--dpi", "30") == 0
+    assert _cli("info", "--plot", str(tmp_path / "nu.png")) == 0
+    assert (tmp_path / "nu.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    capsys.readouterr()
+    assert _cli("plot", str(tmp_path / "nothing")) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "run.json" in err
+    assert _cli("animate", str(run_dir), "--out", str(tmp_path / "a.avi")) == 2
+    assert _cli("info", "--plot", str(tmp_path / "nu.jpg")) == 2
+
+
+def test_hdf5_is_read_in_slices_not_loaded_whole(run_dir, monkeypatch):
+    """Every read of the run's dataset asks for a slice of at most max(k-strided rows, one block)."""
+    asked = []
+    real = h5py.Dataset.__getitem__
+
+    def spy(self, key):
+        if self.name in ("/X", "/states"):
+            asked.append(key)
+        return real(self, key)
+
+    monkeypatch.setattr(h5py.Dataset, "__getitem__", spy)
+    monkeypatch.setattr(_files, "_BLOCK_ROWS", 128)
+    run = plotting.open_run(run_dir)
+    _files.drift_envelope(run, 4)
+    plotting._runs.thinned_rows(run, 100)
+    assert asked and all(isinstance(k, slice) and (k.stop - k.start) <= 128 or k.step >= 11 for k in asked)

@@ -85,7 +85,7 @@ def euler_top(b: float) -> GaudinTop:
 
 
 def lagrange_top(b: float) -> GaudinTop:
-    """N = 2: the Lagrange top (y, x) with H = |y|²/2 + b x^3."""
+    """N = 2: the Lagrange top (y, x) with ``H = |y|²/2 + b x^3``."""
     return GaudinTop(2, b)
 
 

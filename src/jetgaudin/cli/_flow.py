@@ -166,6 +166,7 @@ def flow(
                     overlay=tr.X,
                     overlay_label="flow of G_η",
                 )
+                files += plotting.save_compare_figures(out_dir, t, tr.X, np.arange(steps + 1), orbit_X, b, title=title)
             else:
                 files += plotting.save_orbit_figures(out_dir, t, tr.X, b, title=title, xlabel="time t")
         run["elapsed_seconds"] = time.monotonic() - t0

@@ -59,6 +59,9 @@ def info(
     ] = APPENDIX2_INIT,
     tol: Annotated[float, typer.Option("--tol", help="tolerance of the canonical-leaf test")] = 1e-10,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,
+    plot: Annotated[
+        str | None, typer.Option("--plot", help="also draw |ν²| and arg ν over the λ-plane into FILE (.png/.pdf/.svg)")
+    ] = None,
 ) -> None:
     """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies."""
     with reported_errors():
@@ -108,6 +111,11 @@ def info(
         ok, detail = _canonical_leaf(X, tol)
         d["on_canonical_leaf"] = ok
         d["canonical_leaf_detail"] = detail
+        if plot is not None:
+            from .. import plotting
+
+            fig = plotting.figure_spectral_plane(X, b, eta_c)
+            typer.echo(f"wrote: {plotting.save_figure(fig, plot, 130)}", err=True)
     if as_json:
         typer.echo(json.dumps(d, indent=1))
         return

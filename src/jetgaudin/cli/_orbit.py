@@ -229,10 +229,7 @@ def orbit(
         if not no_plots and res.rows > 0:
             from .. import plotting
 
-            n_rows, X = rec.load_orbit(out_dir)
-            files += plotting.save_orbit_figures(
-                out_dir, n_rows, X, spec.b, title=figure_title(spec.b, spec.eta, spec.steps, spec.X0)
-            )
+            files += plotting.save_run_figures(out_dir)  # streamed from orbit.h5: constant memory
         rec.update_run(out_dir, files=[Path(f).name for f in files])
         print_summary(con, res, spec.N, files)
         if res.status.startswith("failed"):

@@ -1,0 +1,232 @@
+"""Writing the figures of a run: from arrays in memory, or streamed from a run directory (private).
+
+:func:`save_run_figures` never holds a whole run in memory: the points are every ``k``-th saved row
+(``k = ceil(rows / max_points)``, and the last row), and each point of the drift figure is the largest
+``|I_k(n) − I_k(0)|`` over the ``k`` consecutive saved rows it stands for (drawn at the bin's first row),
+computed block by block.
+"""
+
+from __future__ import annotations
+
+import os
+from enum import StrEnum
+from pathlib import Path
+
+import numpy as np
+
+import jetgaudin as jg
+
+from .._errors import InvalidParameterError
+from ._orbit import figure_integral_drift, figure_points_3d, figure_projection
+from ._runs import RunRows, open_run, thin_step, thinned_rows
+
+__all__ = ["FigureFormat", "save_orbit_figures", "save_run_figures", "run_title", "save_figure", "DEFAULT_MAX_POINTS"]
+
+DEFAULT_MAX_POINTS = 20_000
+_BLOCK_ROWS = 1 << 14  # rows read at a time for the drift envelope (9 columns: ~1.2 MB)
+
+
+class FigureFormat(StrEnum):
+    """File format of the written figures."""
+
+    png = "png"
+    pdf = "pdf"
+    svg = "svg"
+
+
+def _eta_text(eta: complex | None) -> str:
+    if eta is None:
+        return "(none)"
+    return f"{eta.real:g} {'+' if eta.imag >= 0 else '−'} {abs(eta.imag):g}i"
+
+
+def run_title(run: RunRows) -> str:
+    """A title a reader understands: what was iterated, with which parameters, from which state."""
+    inp = run.inputs
+    x0 = inp.get("init")
+    start = f"; start (y₀, y₁, …) = ({', '.join(f'{v:g}' for v in x0)})" if x0 is not None and len(x0) <= 12 else ""
+    if run.kind in ("orbit", "ensemble", "map"):
+        what = "Real two-point Bäcklund map"
+        if run.kind == "ensemble":
+            what += f", orbit {run.orbit} of an ensemble of {inp.get('B')}"
+        steps = inp.get("steps")
+        return f"{what} (N = {run.N}): b = {run.b:g}, η = {_eta_text(run.eta)}, {steps} steps{start}"
+    ham = "G_η" if run.eta is not None else "H₂/2"
+    eta = f", η = {_eta_text(run.eta)}" if run.eta is not None else ""
+    return (
+        f"Flow of {ham} (N = {run.N}): b = {run.b:g}{eta}, dt = {inp.get('dt', 1):g}, {inp.get('steps')} samples{start}"
+    )
+
+
+def save_figure(fig, path, dpi: int) -> Path:
+    """Write ``fig`` to ``path`` atomically (a temporary file renamed into place) and close it."""
+    path = Path(path)
+    if path.suffix.lower().lstrip(".") not in {f.value for f in FigureFormat}:
+        raise InvalidParameterError(f"the figure file must end in .png, .pdf or .svg, got {path.name!r}")
+    tmp = path.with_name(path.name + ".tmp")
+    try:
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lower().lstrip("."))
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return path
+
+
+def save_orbit_figures(
+    out_dir,
+    n,
+    X,
+    b,
+    *,
+    title: str = "",
+    overlay=None,
+    overlay_label: str = "flow",
+    xlabel: str = "step n",
+    dpi: int = 130,
+    fmt: FigureFormat | str = FigureFormat.png,
+    note: str = "",
+) -> list[Path]:
+    """Write ``figure1``, ``figure2`` and ``integrals`` (``.png`` by default) of arrays held in memory.
+
+    Parameters
+    ----------
+    out_dir : path
+    n : array_like, shape (T,)
+        Step numbers (or times).
+    X : array_like, shape (T, 3N)
+    b : float
+    title, overlay, overlay_label, xlabel, note
+        As in :func:`figure_points_3d` and :func:`figure_integral_drift`.
+    dpi : int
+    fmt : FigureFormat
+
+    Returns
+    -------
+    list of Path
+    """
+    out_dir, fmt = Path(out_dir), FigureFormat(fmt)
+    kw = {"title": title, "overlay": overlay, "overlay_label": overlay_label, "note": note}
+    return [
+        save_figure(figure_points_3d(X, **kw), out_dir / f"figure1.{fmt}", dpi),
+        save_figure(figure_projection(X, **kw), out_dir / f"figure2.{fmt}", dpi),
+        save_figure(
+            figure_integral_drift(n, X, b, title=title, xlabel=xlabel, note=note), out_dir / f"integrals.{fmt}", dpi
+        ),
+    ]
+
+
+def drift_envelope(run: RunRows, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(index, drift)``: per bin of ``k`` consecutive saved rows, the largest ``|I_j(n) − I_j(0)|`` of each
+    integral, drawn at the bin's first row; shape ``(bins,)`` and ``(bins, 2N)``.  Reads the run in
+    blocks of a multiple of ``k`` rows (constant memory)."""
+    block = max(k, (_BLOCK_ROWS // k) * k)
+    I0 = None
+    idx_out, d_out = [], []
+    for _start, idx, X in run.blocks(block):
+        I = np.asarray(jg.integrals(X, run.b), dtype=float)
+        if I0 is None:
+            I0 = I[0]
+        d = np.abs(I - I0)
+        nb = -(-len(d) // k)
+        pad = nb * k - len(d)
+        dp = np.concatenate([d, np.full((pad, d.shape[1]), -1.0)]).reshape(nb, k, -1)
+        ip = np.concatenate([idx, np.full(pad, idx[-1])]).reshape(nb, k)
+        d_out.append(dp.max(axis=1))
+        idx_out.append(ip[:, 0])  # each bin is drawn at its first row
+    if not d_out:
+        return np.zeros(0), np.zeros((0, 2 * run.N))
+    return np.concatenate(idx_out), np.concatenate(d_out)
+
+
+def save_run_figures(
+    run_dir,
+    out_dir=None,
+    *,
+    orbit: int | None = None,
+    dpi: int = 130,
+    fmt: FigureFormat | str = FigureFormat.png,
+    max_points: int = DEFAULT_MAX_POINTS,
+) -> list[Path]:
+    """Redraw the figures of a finished or interrupted run from its files, in constant memory.
+
+    Writes ``figure1``, ``figure2`` and ``integrals`` for an orbit run, one orbit of an ensemble (``orbit``) or
+    a flow run; for a ``flow --compare`` run also ``compare_drift`` and ``compare_distance``.
+
+    Parameters
+    ----------
+    run_dir : path
+    out_dir : path, optional
+        Where to write (default: ``run_dir``).
+    orbit : int, optional
+        The orbit of an ensemble run (default 0).
+    dpi : int
+    fmt : FigureFormat
+    max_points : int
+        At most this many rows are drawn: every ``k``-th saved row, ``k = ceil(rows / max_points)``, and the last;
+        the drift figure shows each bin's maximum.
+
+    Returns
+    -------
+    list of Path
+
+    Raises
+    ------
+    RecordingError
+        Not a run directory, unreadable files, no safe row.
+    InvalidParameterError
+        ``dpi`` or ``max_points`` out of range.
+    """
+    if not 10 <= int(dpi) <= 2000:
+        raise InvalidParameterError(f"dpi must be between 10 and 2000, got {dpi}")
+    if int(max_points) < 2:
+        raise InvalidParameterError(f"max_points must be >= 2, got {max_points}")
+    fmt = FigureFormat(fmt)
+    run = open_run(run_dir, orbit=orbit)
+    out_dir = Path(run_dir) if out_dir is None else Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if run.rows == 0:
+        from .._errors import RecordingError
+
+        raise RecordingError(f"{run_dir}: no saved row is declared safe in run.json yet; nothing to draw")
+    k = thin_step(run.rows, max_points)
+    idx, X = thinned_rows(run, max_points)
+    title = run_title(run)
+    unit = "time t" if run.index_name == "t" else "step n"
+    note = (
+        f"all {run.rows} saved rows drawn"
+        if k == 1
+        else f"one saved row in {k} drawn (rows 0, {k}, {2 * k}, … and the last of {run.rows}); status: {run.status}"
+    )
+    if k == 1:
+        note += f"; status: {run.status}"
+    overlay = None
+    if run.kind == "flow" and run.inputs.get("compare"):
+        mrun = open_run(run_dir, map_of_flow=True)
+        _, overlay = thinned_rows(mrun, max_points)
+        overlay, X = X, overlay  # the map as points, the flow as lines (as `flow --compare` draws them)
+        title += "\npoints: the map, n = 0, 1, …; lines: the flow of G_η at t = n"
+    kw = {"title": title, "note": note}
+    paths = [
+        save_figure(
+            figure_points_3d(X, overlay=overlay, overlay_label="flow of G_η", **kw), out_dir / f"figure1.{fmt}", dpi
+        ),
+        save_figure(
+            figure_projection(X, overlay=overlay, overlay_label="flow of G_η", **kw), out_dir / f"figure2.{fmt}", dpi
+        ),
+    ]
+    d_idx, drift = drift_envelope(run, k)
+    dnote = note if k == 1 else note + f"; each point: the largest drift over a bin of {k} rows"
+    paths.append(
+        save_figure(
+            figure_integral_drift(d_idx, drift=drift, title=title, xlabel=unit, note=dnote),
+            out_dir / f"integrals.{fmt}",
+            dpi,
+        )
+    )
+    if overlay is not None:
+        from ._compare import save_compare_figures
+
+        n_f, X_f = run.read(0, run.rows)  # a flow run is held in memory by `flow` itself (bounded by its --steps)
+        n_m, X_m = mrun.read(0, mrun.rows)
+        paths += save_compare_figures(out_dir, n_f, X_f, n_m, X_m, run.b, title=title, dpi=dpi, fmt=fmt)
+    return paths

@@ -1,0 +1,181 @@
+"""Reading a run directory for plotting, in slices (constant memory) (private).
+
+All reading of run directories by the plotting code goes through :func:`open_run`: it reads ``run.json``
+with :func:`jetgaudin.recording.read_run` and returns a :class:`RunRows` whose :meth:`RunRows.read` takes
+row slices of the HDF5 file with h5py, so that no figure ever holds a whole run in memory.
+
+**Thinning rule** (:func:`thin_step`): a run of ``R`` saved rows drawn with at most ``M`` points uses every
+``k``-th saved row, ``k = ceil(R / M)``, i.e. rows ``0, k, 2k, …`` and always the last row.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import RecordingError
+
+__all__ = ["RunRows", "open_run", "thin_step", "thinned_rows"]
+
+
+@dataclass(frozen=True)
+class RunRows:
+    """The safe rows of one orbit of a run directory (an orbit run, one orbit of an ensemble, or a flow run).
+
+    ``kind`` is ``"orbit"``, ``"ensemble"`` or ``"flow"``; ``rows`` the number of rows ``run.json`` declares
+    safe; ``index_name`` ``"n"`` (step) or ``"t"`` (time); ``b`` the field, ``eta`` the Bäcklund parameter
+    (``None`` for the physical flow); ``orbit`` the chosen orbit of an ensemble (else ``None``)."""
+
+    run_dir: Path
+    kind: str
+    path: Path
+    dataset: str
+    index_name: str
+    rows: int
+    N: int
+    b: float
+    eta: complex | None
+    orbit: int | None
+    status: str
+    inputs: dict
+
+    def read(self, start: int, stop: int, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
+        """``(index, X)`` of the rows ``start:stop:step`` (clipped to the safe rows); ``X`` of shape ``(k, 3N)``."""
+        import h5py
+
+        stop = min(stop, self.rows)
+        try:
+            try:
+                f = h5py.File(self.path, "r")
+            except OSError:  # a run killed while writing leaves the SWMR flag set: read as a SWMR reader
+                f = h5py.File(self.path, "r", swmr=True)
+            with f:
+                idx = np.asarray(f[self.index_name][start:stop:step])
+                ds = f[self.dataset]
+                X = ds[start:stop:step] if self.orbit is None else ds[start:stop:step, self.orbit, :]
+        except (OSError, KeyError) as exc:
+            raise RecordingError(f"cannot read {self.path}: {exc}") from None
+        return idx, np.asarray(X, dtype=float)
+
+    def blocks(self, block_rows: int) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """``(start, index, X)`` for consecutive blocks of ``block_rows`` rows covering every safe row."""
+        for start in range(0, self.rows, block_rows):
+            idx, X = self.read(start, start + block_rows)
+            yield start, idx, X
+
+
+def thin_step(rows: int, max_points: int) -> int:
+    """``k = ceil(rows / max_points)`` (at least 1): draw every ``k``-th saved row (and the last)."""
+    if max_points < 2:
+        raise RecordingError(f"max_points must be >= 2, got {max_points}")
+    return max(1, math.ceil(rows / max_points))
+
+
+def thinned_rows(run: RunRows, max_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows ``0, k, 2k, …`` and the last one (:func:`thin_step`), read in one strided slice."""
+    k = thin_step(run.rows, max_points)
+    idx, X = run.read(0, run.rows, k)
+    if run.rows and (run.rows - 1) % k:
+        i_last, X_last = run.read(run.rows - 1, run.rows)
+        idx, X = np.concatenate([idx, i_last]), np.concatenate([X, X_last])
+    return idx, X
+
+
+def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) -> RunRows:
+    """Open the run in ``run_dir`` for reading in slices: an orbit, ensemble or flow run (the one place that reads
+    run directories for plotting; the run layer's file names and ``run.json`` fields are used here only).
+
+    Parameters
+    ----------
+    run_dir : path
+        A directory written by ``jetgaudin orbit``, ``ensemble`` or ``flow`` (finished or interrupted).
+    orbit : int, optional
+        The orbit of an ensemble to read (default 0); must be ``None`` or 0 for an orbit or flow run.
+    map_of_flow : bool
+        For a ``flow --compare`` run: the map's orbit (``orbit.h5``) instead of the flow (``flow.h5``).
+
+    Returns
+    -------
+    RunRows
+
+    Raises
+    ------
+    RecordingError
+        No ``run.json``, an unknown program, a missing data file or an orbit number out of range.
+    """
+    from .. import recording as rec
+
+    run_dir = Path(run_dir)
+    if not (run_dir / rec.RUN_JSON).is_file():
+        raise RecordingError(f"{run_dir} holds no run.json: not a jetgaudin run directory")
+    run = rec.read_run(run_dir)
+    program, inp = run.get("program", ""), run.get("inputs", {})
+    status = str(run.get("status", "unknown"))
+    safe = int(run.get("checkpoint", {}).get("rows", 0))
+    if program == "jetgaudin orbit":
+        if orbit not in (None, 0):
+            raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
+        eta = complex(*inp["eta"])
+        return RunRows(
+            run_dir,
+            "orbit",
+            run_dir / rec.ORBIT_H5,
+            "X",
+            "n",
+            safe,
+            int(inp["N"]),
+            float(inp["b"]),
+            eta,
+            None,
+            status,
+            inp,
+        )
+    if program == "jetgaudin ensemble":
+        from ..ensemble_recording import ENSEMBLE_H5
+
+        k = 0 if orbit is None else int(orbit)
+        B = int(inp["B"])
+        if not 0 <= k < B:
+            raise RecordingError(f"--orbit: the ensemble in {run_dir} has orbits 0..{B - 1}, got {orbit}")
+        import h5py
+
+        try:
+            with h5py.File(run_dir / ENSEMBLE_H5, "r") as f:
+                b, eta = float(f["b"][k]), complex(f["eta"][k])
+        except (OSError, KeyError) as exc:
+            raise RecordingError(f"cannot read {run_dir / ENSEMBLE_H5}: {exc}") from None
+        return RunRows(
+            run_dir, "ensemble", run_dir / ENSEMBLE_H5, "states", "n", safe, int(inp["N"]), b, eta, k, status, inp
+        )
+    if program == "jetgaudin flow":
+        if orbit not in (None, 0):
+            raise RecordingError(f"{run_dir} is a flow run: --orbit must be 0 or omitted, got {orbit}")
+        import h5py
+
+        path = run_dir / ("orbit.h5" if map_of_flow else "flow.h5")
+        index_name = "n" if map_of_flow else "t"
+        try:
+            with h5py.File(path, "r") as f:
+                rows = int(f["X"].shape[0])
+        except (OSError, KeyError) as exc:
+            raise RecordingError(f"cannot read {path}: {exc}") from None
+        eta_flow = complex(*inp["eta"]) if inp.get("hamiltonian") == "interpolating" else None
+        return RunRows(
+            run_dir,
+            "map" if map_of_flow else "flow",
+            path,
+            "X",
+            index_name,
+            rows,
+            int(inp["N"]),
+            float(inp["b"]),
+            eta_flow,
+            None,
+            status,
+            inp,
+        )
+    raise RecordingError(f"{run_dir}/run.json was written by {program!r}, not by jetgaudin orbit, ensemble or flow")
