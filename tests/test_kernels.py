@@ -271,3 +271,12 @@ def test_flop_count_is_consistent():
     f = [_kernels.flops_per_step(N, "generic")["total"] for N in range(1, 6)]
     d = np.diff(f)
     assert np.all(d > 0) and np.all(d == d[0])
+
+
+def test_warmup_command_says_how_long_it_took():
+    from typer.testing import CliRunner
+
+    from jetgaudin.cli import app
+
+    r = CliRunner().invoke(app, ["warmup"])
+    assert r.exit_code == 0 and "warmup: 6 kernels" in r.output and " s" in r.output

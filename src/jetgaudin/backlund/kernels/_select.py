@@ -71,7 +71,13 @@ def kernel_names(n_state: int, batch: bool, batch_size: int = 1, specialise: boo
 
 
 def _cache_dirs() -> list[str]:
-    return [d for d in (os.environ.get("NUMBA_CACHE_DIR"), os.path.expanduser("~/.cache/numba")) if d]
+    """Where Numba looks, in its order: ``NUMBA_CACHE_DIR`` alone when set; else next to the source (when
+    writable), then the user-wide cache directory."""
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    if user:
+        return [user]
+    in_tree = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
+    return [in_tree, os.path.expanduser("~/.cache/numba")]
 
 
 def _loaded(name: str) -> bool:
@@ -81,9 +87,8 @@ def _loaded(name: str) -> bool:
 
 def _cached(name: str) -> bool:
     pattern = f"{KERNEL_MODULES[name]}.{name}-*.nbi"
-    in_tree = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
-    return bool(glob.glob(os.path.join(in_tree, pattern))
-                or any(glob.glob(os.path.join(d, "**", pattern), recursive=True) for d in _cache_dirs()))
+    return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
+               for d in _cache_dirs())
 
 
 def kernels_state(names: Sequence[str]) -> str:
@@ -155,8 +160,8 @@ def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], N
     if state == "loaded":
         return CompileReport(tuple(names), state, 0.0)
     say = _stderr if notify is None else notify
-    what = "compiling" if state == "cold" else "loading cached"
-    say(f"jetgaudin: {what} the Numba kernels {', '.join(names)} (about {_expected(names, state):.0f} s"
+    what = "compiling the" if state == "cold" else "loading the cached"
+    say(f"jetgaudin: {what} Numba kernels {', '.join(names)} (about {_expected(names, state):.0f} s"
         + (", once per installation)" if state == "cold" else ")") + " ...")
     t0 = time.perf_counter()
     for n in names:
