@@ -101,8 +101,8 @@ def single_kernel(n_state: int, specialise: bool = True) -> Any:
 def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last,
                  want_drift=True) -> None:
     r"""A batch of independent orbits into preallocated outputs: ``X0`` (B, 3N), per-orbit ``b``, ``eta``,
-    ``nu0`` (B,); ``out`` (B, S, 3N), ``final`` (B, 3N), ``drift`` (B, 2N), ``status``/``fail`` (B,) int64,
-    ``nu_last`` (B,) complex.  N = 3 (with ``specialise``): blocks of lock-stepped lanes
+    ``nu0`` (B,); ``out`` (S, B, 3N) (step-major, C order), ``final`` (B, 3N), ``drift`` (B, 2N),
+    ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  N = 3 (with ``specialise``): blocks of lock-stepped lanes
     (:func:`._lanes.run_lanes3`); other N: :func:`._generic.run_batch_generic`.  Either way every orbit gets the
     bits of its single-orbit run.  Never raises on a singular step (see ``status``)."""
     batch_kernel(X0.shape[1], specialise)(X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final,
@@ -114,20 +114,21 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True):
     singular step.
 
     Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,), status (B,), fail (B,))``
-    (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit).  Raises
+    (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit); ``out`` is a transposed
+    view of a C-ordered ``(S, B, 3N)`` array (``np.moveaxis(out, 0, 1)`` is contiguous, no copy).  Raises
     :class:`jetgaudin.InvalidParameterError` for counts out of range (:func:`check_counts`).
     """
     X, b, eta, nu0 = _batch_args(X, b, eta, nu0)
     B, n3 = X.shape
     S = check_counts(steps, save_every, B, n3)
-    out = np.empty((B, S, n3))
+    out = np.empty((S, B, n3))
     final = np.empty((B, n3))
     drift = np.empty((B, 2 * (n3 // 3)))
     status = np.zeros(B, np.int64)
     fail = np.zeros(B, np.int64)
     nu_last = np.empty(B, np.complex128)
     run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last)
-    return out, final, drift, nu_last, status, fail
+    return out.transpose(1, 0, 2), final, drift, nu_last, status, fail
 
 
 def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):

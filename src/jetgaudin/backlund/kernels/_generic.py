@@ -242,10 +242,10 @@ def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_
 def run_batch_generic(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last,
                       want_drift):
     r"""A batch of independent orbits by :func:`run_orbit`, one per iteration of a ``prange`` loop: ``X0`` (B, 3N),
-    per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out`` (B, S, 3N), ``final`` (B, 3N), ``drift`` (B, 2N),
+    per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out`` (S, B, 3N) (step-major), ``final`` (B, 3N), ``drift`` (B, 2N),
     ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  Every orbit gets the bits of its single-orbit run."""
     for i in prange(X0.shape[0]):
-        st, n, nu = run_orbit(X0[i], b[i], eta[i], nu0[i], cont, steps, save_every, out[i], final[i], drift[i],
+        st, n, nu = run_orbit(X0[i], b[i], eta[i], nu0[i], cont, steps, save_every, out[:, i], final[i], drift[i],
                               want_drift)
         status[i] = st
         fail[i] = n

@@ -189,7 +189,7 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         buf[26 * L + l] = 0.0
     for l in range(W):
         for i in range(9):
-            out[l, 0, i] = X0[l, i]
+            out[0, l, i] = X0[l, i]
         status[l] = STATUS_OK
         fail[l] = steps
     nbu = 0
@@ -209,7 +209,7 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
             j = (n + 1) // save_every
             for l in range(W):
                 for i in range(9):
-                    out[l, j, i] = buf[i * L + l]
+                    out[j, l, i] = buf[i * L + l]
     I0 = np.empty(6)
     Ib = np.empty(6)
     for l in range(W):
@@ -221,19 +221,20 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         if want_drift:
             _integrals(X0[l], b[l], 3, I0)
             last = (fail[l] if status[l] != STATUS_OK else steps) // save_every
-            _drift_pass(out[l], final[l], last, b[l], 3, I0, Ib, drift[l])
+            _drift_pass(out[:, l], final[l], last, b[l], 3, I0, Ib, drift[l])
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
 def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last, want_drift):
     r"""A batch of independent N = 3 orbits: ``X0`` (B, 9), per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out``
-    (B, S, 9), ``final`` (B, 9), ``drift`` (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.
-    Blocks of ``LANES`` orbits in lock-step (:func:`_run_block3`, SIMD across orbits), in a ``prange`` loop over
-    blocks; every orbit gets the bits of its single-orbit run (:func:`._n3.run_orbit3`)."""
+    (S, B, 9) (step-major: the layout of ``iterate()``'s result, no transposed copy), ``final`` (B, 9), ``drift``
+    (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  Blocks of ``LANES`` orbits in lock-step
+    (:func:`_run_block3`, SIMD across orbits), in a ``prange`` loop over blocks; every orbit gets the bits of its
+    single-orbit run (:func:`._n3.run_orbit3`)."""
     B = X0.shape[0]
     nblocks = (B + LANES - 1) // LANES
     for k in prange(nblocks):
         i0 = k * LANES
         i1 = min(i0 + LANES, B)
-        _run_block3(X0[i0:i1], b[i0:i1], eta[i0:i1], nu0[i0:i1], cont, steps, save_every, out[i0:i1],
+        _run_block3(X0[i0:i1], b[i0:i1], eta[i0:i1], nu0[i0:i1], cont, steps, save_every, out[:, i0:i1],
                     final[i0:i1], drift[i0:i1], status[i0:i1], fail[i0:i1], nu_last[i0:i1], want_drift)
