@@ -1,5 +1,7 @@
 """Compiled (Numba) kernels of the real two-point map against the NumPy reference route."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -280,3 +282,25 @@ def test_warmup_command_says_how_long_it_took():
 
     r = CliRunner().invoke(app, ["warmup"])
     assert r.exit_code == 0 and "warmup: 6 kernels" in r.output and " s" in r.output
+
+
+def test_a_changed_kernel_source_invalidates_every_cached_kernel(tmp_path):
+    # Numba keys a cached kernel by the content of its own file only; the kernels inline blocks of _scalar.py, so a
+    # cache directory whose stamp records other kernel sources loses the kernels' cache files (they are recompiled)
+    from jetgaudin.backlund import kernels
+    from jetgaudin.backlund.kernels import _target
+
+    for name in ("_lanes.run_lanes3-227.py311.nbi", "_lanes.run_lanes3-227.py311.1.nbc", "_n3.run_orbit3-9.py311.nbi",
+                 "other.f-1.py311.nbi"):
+        (tmp_path / name).write_text("x")
+    (tmp_path / _target.STAMP_NAME).write_text("an older digest\n")
+    digest = _target.sources_digest()
+    assert _target.clean_cache_dir(str(tmp_path), digest) == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == [_target.STAMP_NAME, "other.f-1.py311.nbi"]
+    (tmp_path / "_n3.run_orbit3-9.py311.nbi").write_text("x")  # compiled from the present sources
+    assert _target.clean_cache_dir(str(tmp_path), digest) == 0  # the stamp matches: kept
+    # the directories the kernels really use carry the stamp of the present sources
+    kernels.warmup(notify=lambda msg: None)
+    lanes = kernels.kernel_module("_lanes")
+    stamp = os.path.join(lanes.run_lanes3._cache._cache_path, _target.STAMP_NAME)
+    assert open(stamp).read().strip() == digest

@@ -31,18 +31,34 @@ __all__ = [
 INT64_MAX = 2**63 - 1
 
 
+_modules: dict[str, ModuleType] = {}
+
+
 def kernel_module(name: str) -> ModuleType:
     """The kernel module ``name`` (``"_n3"``, ``"_generic"``, ``"_lanes"``, ``"_branch"``, ``"_closed"``),
     imported after the target configuration (:func:`._target.configure`)."""
-    _target.configure()
-    return importlib.import_module(f"{__package__}.{name}")
+    mod = _modules.get(name)
+    if mod is None:
+        _target.configure()
+        mod = importlib.import_module(f"{__package__}.{name}")
+        for dep in ("_scalar", "_n3", "_generic", "_branch"):  # the modules it inlines from, and itself
+            _target.refresh_stale_cache(importlib.import_module(f"{__package__}.{dep}"))
+        _target.refresh_stale_cache(mod)
+        _modules[name] = mod
+    return mod
+
+
+_memory: list[int | None] = []
 
 
 def _memory_bytes() -> int | None:
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES"))
-    except (AttributeError, OSError, ValueError):
-        return None
+    """Physical memory of the machine in bytes (read once), ``None`` where unknown."""
+    if not _memory:
+        try:
+            _memory.append(int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES")))
+        except (AttributeError, OSError, ValueError):
+            _memory.append(None)
+    return _memory[0]
 
 
 def _count(name: str, value: Any, minimum: int) -> int:

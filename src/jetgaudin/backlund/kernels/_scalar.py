@@ -1,11 +1,10 @@
 """Scalar building blocks of the kernels (complex arithmetic written out, the eigenvector and ``M0`` of the
 dressing, the products of ``R(λ)``, selects for the lock-step lanes, the integrals and the drift pass).
 
-The structural blocks are ``inline="always"`` (inlined by Numba, so that the lanes' loop body has no calls and
-LLVM vectorises it); the smallest helpers (``_abs2``, ``_cdiv``, ``_rmul``, ``_cr``, ``_horner_step_u``, ``_sel``,
-``_selc``) are left to LLVM's inliner: inlining their hundreds of call sites at Numba's IR level doubled the
-compile time of the lanes (measured 73 s against 37 s on a loaded machine, docs/performance.md part i) for a
-per-thread rate within 5 %.  Either way the single-orbit routes and the lanes perform the same IEEE operations
+The blocks are ``inline="always"`` (inlined by Numba, so that the loop bodies have no calls and LLVM vectorises
+the lanes), except the two selects ``_sel`` and ``_selc``, used only by the lanes and left to LLVM's inliner:
+inlining their hundreds of call sites at Numba's IR level doubled the compile time of the lanes kernel
+(docs/performance.md, part i).  Either way the single-orbit routes and the lanes perform the same IEEE operations
 in the same order (no fastmath, no contraction) and give the same bits (tests/test_routes.py).
 Import only after :func:`._target.configure`.
 """
@@ -27,12 +26,12 @@ _RESIDUAL_TOL2 = 1e-16
 
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _abs2(z):
     return z.real * z.real + z.imag * z.imag
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _cdiv(a, b):
     r"""``a/b = a·conj(b)·(1/|b|²)``: one real division (shorter latency than Smith's algorithm, which
     the NumPy route uses; the two agree to a few ulp for ``1e-150 < |b| < 1e150``); never raises
@@ -43,7 +42,7 @@ def _cdiv(a, b):
     return complex((a.real * br + a.imag * bi) * r, (a.imag * br - a.real * bi) * r)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _rmul(d, q):
     """real × complex, as NumPy's complex product with ``d + 0i`` (identical for finite values)."""
     return complex(d * q.real, d * q.imag)
@@ -172,13 +171,13 @@ def _drift_pass(out, final, last, b, N, I0, Ibuf, drift):
 # ---------------------------------------------------------------------------------------------
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _cr(c, r):
     """complex × real, as NumPy's product with ``r + 0i`` (identical for finite values)."""
     return complex(c.real * r, c.imag * r)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _horner_step_u(acc, z, u):
     """``acc·z + (u + 0i)`` with real ``u``."""
     p = acc * z

@@ -162,7 +162,7 @@ def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], N
         return CompileReport(tuple(names), state, 0.0)
     say = _stderr if notify is None else notify
     what = "compiling the" if state == "cold" else "loading the cached"
-    say(f"jetgaudin: {what} Numba kernels {', '.join(names)} (about {_expected(names, state):.0f} s"
+    say(f"jetgaudin: {what} Numba kernels {', '.join(names)} (about {_expected(names, state):.2g} s"
         + (", once per installation)" if state == "cold" else ")") + " ...")
     t0 = time.perf_counter()
     for n in names:

@@ -3,9 +3,16 @@ kernel module is imported (the drivers do it at the kernels' first use; importin
 
 from __future__ import annotations
 
-__all__ = ["configure", "prefer_256_bit"]
+import hashlib
+from pathlib import Path
+from typing import Any
 
-_state: dict[str, bool] = {}
+__all__ = ["configure", "prefer_256_bit", "refresh_stale_cache", "sources_digest", "clean_cache_dir"]
+
+#: the modules holding compiled code; a kernel inlines blocks of the others
+KERNEL_SOURCES = ("_status.py", "_scalar.py", "_generic.py", "_n3.py", "_lanes.py", "_branch.py")
+
+_state: dict[str, Any] = {}
 
 
 def _prefer_256_bit_vectors() -> bool:
@@ -33,6 +40,48 @@ def _prefer_256_bit_vectors() -> bool:
         return False
     config.CPU_FEATURES = features.flatten() + ",+prefer-256-bit"
     return True
+
+
+def sources_digest() -> str:
+    """SHA-256 of the kernel sources (:data:`KERNEL_SOURCES`) together."""
+    here = Path(__file__).resolve().parent
+    return hashlib.sha256(b"".join((here / f).read_bytes() for f in KERNEL_SOURCES)).hexdigest()
+
+
+STAMP_NAME = "jetgaudin-kernel-sources.sha256"
+
+
+def clean_cache_dir(path: str, digest: str) -> int:
+    """Remove the kernels' cache files (``<module>.*.nbi``/``.nbc``) from the cache directory ``path`` unless its
+    stamp file records ``digest``; then record it.  Returns the number of files removed (0 if unwritable)."""
+    stamp = Path(path) / STAMP_NAME
+    removed = 0
+    try:
+        if stamp.is_file() and stamp.read_text().strip() == digest:
+            return 0
+        for f in KERNEL_SOURCES:
+            for p in Path(path).glob(f"{f[:-3]}.*.nb[ic]"):
+                p.unlink()
+                removed += 1
+        Path(path).mkdir(parents=True, exist_ok=True)
+        stamp.write_text(digest + "\n")
+    except OSError:
+        pass
+    return removed
+
+
+def refresh_stale_cache(module: Any) -> int:
+    """Drop cached kernels compiled from other kernel sources than the present ones, before the first call.
+
+    Numba keys a cached function by the content of the file that defines it only, so after an edit of
+    ``_scalar.py`` alone (or an upgrade that changes it) the cached ``_n3``/``_lanes``/... kernels, which inline its
+    blocks, would still be loaded.  Each cache directory the just-imported kernel ``module`` uses holds a stamp with
+    the digest of all kernel sources; on a mismatch the kernels' cache files there are removed (they are then
+    recompiled).  Returns the number of files removed."""
+    digest = _state.get("digest") or sources_digest()
+    _state["digest"] = digest
+    dirs = {getattr(getattr(v, "_cache", None), "_cache_path", None) for v in vars(module).values()}
+    return sum(clean_cache_dir(d, digest) for d in dirs if isinstance(d, str))
 
 
 def configure() -> bool:
