@@ -1,29 +1,55 @@
-"""Benchmarks of the compiled Bäcklund kernels (issue 6): one orbit, the Appendix 2 work vs heyoka,
-ensembles on 1 and 2 threads with the flop rate, N = 1..5, the main job in a fresh process, memory.
+"""Benchmarks of the compiled Bäcklund kernels: one orbit, the Appendix 2 work vs heyoka, ensembles on 1 and 2
+threads with the flop rate, N = 1..5, the main job in a fresh process, memory, the fixed cost of short calls,
+first-use compile time, and Dask LocalCluster vs threads (the harness: ``benchmarks/harness.py``).
 
-Run: ``python benchmarks/bench_backlund.py [--quick] [--parts abcdefg] [--markdown FILE]``
-(the same code as ``jetgaudin bench``; the table of ``docs/performance.md`` is its Markdown output).
-Timings are medians of repeated runs (best-of in the notes); single-thread timings use the thread's
-CPU time, multi-thread timings wall time.
+Examples (every value shown is accepted):
+
+    python benchmarks/bench_backlund.py --quick                  # a smoke test, a few minutes
+    python benchmarks/bench_backlund.py --parts abcdefhij --markdown table.md
+
+The table of ``docs/performance.md`` is its Markdown output.  Timings are medians of repeated runs (best-of in
+the notes); single-thread timings use the thread's CPU time, multi-thread timings wall time.  Parts needing
+heyoka (b) or Dask (j) are skipped with a note when those are not installed.
 """
 
 import argparse
+import importlib.util
 import json
+import sys
 from pathlib import Path
 
-from jetgaudin.cli.bench import rows_to_markdown, run_benchmarks
+
+def _harness():
+    path = Path(__file__).with_name("harness.py")
+    spec = importlib.util.spec_from_file_location("jetgaudin_benchmarks_harness", path)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod
+    spec.loader.exec_module(mod)
+    return mod
 
 
-def main():
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def _parts(text: str) -> str:
+    letters = "abcdefghij"
+    if not text or set(text) - set(letters):
+        raise argparse.ArgumentTypeError(f"use letters of '{letters}', got {text!r}")
+    return text
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
-    p.add_argument("--parts", default="abcdefg", help="letters of 'abcdefg'")
-    p.add_argument("--markdown", type=Path, help="write the table as Markdown")
-    a = p.parse_args()
-    rows, info = run_benchmarks(a.parts, quick=a.quick)
+    p.add_argument("--parts", type=_parts, default="abcdefghij", help="letters of 'abcdefghij' (default: all)")
+    p.add_argument("--markdown", type=Path, help="write the table as Markdown to this file")
+    return p
+
+
+def main(argv=None):
+    a = parser().parse_args(argv)
+    h = _harness()
+    rows, info = h.run_benchmarks(a.parts, quick=a.quick)
     print("machine:", json.dumps(info, default=str))
     if a.markdown:
-        a.markdown.write_text(rows_to_markdown(rows, info) + "\n")
+        a.markdown.write_text(h.rows_to_markdown(rows, info) + "\n")
 
 
 if __name__ == "__main__":

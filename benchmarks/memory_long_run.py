@@ -1,4 +1,4 @@
-"""Resident memory of a long streamed orbit (issue 7): ``jetgaudin orbit --steps 1e8 --save-every 1000``
+"""Resident memory of a long streamed orbit (issue 7): ``jetgaudin orbit --steps 100000000 --save-every 1000``
 must stay under 200 MB.
 
 Runs the real command in a subprocess and samples its resident set size (``VmRSS`` of ``/proc/PID/status``,
@@ -6,8 +6,8 @@ Linux) every 0.2 s; prints the peak, the time, the steps per second and the size
 A second, 100 times shorter run in the same process gives a baseline: the peak must not grow with the
 length of the run (constant memory).
 
-    python benchmarks/memory_long_run.py                 # 10^8 steps (about a minute with the compiled kernel)
-    python benchmarks/memory_long_run.py --steps 1e6     # quick
+    python benchmarks/memory_long_run.py                     # 10^8 steps (about a minute, compiled kernel)
+    python benchmarks/memory_long_run.py --steps 1000000     # quick
 """
 
 from __future__ import annotations
@@ -79,13 +79,17 @@ def run(steps: int, save_every: int, out: Path, kernel: str) -> dict:
     }
 
 
-def main() -> None:
+def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--steps", type=float, default=1e8)
-    ap.add_argument("--save-every", type=int, default=1000)
-    ap.add_argument("--kernel", default="auto")
-    args = ap.parse_args()
-    steps = int(args.steps)
+    ap.add_argument("--steps", type=int, default=10**8, help="steps of the long run (an integer; default 100000000)")
+    ap.add_argument("--save-every", type=int, default=1000, help="save every k-th state (default 1000)")
+    ap.add_argument("--kernel", choices=("auto", "compiled", "numpy"), default="auto", help="default auto")
+    return ap
+
+
+def main() -> None:
+    args = parser().parse_args()
+    steps = args.steps
     with tempfile.TemporaryDirectory() as d:
         base = run(max(steps // 100, args.save_every), args.save_every, Path(d) / "baseline", args.kernel)
         long = run(steps, args.save_every, Path(d) / "long", args.kernel)

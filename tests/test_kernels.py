@@ -1,5 +1,7 @@
 """Compiled (Numba) kernels of the real two-point map against the NumPy reference route."""
 
+import os
+
 import numpy as np
 import pytest
 
@@ -116,19 +118,72 @@ def test_auto_uses_compiled_once_loaded():
 ])
 def test_auto_policy(monkeypatch, state, work, expected):
     # the thresholds of docs/performance.md (part f): loading cached kernels ~ 1000 NumPy steps, compiling ~ 6 s
-    from jetgaudin.backlund import maps
+    from jetgaudin.backlund.kernels import _select
 
-    monkeypatch.setattr(maps, "_kernels_state", lambda names: state)
-    assert maps.auto_kernel(work, 9) == expected
-    assert maps.auto_kernel(work // 4, 9, (4,)) == maps.auto_kernel(work // 4 * 4, 9)  # work counts orbit-steps
+    monkeypatch.setattr(_select, "kernels_state", lambda names: state)
+    assert _select.auto_kernel(work, 9) == expected
+    assert jg.backlund.auto_kernel is _select.auto_kernel  # maps re-exports the one implementation
+    assert _select.auto_kernel(work // 4, 9, (4,)) == _select.auto_kernel(work // 4 * 4, 9)  # counts orbit-steps
 
 
 def test_kernels_state_sees_the_cache():
-    from jetgaudin.backlund import maps
+    from jetgaudin.backlund import kernels
 
     jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA).iterate(APPENDIX2_X0, 2, kernel="compiled")
-    assert maps._kernels_state(maps._kernel_names(9, False)) == "loaded"
-    assert maps._kernels_state(("no_such_kernel",)) == "cold"
+    assert kernels.kernels_state(kernels.kernel_names(9, False)) == "loaded"
+    assert kernels.kernels_state(("no_such_kernel",)) == "cold"
+
+
+def test_cache_lookup_matches_numbas_file_names():
+    # after warmup every kernel is loaded here and, in a fresh process (nothing loaded), found in Numba's cache:
+    # the lookup's file names (<module>.<function>-*.nbi) are the ones Numba writes
+    import subprocess
+    import sys
+
+    from jetgaudin.backlund import kernels
+
+    report = kernels.warmup(notify=lambda msg: None)
+    assert set(report.kernels) == set(kernels.KERNEL_MODULES)
+    assert kernels.kernels_state(tuple(kernels.KERNEL_MODULES)) == "loaded"
+    code = ("import sys; from jetgaudin.backlund import kernels as k; "
+            "print([k.kernels_state((n,)) for n in k.KERNEL_MODULES]); "
+            "print(k.configure.__module__ in sys.modules, any(m.endswith(('._n3', '._lanes')) for m in sys.modules), "
+            "'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split("\n")
+    assert out[0] == str(["cached"] * len(kernels.KERNEL_MODULES))
+    # importing the package imports no kernel module and not Numba (the target is configured at first use)
+    assert out[1] == "True False False"
+
+
+def test_prepare_says_what_it_compiles():
+    from jetgaudin.backlund import kernels
+
+    said = []
+    kernels.warmup(notify=said.append)
+    said.clear()
+    report = kernels.prepare(9, None, notify=said.append)  # already loaded: nothing to say, no time
+    assert report.state == "loaded" and report.seconds == 0.0 and said == []
+    assert report.kernels == ("run_orbit3", "_nu_default_serial")
+    assert kernels.kernel_names(9, True, 10_000) == ("run_lanes3", "_nu_default_batch")
+    assert kernels.kernel_names(12, True, 10) == ("run_batch_generic", "_nu_default_serial")
+
+
+@pytest.mark.parametrize(("steps", "save_every", "match"), [
+    (2**63, 2**62, "steps"),  # beyond int64: was uninitialised memory (issue 11, item 8)
+    (2**64, 1, "steps"),  # was a Numba TypingError
+    (10, 2**63, "save_every"),
+    (-1, 1, "steps"),
+    (2**62, 1, "GiB"),  # 2^62 saved rows cannot be allocated: refused before allocating
+])
+def test_counts_are_validated_before_allocating(steps, save_every, match):
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    with pytest.raises(jg.InvalidParameterError, match=match):
+        B.iterate(APPENDIX2_X0, steps, kernel="compiled", save_every=save_every)
+    nu0 = B.nu1(APPENDIX2_X0)
+    with pytest.raises(jg.InvalidParameterError, match=match):
+        _kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, nu0, False, steps, save_every)
+    with pytest.raises(jg.InvalidParameterError, match=match):
+        _kernels.run_batch(APPENDIX2_X0[None], [APPENDIX2_B], [APPENDIX2_ETA], [nu0], False, steps, save_every)
 
 
 def test_real_eta_is_identity():
@@ -218,3 +273,34 @@ def test_flop_count_is_consistent():
     f = [_kernels.flops_per_step(N, "generic")["total"] for N in range(1, 6)]
     d = np.diff(f)
     assert np.all(d > 0) and np.all(d == d[0])
+
+
+def test_warmup_command_says_how_long_it_took():
+    from typer.testing import CliRunner
+
+    from jetgaudin.cli import app
+
+    r = CliRunner().invoke(app, ["warmup"])
+    assert r.exit_code == 0 and "warmup: 6 kernels" in r.output and " s" in r.output
+
+
+def test_a_changed_kernel_source_invalidates_every_cached_kernel(tmp_path):
+    # Numba keys a cached kernel by the content of its own file only; the kernels inline blocks of _scalar.py, so a
+    # cache directory whose stamp records other kernel sources loses the kernels' cache files (they are recompiled)
+    from jetgaudin.backlund import kernels
+    from jetgaudin.backlund.kernels import _target
+
+    for name in ("_lanes.run_lanes3-227.py311.nbi", "_lanes.run_lanes3-227.py311.1.nbc", "_n3.run_orbit3-9.py311.nbi",
+                 "other.f-1.py311.nbi"):
+        (tmp_path / name).write_text("x")
+    (tmp_path / _target.STAMP_NAME).write_text("an older digest\n")
+    digest = _target.sources_digest()
+    assert _target.clean_cache_dir(str(tmp_path), digest) == 3
+    assert sorted(p.name for p in tmp_path.iterdir()) == [_target.STAMP_NAME, "other.f-1.py311.nbi"]
+    (tmp_path / "_n3.run_orbit3-9.py311.nbi").write_text("x")  # compiled from the present sources
+    assert _target.clean_cache_dir(str(tmp_path), digest) == 0  # the stamp matches: kept
+    # the directories the kernels really use carry the stamp of the present sources
+    kernels.warmup(notify=lambda msg: None)
+    lanes = kernels.kernel_module("_lanes")
+    stamp = os.path.join(lanes.run_lanes3._cache._cache_path, _target.STAMP_NAME)
+    assert open(stamp).read().strip() == digest

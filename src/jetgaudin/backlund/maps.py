@@ -36,6 +36,7 @@ from ._dressing import (
     spectral_s,
     two_point_M0,
 )
+from .kernels import auto_kernel  # the kernel choice of kernel="auto" lives with the kernels
 
 __all__ = [
     "MapProperties",
@@ -299,59 +300,6 @@ class TwoPointBacklund:
         out, _, _, nu = _kernels.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
         return orbit, nu.reshape(lead)
-
-
-#: "auto" uses the compiled kernels once they are loaded, and otherwise from this many orbit-steps on.
-#: Measured (benchmarks/, part f): in a fresh process, importing Numba and loading the cached kernels costs
-#: ~0.3 s, the time of ~1000 steps of the NumPy route (~3500 steps/s); once loaded, the compiled route is
-#: faster from the first step (~0.1 µs per step against ~300 µs).
-_AUTO_MIN_WORK = 2000
-#: The same threshold when Numba's cache does not hold the kernels yet (first use after an install): compiling
-#: them takes ~6 s here (measured: 5.9 s for the N = 3 orbit kernel and the branch rule), ~20000 NumPy steps.
-_AUTO_MIN_WORK_COLD = 20000
-
-
-def _kernel_names(n_state: int, batch: bool) -> tuple[str, ...]:
-    """The compiled functions a run of this shape calls (see ``_kernels.iterate_single/iterate_batch``)."""
-    if batch:
-        return ("run_ensemble", "_nu_default_serial")
-    return ("run_orbit3" if n_state == 9 else "run_orbit", "_nu_default_serial")
-
-
-def _kernels_state(names) -> str:
-    """``"loaded"`` (compiled in this process), ``"cached"`` (index files in Numba's cache) or ``"cold"``.
-
-    Looks at the files only (no Numba import): Numba caches next to the source in ``__pycache__`` when that
-    is writable, else under ``NUMBA_CACHE_DIR`` or the user-wide cache directory.  A wrong guess costs time,
-    never correctness: both kernels give the same orbits to round-off.
-    """
-    import glob
-    import os
-    import sys
-
-    mod = sys.modules.get("jetgaudin.backlund._kernels")
-    if mod is not None and all(getattr(getattr(mod, n, None), "signatures", None) for n in names):
-        return "loaded"
-    in_tree = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
-    elsewhere = [d for d in (os.environ.get("NUMBA_CACHE_DIR"), os.path.expanduser("~/.cache/numba")) if d]
-    for n in names:
-        pattern = f"_kernels.{n}-*.nbi"
-        if not (glob.glob(os.path.join(in_tree, pattern))
-                or any(glob.glob(os.path.join(d, "**", pattern), recursive=True) for d in elsewhere)):
-            return "cold"
-    return "cached"
-
-
-def auto_kernel(steps: int, n_state: int, batch_shape=()) -> str:
-    """The kernel ``kernel="auto"`` picks for ``steps`` steps of ``prod(batch_shape)`` orbits of ``n_state`` = 3N
-    components: ``"compiled"`` when it pays off (kernels loaded; or cached and at least ``_AUTO_MIN_WORK``
-    orbit-steps; or at least ``_AUTO_MIN_WORK_COLD`` orbit-steps), else ``"numpy"``."""
-    work = int(steps) * max(1, int(np.prod(batch_shape)))
-    state = _kernels_state(_kernel_names(int(n_state), len(batch_shape) > 0))
-    if state == "loaded":
-        return "compiled"
-    threshold = _AUTO_MIN_WORK if state == "cached" else _AUTO_MIN_WORK_COLD
-    return "compiled" if work >= threshold else "numpy"
 
 
 def _check_steps(steps) -> int:

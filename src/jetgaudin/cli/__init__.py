@@ -107,7 +107,7 @@ def _silence_stdout() -> None:
 
 from . import _flow, _info, _orbit  # noqa: E402,F401  (register the commands)
 
-for _m in ("ensemble", "bench", "verify", "animate", "plot"):
+for _m in ("ensemble", "bench", "verify", "warmup", "animate", "plot"):
     if importlib.util.find_spec(f"jetgaudin.cli.{_m}") is not None:
         try:
             importlib.import_module(f"jetgaudin.cli.{_m}")

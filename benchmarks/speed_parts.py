@@ -1,0 +1,149 @@
+"""Parts (h) fixed cost of short calls, (i) first-use compile time and (j) Dask LocalCluster vs threads of the
+benchmark harness (``benchmarks/harness.py`` loads this file; it has no command line of its own)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
+
+
+def _median_wall(fn, repeat: int) -> tuple[float, float]:
+    t = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        t.append(time.perf_counter() - t0)
+    return float(np.median(t)), float(np.min(t))
+
+
+def _ensemble(orbits: int, seed: int = 2):
+    from jetgaudin.ensemble import sample_on_leaf
+
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], orbits, seed=seed)
+    return X, np.full(orbits, 1.0), np.full(orbits, 5 + 0.1j)
+
+
+def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
+    """(h) ``TwoPointBacklund.iterate(X, 10)`` on a batch of ``orbits`` N = 3 orbits: compiled vs NumPy-vectorised
+    (the reference), and the per-orbit fixed cost of a call (``steps = 0``: branch rule, set-up, output)."""
+    import jetgaudin as jg
+    from jetgaudin.backlund import kernels
+
+    X, b, eta = _ensemble(orbits)
+    B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
+    kernels.prepare(9, orbits, notify=lambda m: None)
+    B.iterate(X[:300], 1, kernel="compiled")
+    tc, tcb = _median_wall(lambda: B.iterate(X, steps, kernel="compiled"), 5)
+    t0, _ = _median_wall(lambda: B.iterate(X, 0, kernel="compiled"), 5)
+    tnu, _ = _median_wall(lambda: kernels.nu_default(X, b, eta), 5)
+    tn, _ = _median_wall(lambda: B.iterate(X, steps, kernel="numpy"), 3)
+    work = orbits * steps
+    rows.append(Row("h", f"iterate(X, {steps}), {orbits:.0e} orbits, compiled", work / tc, "orbit-steps/s",
+                    f"best {work / tcb:.3g}; wall, all threads"))
+    rows.append(Row("h", f"iterate(X, {steps}), {orbits:.0e} orbits, NumPy-vectorised", work / tn, "orbit-steps/s",
+                    "the reference"))
+    rows.append(Row("h", "ratio compiled / NumPy-vectorised (10-step call)", tn / tc, "x", "target >= 20"))
+    rows.append(Row("h", "fixed cost per orbit per call (iterate(X, 0))", t0 / orbits * 1e6, "µs",
+                    f"of which the branch rule for ν1 {tnu / orbits * 1e6:.3f} µs; target < 0.1 µs"))
+
+
+_COMPILE_CODE = r"""
+import json, time
+t0 = time.perf_counter()
+from jetgaudin.backlund import kernels as k
+quiet = lambda m: None
+r = {"orbit": k.prepare(9, None, notify=quiet), "ensemble_1e3": k.prepare(9, 1000, notify=quiet),
+     "ensemble_1e5": k.prepare(9, 10**5, notify=quiet), "generic": k.prepare(12, None, notify=quiet)}
+print(json.dumps({n: [v.state, v.seconds, list(v.kernels)] for n, v in r.items()}))
+"""
+
+
+def bench_compile(rows, Row):
+    """(i) First-use compile time (fresh process, empty ``NUMBA_CACHE_DIR``) of the kernels of the main job /
+    ``orbit --kernel compiled`` (N = 3 orbit + serial branch rule), of ``ensemble`` (lanes; the parallel branch
+    rule from 256 orbits on) and of the generic route; then the load time from the cache in a second process."""
+    with tempfile.TemporaryDirectory() as d:
+        env = dict(os.environ, NUMBA_CACHE_DIR=d)
+        res = []
+        for _ in range(2):  # cold, then cached
+            t0 = time.perf_counter()
+            out = subprocess.run([sys.executable, "-c", _COMPILE_CODE], capture_output=True, text=True, env=env,
+                                 timeout=1800, check=True).stdout
+            res.append((json.loads(out.strip().splitlines()[-1]), time.perf_counter() - t0))
+    (cold, t_cold), (warm, t_warm) = res
+    for name, (state, sec, names) in cold.items():
+        rows.append(Row("i", f"compile, {name} ({state})", sec, "s", "+".join(names) + "; only the kernels not "
+                        "already compiled by the lines above"))
+    main = cold["orbit"][1] + cold["ensemble_1e3"][1] + cold["ensemble_1e5"][1]
+    rows.append(Row("i", "compile, main job + orbit --kernel compiled + ensemble", main, "s",
+                    f"target <= 15 s; whole fresh process {t_cold:.1f} s"))
+    load = sum(v[1] for v in warm.values())
+    rows.append(Row("i", "load from the cache, the same kernels (second process)", load, "s",
+                    f"states {sorted({v[0] for v in warm.values()})}; whole process {t_warm:.1f} s"))
+
+
+def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000)):
+    """(j) The same ensemble (``orbits`` × ``steps``, N = 3, final states only) on the threaded kernel (2 threads)
+    and on a Dask ``LocalCluster`` of 2 worker processes × 1 thread, one task per chunk; the overhead per task
+    (empty tasks), and the bits compared."""
+    import numba
+    from dask.distributed import Client, LocalCluster
+
+    from jetgaudin.backlund import kernels
+
+    X, b, eta = _ensemble(orbits)
+    nu0 = kernels.nu_default(X, b, eta)
+    kernels.run_batch(X[:4], b[:4], eta[:4], nu0[:4], False, 2, 2)
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    ref = None
+
+    def threaded():
+        nonlocal ref
+        ref = kernels.run_batch(X, b, eta, nu0, False, steps, steps)[1]
+
+    tt, _ = _median_wall(threaded, 3)
+    rows.append(Row("j", f"threads (2): {orbits:.0e} × {steps}", orbits * steps / tt, "orbit-steps/s",
+                    f"{tt:.2f} s wall"))
+    old = os.environ.get("NUMBA_NUM_THREADS")
+    os.environ["NUMBA_NUM_THREADS"] = "1"  # one thread per worker process (inherited by the workers)
+    try:
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+                Client(cluster) as client:
+            client.run(kernels.prepare, 9, orbits, notify=print)  # load the cached kernels in each worker
+            client.gather(client.map(kernels.run_batch, [X[:4]] * 2, [b[:4]] * 2, [eta[:4]] * 2, [nu0[:4]] * 2,
+                                     [False] * 2, [2] * 2, [2] * 2, pure=False))
+            n_empty = 200
+            t0 = time.perf_counter()
+            client.gather(client.map(int, range(n_empty), pure=False))
+            per_task = (time.perf_counter() - t0) / n_empty
+            rows.append(Row("j", "Dask overhead per task (empty tasks, 2 workers)", per_task * 1e3, "ms",
+                            f"{n_empty} tasks"))
+            for c in chunks:
+                starts = range(0, orbits, c)
+
+                def run(starts=starts, c=c):
+                    futs = client.map(kernels.run_batch, [X[i:i + c] for i in starts], [b[i:i + c] for i in starts],
+                                      [eta[i:i + c] for i in starts], [nu0[i:i + c] for i in starts],
+                                      [False] * len(starts), [steps] * len(starts), [steps] * len(starts),
+                                      pure=False)
+                    return np.concatenate([r[1] for r in client.gather(futs)])
+
+                final = run()
+                td, _ = _median_wall(run, 3)
+                same = bool(np.array_equal(final, ref))
+                rows.append(Row("j", f"Dask LocalCluster 2×1, chunk {c} ({len(starts)} tasks)",
+                                orbits * steps / td, "orbit-steps/s",
+                                f"ratio to threads {tt / td:.2f}; {td:.2f} s wall; bitwise equal to threads: {same}"))
+    finally:
+        if old is None:
+            os.environ.pop("NUMBA_NUM_THREADS", None)
+        else:
+            os.environ["NUMBA_NUM_THREADS"] = old

@@ -1,0 +1,220 @@
+"""Python drivers of the compiled kernels: validate the counts, allocate, call a kernel, turn its status into a
+typed error.  No mathematics here.  The kernel modules are imported at the first call, after
+:func:`._target.configure` (never at import of the package)."""
+
+from __future__ import annotations
+
+import importlib
+import os
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from ..._errors import BranchPointError, InvalidParameterError
+from . import _target
+from ._status import STATUS_BRANCH, STATUS_OK, status_error
+
+__all__ = [
+    "kernel_module",
+    "check_counts",
+    "saved_count",
+    "run_batch",
+    "run_ensemble",
+    "iterate_batch",
+    "iterate_single",
+    "nu_default",
+    "closed_form_orbit",
+]
+
+#: largest count the kernels take (their loop counters are int64)
+INT64_MAX = 2**63 - 1
+
+
+_modules: dict[str, ModuleType] = {}
+
+
+def kernel_module(name: str) -> ModuleType:
+    """The kernel module ``name`` (``"_n3"``, ``"_generic"``, ``"_lanes"``, ``"_branch"``, ``"_closed"``),
+    imported after the target configuration (:func:`._target.configure`)."""
+    mod = _modules.get(name)
+    if mod is None:
+        _target.configure()
+        mod = importlib.import_module(f"{__package__}.{name}")
+        for dep in ("_scalar", "_n3", "_generic", "_branch"):  # the modules it inlines from, and itself
+            _target.refresh_stale_cache(importlib.import_module(f"{__package__}.{dep}"))
+        _target.refresh_stale_cache(mod)
+        _modules[name] = mod
+    return mod
+
+
+_memory: list[int | None] = []
+
+
+def _memory_bytes() -> int | None:
+    """Physical memory of the machine in bytes (read once), ``None`` where unknown."""
+    if not _memory:
+        try:
+            _memory.append(int(os.sysconf("SC_PAGE_SIZE")) * int(os.sysconf("SC_PHYS_PAGES")))
+        except (AttributeError, OSError, ValueError):
+            _memory.append(None)
+    return _memory[0]
+
+
+def _count(name: str, value: Any, minimum: int) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise InvalidParameterError(f"{name} must be an integer, got {value!r}")
+    if not minimum <= int(value) <= INT64_MAX:
+        raise InvalidParameterError(f"{name} must be in [{minimum}, 2**63 - 1], got {int(value)}")
+    return int(value)
+
+
+def check_counts(steps: Any, save_every: Any, batch: int = 1, n_state: int = 9) -> int:
+    """Validate ``steps`` (0 ≤ steps < 2⁶³) and ``save_every`` (1 ≤ save_every < 2⁶³) and check that the saved
+    rows of ``batch`` orbits of ``n_state`` components fit in the machine's memory, before anything is allocated.
+
+    Returns the number of saved rows ``steps // save_every + 1``; raises
+    :class:`jetgaudin.InvalidParameterError` naming the count and the fix."""
+    steps = _count("steps", steps, 0)
+    save_every = _count("save_every", save_every, 1)
+    rows = steps // save_every + 1
+    need = rows * max(int(batch), 1) * max(int(n_state), 1) * 8
+    mem = _memory_bytes()
+    if mem is not None and need > mem:
+        raise InvalidParameterError(
+            f"steps = {steps} saving every {save_every}: the {rows} saved rows of {batch} orbit(s) need "
+            f"{need / 2**30:.3g} GiB, more than this machine's {mem / 2**30:.3g} GiB; raise save_every or run "
+            "in chunks (the run layer streams rows to disk)"
+        )
+    return rows
+
+
+def saved_count(steps: int, save_every: int) -> int:
+    """Number of saved states ``x_0, x_k, x_2k, …`` (``k = save_every``)."""
+    return steps // save_every + 1
+
+
+def _batch_args(X: Any, b: Any, eta: Any, nu0: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    return (np.ascontiguousarray(X, dtype=np.float64), np.ascontiguousarray(b, dtype=np.float64),
+            np.ascontiguousarray(eta, dtype=np.complex128), np.ascontiguousarray(nu0, dtype=np.complex128))
+
+
+def batch_kernel(n_state: int, specialise: bool = True) -> Any:
+    """The compiled batch kernel for states of ``n_state`` components: the lock-step lanes for N = 3
+    (``specialise``), else the ``prange`` loop over the generic single-orbit route."""
+    if specialise and n_state == 9:
+        return kernel_module("_lanes").run_lanes3
+    return kernel_module("_generic").run_batch_generic
+
+
+def single_kernel(n_state: int, specialise: bool = True) -> Any:
+    """The compiled single-orbit kernel: the N = 3 route (``specialise``) or the generic route."""
+    if specialise and n_state == 9:
+        return kernel_module("_n3").run_orbit3
+    return kernel_module("_generic").run_orbit
+
+
+def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last,
+                 want_drift=True) -> None:
+    r"""A batch of independent orbits into preallocated outputs: ``X0`` (B, 3N), per-orbit ``b``, ``eta``,
+    ``nu0`` (B,); ``out`` (S, B, 3N) (step-major, C order), ``final`` (B, 3N), ``drift`` (B, 2N),
+    ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  N = 3 (with ``specialise``): blocks of lock-stepped lanes
+    (:func:`._lanes.run_lanes3`); other N: :func:`._generic.run_batch_generic`.  Either way every orbit gets the
+    bits of its single-orbit run.  Never raises on a singular step (see ``status``)."""
+    batch_kernel(X0.shape[1], specialise)(X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final,
+                                          drift, status, fail, nu_last, bool(want_drift))
+
+
+def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True):
+    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,); never raises on a
+    singular step.
+
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,), status (B,), fail (B,))``
+    (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit); ``out`` is a transposed
+    view of a C-ordered ``(S, B, 3N)`` array (``np.moveaxis(out, 0, 1)`` is contiguous, no copy).  Raises
+    :class:`jetgaudin.InvalidParameterError` for counts out of range (:func:`check_counts`).
+    """
+    X, b, eta, nu0 = _batch_args(X, b, eta, nu0)
+    B, n3 = X.shape
+    S = check_counts(steps, save_every, B, n3)
+    out = np.empty((S, B, n3))
+    final = np.empty((B, n3))
+    drift = np.empty((B, 2 * (n3 // 3)))
+    status = np.zeros(B, np.int64)
+    fail = np.zeros(B, np.int64)
+    nu_last = np.empty(B, np.complex128)
+    run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last)
+    return out.transpose(1, 0, 2), final, drift, nu_last, status, fail
+
+
+def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):
+    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,).
+
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,))``; raises
+    :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
+    """
+    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
+    bad = np.flatnonzero(status)
+    if bad.size:
+        i = bad[0]
+        raise status_error(status[i], fail[i], i)
+    return out, final, drift, nu_last
+
+
+def iterate_single(x, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
+    """One orbit ``x`` (3N,): returns ``(out (S, 3N), final (3N,), drift (2N,), nu_last)``; raises
+    :class:`jetgaudin.SingularStepError` / :class:`jetgaudin.BranchPointError` at a singular step and
+    :class:`jetgaudin.InvalidParameterError` for counts out of range."""
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    n3 = x.shape[0]
+    S = check_counts(steps, save_every, 1, n3)
+    out = np.empty((S, n3))
+    final = np.empty(n3)
+    drift = np.empty(2 * (n3 // 3))
+    fn = single_kernel(n3, specialise)
+    status, fail, nu = fn(x, float(b), complex(eta), complex(nu0), bool(cont), int(steps), int(save_every),
+                          out, final, drift, bool(want_drift))
+    if status != STATUS_OK:
+        raise status_error(status, fail)
+    return out, final, drift, nu
+
+
+#: batches from this size on use the parallel branch-rule kernel (below: no parallel region, whose start-up
+#: costs more than the work and loads the threading layer)
+NU_PARALLEL_MIN = 256
+
+
+def nu_default(X, b, eta, sheet=1):
+    r"""Compiled :func:`jetgaudin.nu` (default branch times ``sheet``) for states ``X`` (B, 3N) with per-orbit
+    ``b``, ``eta`` (B,); equal to the NumPy branch rule to round-off.  Raises :class:`jetgaudin.BranchPointError`
+    where the rule is undefined."""
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    B = X.shape[0]
+    nu = np.empty(B, np.complex128)
+    ok = np.zeros(B, np.bool_)
+    k = kernel_module("_branch")
+    fn = k._nu_default_batch if B >= NU_PARALLEL_MIN else k._nu_default_serial
+    fn(X, np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(eta, dtype=np.complex128), float(sheet), nu,
+       ok)
+    if not np.all(ok):
+        i = int(np.flatnonzero(~ok)[0])
+        raise BranchPointError(
+            f"orbit {i}: nu has a branch point on the vertical segment from Re(eta) to eta (or Re(eta) = 0); "
+            "move eta or the state off the branch point"
+        )
+    return nu
+
+
+def closed_form_orbit(x0, b, eta, nu0, steps):
+    r"""Orbit (steps + 1, 9) of the N = 3 map by the corrected Appendix 1 closed form
+    ``X̆ = Φ(s, t) X + X0(s, t)`` (:func:`jetgaudin.backlund.closed_form._two_point_core`, compiled with
+    ``numba.njit``), with ``ℓ(η)``, ``ν1`` and the eigenvector as in the N = 3 route,
+    ``s = −k2/k1`` and ``t = 2i Im(η) s̄/(1 + |s|²)``.  For benchmarks and cross-checks only: ``s`` is
+    infinite where ``k1 = 0`` (the dressing kernels work projectively there).  Raises on a singular step."""
+    S = check_counts(steps, 1, 1, 9)
+    out = np.empty((S, 9))
+    orbit = kernel_module("_closed").orbit_kernel()
+    n = orbit(np.ascontiguousarray(x0, dtype=np.float64), float(b), complex(eta), complex(nu0), int(steps), out)
+    if n != steps:
+        raise status_error(STATUS_BRANCH, n)
+    return out

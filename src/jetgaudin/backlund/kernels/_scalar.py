@@ -1,0 +1,237 @@
+"""Scalar building blocks of the kernels (complex arithmetic written out, the eigenvector and ``M0`` of the
+dressing, the products of ``R(λ)``, selects for the lock-step lanes, the integrals and the drift pass).
+
+The blocks are ``inline="always"`` (inlined by Numba, so that the loop bodies have no calls and LLVM vectorises
+the lanes), except the two selects ``_sel`` and ``_selc``, used only by the lanes and left to LLVM's inliner:
+inlining their hundreds of call sites at Numba's IR level doubled the compile time of the lanes kernel
+(docs/performance.md, part i).  Either way the single-orbit routes and the lanes perform the same IEEE operations
+in the same order (no fastmath, no contraction) and give the same bits (tests/test_routes.py).
+Import only after :func:`._target.configure`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK
+
+#: (1e-15)^2: squared form of the eigenvector test max(|k_a|², |k_b|²) <= (1e-15 * scale)² of the NumPy route
+_EIG_TOL2 = 1e-30
+#: squared relative residual tolerance (maps._RESIDUAL_TOL = 1e-8)
+_RESIDUAL_TOL2 = 1e-16
+
+
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _abs2(z):
+    return z.real * z.real + z.imag * z.imag
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _cdiv(a, b):
+    r"""``a/b = a·conj(b)·(1/|b|²)``: one real division (shorter latency than Smith's algorithm, which
+    the NumPy route uses; the two agree to a few ulp for ``1e-150 < |b| < 1e150``); never raises
+    (``b = 0`` gives inf/NaN, caught by the callers' singularity tests and the final finiteness test)."""
+    br = b.real
+    bi = b.imag
+    r = 1.0 / (br * br + bi * bi)
+    return complex((a.real * br + a.imag * bi) * r, (a.imag * br - a.real * bi) * r)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rmul(d, q):
+    """real × complex, as NumPy's complex product with ``d + 0i`` (identical for finite values)."""
+    return complex(d * q.real, d * q.imag)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _csqrt(z):
+    r"""A square root of ``z`` (principal; the sign is fixed by the caller): ``t = √((|z| + |a|)/2)``,
+    no cancellation; ``|z|`` as ``√(a² + b²)`` (no overflow guard: fine for ``|z| < 1e150``)."""
+    a = z.real
+    b = z.imag
+    t = math.sqrt(0.5 * (math.sqrt(a * a + b * b) + abs(a)))
+    if t == 0.0:
+        return complex(0.0, 0.0)
+    if a >= 0.0:
+        return complex(t, 0.5 * b / t)
+    return complex(0.5 * abs(b) / t, math.copysign(t, b))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _continue_nu(u, v, w, nu_prev):
+    r"""Root of ``u² + vw`` closest to ``nu_prev`` (``maps._continue_nu``)."""
+    r = _csqrt(u * u + v * w)
+    if r.real * nu_prev.real + r.imag * nu_prev.imag >= 0.0:
+        return r
+    return -r
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _eigvec(u, v, w, nu):
+    r"""Eigenvector ``k`` of ``ℓ(η) = [[u, v], [w, −u]]`` for ``ν`` (:func:`jetgaudin.backlund._dressing.eigenvector`):
+    ``(v, ν − u)`` or ``(u + ν, w)``, the one with the larger ``|k|²``; ``s = −k_2/k_1`` may be infinite.
+    Returns ``(k1, k2, |k|², status)``: ``STATUS_BRANCH`` when both vanish (``ℓ(η) = 0``, a double branch
+    point), ``STATUS_NONFINITE`` on overflow."""
+    # the same values as _eigvec_flags, with an if instead of selects: ~5 % faster on the single-orbit chain
+    a1 = v
+    a2 = nu - u
+    b1 = u + nu
+    b2 = w
+    na = _abs2(a1) + _abs2(a2)
+    nb = _abs2(b1) + _abs2(b2)
+    if na >= nb:
+        k1, k2, nk = a1, a2, na
+    else:
+        k1, k2, nk = b1, b2, nb
+    scale2 = 4.0 * (_abs2(u) + _abs2(v) + _abs2(w) + _abs2(nu))
+    if not (scale2 - scale2 == 0.0):  # overflow or NaN in ℓ(η) or ν
+        return k1, k2, nk, STATUS_NONFINITE
+    if nk <= _EIG_TOL2 * scale2 or nk == 0.0:
+        return k1, k2, nk, STATUS_BRANCH
+    return k1, k2, nk, STATUS_OK
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _eigvec_flags(u, v, w, nu):
+    """:func:`_eigvec` without data-dependent branches (both candidates formed, one selected; for the
+    lock-step lanes): returns ``(k1, k2, |k|², nonfinite, branch)``."""
+    a1 = v
+    a2 = nu - u
+    b1 = u + nu
+    b2 = w
+    na = _abs2(a1) + _abs2(a2)
+    nb = _abs2(b1) + _abs2(b2)
+    use_a = na >= nb
+    k1 = _selc(use_a, a1, b1)
+    k2 = _selc(use_a, a2, b2)
+    nk = _sel(use_a, na, nb)
+    # NumPy: max(na, nb) <= (1e-15 (|u| + |v| + |w| + |ν|))²; here the bound (Σ|·|)² <= 4 Σ|·|² (no
+    # square roots): the compiled route refuses whenever the NumPy route does, and in a band twice as wide
+    scale2 = 4.0 * (_abs2(u) + _abs2(v) + _abs2(w) + _abs2(nu))
+    nonfinite = not (scale2 - scale2 == 0.0)
+    branch = nk <= _EIG_TOL2 * scale2 or nk == 0.0
+    return k1, k2, nk, nonfinite, branch
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _m0_from_k(eta, k1, k2, nk):
+    r"""``M0`` of the real two-point map from the eigenvector ``k``
+    (:func:`jetgaudin.backlund._dressing.real_two_point_M0`):
+
+    ``M0 = −diag(η, η̄) + (2i Im η/|k|²) [[|k2|², −k1 k̄2], [−k̄1 k2, −|k2|²]]``
+
+    (eq. (mm) with ``t = 2i Im(η) s̄/(1 + |s|²)``, ``s = −k2/k1``: reality forces ``κ = 1/s̄`` in eq. (X)).
+    ``c = 2i Im η/|k|² = i·ci`` is imaginary; returns ``(m00, m01, m10, m11)``."""
+    ci = (eta.imag + eta.imag) * (1.0 / nk)
+    a2 = _abs2(k2)
+    m01 = complex(ci * k1.imag, -ci * k1.real) * k2.conjugate()  # −c k1 conj(k2)
+    m10 = complex(-ci * k1.imag, -ci * k1.real) * k2  # −c conj(k1) k2
+    m00 = complex(-eta.real, ci * a2 - eta.imag)
+    m11 = complex(-eta.real, eta.imag - ci * a2)
+    return m00, m01, m10, m11
+
+
+@njit(cache=True, error_model="numpy")
+def _integrals(x, b, N, out):
+    r"""``κ_1..κ_2N`` (``H_1..H_N, C_1..C_N``) of a real state with field ``b e_3`` (:func:`jetgaudin.integrals`):
+    ``κ_m = Σ_{i+j=m} ⟨ξ_i, ξ_j⟩`` with ``ξ_0 = b e_3``, ``ξ_i = y_{i-1}``."""
+    for m in range(2 * N):
+        out[m] = 0.0
+    for i in range(1, N + 1):
+        p = 3 * (i - 1)
+        out[i - 1] += 2.0 * b * x[p + 2]
+        for j in range(1, N + 1):
+            q = 3 * (j - 1)
+            out[i + j - 1] += x[p] * x[q] + x[p + 1] * x[q + 1] + x[p + 2] * x[q + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def _drift_pass(out, final, last, b, N, I0, Ibuf, drift):
+    r"""``drift_k = max_n |I_k(x_n) − I_k(x_0)| / max(1, |I_k(x_0)|)`` over the saved rows ``out[1..last]`` and
+    ``final`` (computed after the run, off the critical path of the steps)."""
+    inv = np.empty(2 * N)
+    for k in range(2 * N):
+        inv[k] = 1.0 / max(1.0, abs(I0[k]))
+    for j in range(1, last + 2):
+        row = out[j] if j <= last else final
+        _integrals(row, b, N, Ibuf)
+        for k in range(2 * N):
+            e = abs(Ibuf[k] - I0[k]) * inv[k]
+            if not (e <= drift[k]):  # also propagates NaN
+                drift[k] = e
+
+
+# ---------------------------------------------------------------------------------------------
+# building blocks shared by the generic route and the N = 3 route (so that the two agree bit for bit)
+# ---------------------------------------------------------------------------------------------
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _cr(c, r):
+    """complex × real, as NumPy's product with ``r + 0i`` (identical for finite values)."""
+    return complex(c.real * r, c.imag * r)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _horner_step_u(acc, z, u):
+    """``acc·z + (u + 0i)`` with real ``u``."""
+    p = acc * z
+    return complex(p.real + u, p.imag)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _products(m00, m01, m10, m11, u, v, w):
+    r"""``T1 = M0 ℓ_m + ℓ_m adj M0`` and ``T2 = M0 ℓ_m adj M0`` (entries 00, 01, 10) for
+    ``ℓ_m = [[u, v], [w, −u]]``, ``u`` real (``m ≥ 1``)."""
+    a00 = m11
+    a01 = -m01
+    a10 = -m10
+    lx = -u
+    p00 = _cr(m00, u) + m01 * w
+    p01 = m00 * v + _cr(m01, lx)
+    p10 = _cr(m10, u) + m11 * w
+    p11 = m10 * v + _cr(m11, lx)
+    t1u = p00 + (_cr(a00, u) + v * a10)
+    t1v = p01 + (_cr(a01, u) + v * m00)
+    t1w = p10 + (w * a00 + _cr(a10, lx))
+    t2u = p00 * a00 + p01 * a10
+    t2v = p00 * a01 + p01 * m00
+    t2w = p10 * a00 + p11 * a10
+    return t1u, t1v, t1w, t2u, t2v, t2w
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _products0(m00, m01, m10, m11, b):
+    r""":func:`_products` for ``ℓ_0 = diag(b, −b)`` (the zero entries dropped: ``x + 0·y = x``)."""
+    a00 = m11
+    a01 = -m01
+    a10 = -m10
+    p00 = _cr(m00, b)
+    p01 = _cr(m01, -b)
+    p10 = _cr(m10, b)
+    p11 = _cr(m11, -b)
+    t1u = p00 + _cr(a00, b)
+    t1v = p01 + _cr(a01, b)
+    t1w = p10 + _cr(a10, -b)
+    t2u = p00 * a00 + p01 * a10
+    t2v = p00 * a01 + p01 * m00
+    t2w = p10 * a00 + p11 * a10
+    return t1u, t1v, t1w, t2u, t2v, t2w
+
+
+@njit(cache=True, error_model="numpy")
+def _sel(c, a, b):
+    return a if c else b
+
+
+@njit(cache=True, error_model="numpy")
+def _selc(c, a, b):
+    """complex select by components (a select of a complex struct keeps LLVM from vectorising)."""
+    return complex(_sel(c, a.real, b.real), _sel(c, a.imag, b.imag))
+
+
