@@ -13,7 +13,7 @@ from ._errors import (
 )
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
-from .flows import Trajectory, integrate
+from .flows import FlowMap, Trajectory, integrate
 from .hamiltonians import (
     IntegralHamiltonian,
     interpolating_flow_hamiltonian,
@@ -23,6 +23,7 @@ from .hamiltonians import (
     physical_hamiltonian,
 )
 from .lax import lax_matrix, r_matrix, uvw
+from .maps import Advance, Backend, Branch, Map, map_from_description
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
 from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material_point
 
@@ -51,7 +52,13 @@ __all__ = [
     "nu",
     "nu_squared",
     "branch_points",
+    "Map",
     "MapProperties",
+    "Advance",
+    "Backend",
+    "Branch",
+    "map_from_description",
+    "FlowMap",
     "OnePointBacklund",
     "TwoPointBacklund",
     "Trajectory",

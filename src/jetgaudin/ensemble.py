@@ -75,9 +75,9 @@ def _check_int(value, name, minimum):
 
 def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise):
     """Run one chunk with the compiled kernels; returns arrays and status (no exception: for Dask)."""
-    from .backlund import _kernels
+    from .backlund._compiled import kernels
 
-    return _kernels.run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
+    return kernels().run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
 
 
 def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="default", nu1=None,
@@ -123,9 +123,9 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     X = np.ascontiguousarray(X)
     if nu1 is None:
         cont = False
-        from .backlund._kernels import nu_default
+        from .backlund._compiled import kernels
 
-        nu0 = nu_default(X, bb, ee, sheet)
+        nu0 = kernels().nu_default(X, bb, ee, sheet)
     else:
         cont = True
         nu0 = _per_orbit(nu1, B, "nu1", complex)
@@ -137,10 +137,10 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
         )
     bad = np.flatnonzero(status)
     if bad.size:
-        from .backlund._kernels import status_error
+        from .backlund._compiled import kernels
 
         i = int(bad[0])
-        exc = status_error(status[i], fail[i], i)
+        exc = kernels().status_error(status[i], fail[i], i)
         raise type(exc)(f"{exc} ({bad.size} orbit(s) of {B} failed)")
     return EnsembleResult(
         states=np.moveaxis(out, 0, 1),
