@@ -9,6 +9,9 @@ from ._errors import (
     JetGaudinError,
     OffLeafError,
     RecordingError,
+    RunDirectoryError,
+    RunIOError,
+    RunLockedError,
     SingularStepError,
 )
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
@@ -39,6 +42,9 @@ __all__ = [
     "OffLeafError",
     "IntegrationError",
     "RecordingError",
+    "RunDirectoryError",
+    "RunLockedError",
+    "RunIOError",
     "structure_constants",
     "poisson_tensor",
     "bracket",
