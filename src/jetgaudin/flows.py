@@ -226,6 +226,11 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     return Trajectory(t=t_eval, X=Xs, integrals=integrals(Xs, bb, cc), method=method.value)
 
 
+#: largest time step of a FlowMap: an adaptive integrator takes at least one step per unit of the orbit's own time
+#: scale (O(1) for states of size O(1)); a step of 1e6 time units already means millions of integrator steps per
+#: map step.  Larger steps are refused rather than left running without end (issue 11, item 8).
+MAX_FLOW_DT = 1e6
+
 _FLOW_PROPERTIES = MapProperties(
     preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True, interpolates_flow=False
 )
@@ -255,6 +260,9 @@ class FlowMap(Map):
         if not isinstance(self.H, IntegralHamiltonian):
             raise InvalidParameterError("H must be an IntegralHamiltonian (physical_hamiltonian, ...)")
         dt = _check_tol("dt", self.dt, True)
+        if dt > MAX_FLOW_DT:
+            raise InvalidParameterError(f"dt = {dt:g} is too large: one map step would integrate over {dt:g} time "
+                                        f"units (hours to forever); give dt <= {MAX_FLOW_DT:g} and more steps")
         object.__setattr__(self, "dt", dt)
         object.__setattr__(self, "method", Method.parse(self.method))
         object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
