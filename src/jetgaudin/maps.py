@@ -37,6 +37,7 @@ __all__ = [
     "check_count",
     "map_from_description",
     "register_map",
+    "step_loop",
 ]
 
 
@@ -160,19 +161,8 @@ class Map(abc.ABC):
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` steps from ``(X, carry)`` keeping every ``save_every``-th state (a loop over :meth:`step`;
         ``carry=None`` starts the orbit with :meth:`start`)."""
-        steps = check_count(steps, "steps")
-        save_every = check_count(save_every, "save_every", 1)
         X = np.asarray(X)
-        if carry is None:
-            carry = self.start(X)
-        rows = np.empty((steps // save_every,) + X.shape, dtype=X.dtype)
-        imag = np.zeros(X.shape[:-1])
-        for n in range(steps):
-            X, carry, im = self.step(X, carry)
-            imag = np.maximum(imag, im)
-            if (n + 1) % save_every == 0:
-                rows[(n + 1) // save_every - 1] = X
-        return Advance(rows=rows, X=X, carry=carry, imag_max=imag)
+        return step_loop(self, X, self.start(X) if carry is None else carry, steps, save_every)
 
     def iterate(self, X0: np.ndarray, steps: int, *, save_every: int = 1, carry: Any = None,
                 return_carry: bool = False) -> np.ndarray | tuple[np.ndarray, Any]:
@@ -194,6 +184,21 @@ class Map(abc.ABC):
     @abc.abstractmethod
     def describe(self) -> dict:
         """A JSON-able description with ``"kind"`` and every parameter (:func:`map_from_description` inverts it)."""
+
+
+def step_loop(m: Map, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+    """The one stepping loop of the NumPy routes: ``steps`` calls of ``m.step`` from ``(X, carry)`` keeping every
+    ``save_every``-th state and the largest imaginary residue (``carry`` passed as given, ``None`` included)."""
+    steps = check_count(steps, "steps")
+    save_every = check_count(save_every, "save_every", 1)
+    rows = np.empty((steps // save_every,) + np.shape(X), dtype=np.asarray(X).dtype)
+    imag = np.zeros(np.shape(X)[:-1])
+    for n in range(steps):
+        X, carry, im = m.step(X, carry)
+        imag = np.maximum(imag, im)
+        if (n + 1) % save_every == 0:
+            rows[(n + 1) // save_every - 1] = X
+    return Advance(rows=rows, X=X, carry=carry, imag_max=imag)
 
 
 _REGISTRY: dict[str, Callable[[dict], Map]] = {}

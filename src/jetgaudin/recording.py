@@ -27,7 +27,7 @@ from . import _fs
 from ._errors import InvalidParameterError, RecordingError
 from ._validate import as_state
 from .backlund.maps import _TWO_POINT_PROPERTIES, TwoPointBacklund
-from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
+from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop
 from .run import api as _api
 from .run.driver import RunInterrupted
 from .run.files import (
@@ -43,7 +43,6 @@ from .run.files import (
 )
 from .run.load import load
 from .run.spec import DEFAULT_MAX_DRIFT, DEFAULT_MAX_IMAG, HealthLimits, RunSpec, integral_names
-from .spectral import integrals
 
 __all__ = [
     "RecordingError",
@@ -62,11 +61,15 @@ __all__ = [
     "integral_names",
     "DEFAULT_MAX_DRIFT",
     "DEFAULT_MAX_IMAG",
+    "ORBIT_CSV",
+    "ORBIT_H5",
+    "RUN_JSON",
+    "one_line",
+    "update_run",
 ]
 
 RunResult = _api.RunResult
 _write_run = write_run
-_ = (ORBIT_CSV, ORBIT_H5, RUN_JSON)
 
 
 @dataclass(frozen=True)
@@ -145,14 +148,7 @@ class _StepHook(Map):
         return self.inner.step(X, carry)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        rows = np.empty((steps // save_every,) + np.shape(X))
-        imag = np.zeros(np.shape(X)[:-1])
-        for n in range(steps):
-            X, carry, im = self.step(X, carry)
-            imag = np.maximum(imag, im)
-            if (n + 1) % save_every == 0:
-                rows[(n + 1) // save_every - 1] = X
-        return Advance(rows=rows, X=X, carry=carry, imag_max=imag)
+        return step_loop(self, np.asarray(X, dtype=float), carry, steps, save_every)
 
     def inverse(self) -> Map:
         raise NotImplementedError
@@ -235,5 +231,3 @@ def update_run(out_dir: str | Path, **fields: Any) -> None:
     run.update(fields)
     write_run(out_dir, run)
 
-
-_unused = (integrals, one_line, Branch)

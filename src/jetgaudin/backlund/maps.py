@@ -25,7 +25,7 @@ import numpy as np
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import as_state, nonzero_field, spectral_parameter
 from ..lax import ell_coefficients, state_from_ell
-from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map
+from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ..spectral import _nu_from_kappa, curve_coefficients, integrals
 from . import _compiled
 from ._dressing import (
@@ -276,14 +276,7 @@ class TwoPointBacklund(Map):
             return _empty_advance(X, steps, save_every, carry)
         if self.resolved_backend(steps, X) is Backend.COMPILED:
             return self._advance_compiled(X, carry, steps, save_every)
-        rows = np.empty((steps // save_every,) + X.shape)
-        imag = np.zeros(X.shape[:-1])
-        for n in range(steps):
-            X, carry, im = self.step(X, carry)
-            imag = np.maximum(imag, im)
-            if (n + 1) % save_every == 0:
-                rows[(n + 1) // save_every - 1] = X
-        return Advance(rows=rows, X=X, carry=carry, imag_max=imag)
+        return step_loop(self, X, carry, steps, save_every)
 
     def _advance_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
         K = _compiled.kernels()
@@ -465,12 +458,7 @@ class OnePointBacklund(Map):
         X = X.astype(complex)
         if X.size == 0:
             return _empty_advance(X, steps, save_every, carry)
-        rows = np.empty((steps // save_every,) + X.shape, dtype=complex)
-        for n in range(steps):
-            X, carry, _ = self.step(X, carry)
-            if (n + 1) % save_every == 0:
-                rows[(n + 1) // save_every - 1] = X
-        return Advance(rows=rows, X=X, carry=carry, imag_max=np.zeros(X.shape[:-1]))
+        return step_loop(self, X, carry, steps, save_every)
 
 
 def _two_point_from(d: dict) -> TwoPointBacklund:
