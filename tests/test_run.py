@@ -351,3 +351,27 @@ def test_signal_is_honoured_quickly_whatever_save_every(tmp_path, every):
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "Traceback" not in err and "resume with" in err
     assert took < 2.0, took  # 0.5 s promised (kernel calls of ~0.05 s); 2 s leaves room for a loaded machine
+
+
+def test_init_from_continues_from_the_last_state(tmp_path, capsys):
+    """`--init-from RUN_DIR` (issue 11, 10): orbit, flow and ensemble start from the last safe state of a run;
+    the orbit with the run's own b, eta: 10 steps then 10 from the last state = 20 steps (same route: NumPy)."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert run_cli(capsys, "orbit", "--steps", 10, "--kernel", "numpy", "--no-plots", "--out", a)[0] == 0
+    assert run_cli(capsys, "orbit", "--init-from", a, "--steps", 10, "--kernel", "numpy", "--no-plots",
+                   "--out", b)[0] == 0
+    ref = reference(20)
+    assert np.array_equal(rl.load(b).X[0], ref[10])
+    # the next step from a state re-starts nu1 by the branch rule: equal to the continued orbit to round-off
+    np.testing.assert_allclose(rl.load(b).X[-1], ref[20], rtol=0, atol=1e-13)
+    assert run_cli(capsys, "ensemble", "--init-from", a, "--steps", 3, "--out", tmp_path / "e",
+                   "--no-progress")[0] == 0
+    assert np.array_equal(rl.load(tmp_path / "e").X0, ref[10][None])
+    code, _, err = run_cli(capsys, "flow", "--init-from", a, "--steps", 2, "--no-plots", "--out", tmp_path / "f")
+    assert code == 0, err
+    assert np.array_equal(rl.load(tmp_path / "f").X[0], ref[10])
+    # an orbit.csv (with its header and step column) is a valid --input
+    code, _, err = run_cli(capsys, "ensemble", "--input", a / "orbit.csv", "--steps", 1, "--out", tmp_path / "c",
+                           "--no-progress")
+    assert code == 0, err
+    assert np.array_equal(rl.load(tmp_path / "c").X0, ref[:11])
