@@ -275,10 +275,12 @@ class TwoPointBacklund(Map):
         if X.size == 0:
             return _empty_advance(X, steps, save_every, carry)
         if self.resolved_backend(steps, X) is Backend.COMPILED:
-            return self._advance_compiled(X, carry, steps, save_every)
+            orbit, final, nu = self._orbit_compiled(X, carry, steps, save_every)
+            return Advance(rows=orbit[1:], X=final, carry=nu, imag_max=np.zeros(X.shape[:-1]))
         return step_loop(self, X, carry, steps, save_every)
 
-    def _advance_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
+    def _orbit_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> tuple[Any, Any, Any]:
+        """``(orbit (steps//save_every + 1, ..., 3N) including X, final state, ν1)`` by the compiled kernels."""
         K = _compiled.kernels()
         cont = carry is not None
         lead = X.shape[:-1]
@@ -289,10 +291,10 @@ class TwoPointBacklund(Map):
         if X.ndim == 1:
             out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
                                                  want_drift=False)
-            return Advance(rows=out[1:], X=final, carry=np.complex128(nu), imag_max=np.zeros(()))
+            return out, final, np.complex128(nu)
         out, final, _, nu = K.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
-        return Advance(rows=orbit[1:], X=final.reshape(X.shape), carry=nu.reshape(lead), imag_max=np.zeros(lead))
+        return orbit, final.reshape(X.shape), nu.reshape(lead)
 
     def iterate(self, X0, steps: int, *, save_every: int = 1, kernel: Backend | str | None = None, nu1=None,
                 return_nu: bool = False, carry=None, return_carry: bool = False):
@@ -313,11 +315,22 @@ class TwoPointBacklund(Map):
         otherwise).  A batch ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both
         routes).
         """
-        m = self if kernel is None else TwoPointBacklund(self.b, self.eta, self.branch, Backend.parse(kernel))
-        X0, _ = as_state(X0)
-        out = Map.iterate(m, X0, steps, save_every=save_every, carry=nu1 if carry is None else carry,
-                          return_carry=True)
-        return out if (return_nu or return_carry) else out[0]
+        backend = self.backend if kernel is None else Backend.parse(kernel)
+        X, _ = as_state(X0)
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        c = nu1 if carry is None else carry
+        if c is not None:
+            c = _check_nu(c, X.shape[:-1], "nu1")
+        if backend is Backend.AUTO:
+            backend = Backend(auto_kernel(steps, X.shape[-1], X.shape[:-1]))
+        if backend is Backend.COMPILED and X.size:  # the kernels write the whole orbit, X_0 included
+            orbit, _, c = self._orbit_compiled(X, c, steps, save_every)
+        else:
+            m = self if backend is self.backend else TwoPointBacklund(self.b, self.eta, self.branch, backend)
+            adv = m.advance(X, c, steps, save_every)
+            orbit, c = np.concatenate([X[None], adv.rows], axis=0), adv.carry
+        return (orbit, c) if (return_nu or return_carry) else orbit
 
 
 #: AUTO uses the compiled kernels once they are loaded, and otherwise from this many orbit-steps on.
