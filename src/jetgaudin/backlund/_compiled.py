@@ -1,0 +1,19 @@
+"""The compiled route of the real two-point map, seen from the method layer (private).
+
+The **only** place outside :mod:`jetgaudin.backlund.kernels` that reaches the Numba kernels: the maps, the
+ensemble driver and the run layer call :func:`kernels`.  The ``kernel="auto"`` choice and the loaded / cached /
+cold state of the kernels live with the kernels (:mod:`jetgaudin.backlund.kernels._select`).
+"""
+
+from __future__ import annotations
+
+from types import ModuleType
+
+__all__ = ["kernels"]
+
+
+def kernels() -> ModuleType:
+    """The compiled kernels' package (its drivers import Numba at their first call)."""
+    from . import kernels as _k
+
+    return _k
