@@ -103,7 +103,7 @@ def _elim_core(a3, b3, c3, am, bm, cm, g1, g2):
 # ---------------------------------------------------------------------------------------------
 
 
-def _vec3(a, name):
+def _vec3(a: ArrayLike, name: str) -> np.ndarray:
     arr = np.asarray(a, dtype=complex)
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise InvalidParameterError(f"{name} must have shape (..., 3), got {arr.shape}")
@@ -162,14 +162,14 @@ def generating_function(
     printed (fu) has ``γ2`` for ``2γ2`` (three times), ``γ2²/4 − γ1`` for ``γ2² − 2γ1``, lacks ``−k/(4η²)``
     (and the ``bη`` that makes ``∂F/∂η = ν`` exact).  Defined up to a constant (the branch of ``ln``).
     """
-    chi_minus = _vec3(chi_minus, "chi_minus")
-    chi_plus_new = _vec3(chi_plus_new, "chi_plus_new")
+    cm = _vec3(chi_minus, "chi_minus")
+    cp = _vec3(chi_plus_new, "chi_plus_new")
     b = nonzero_field(b)
     eta = complex(eta)
     if eta == 0:
         raise InvalidParameterError("eta must be nonzero (F contains 1/eta^2)")
-    ym, xm, zm = (chi_minus[..., j] for j in range(3))
-    ypt, xpt, zpt = (chi_plus_new[..., j] for j in range(3))
+    ym, xm, zm = (cm[..., j] for j in range(3))
+    ypt, xpt, zpt = (cp[..., j] for j in range(3))
     g1 = np.asarray(gamma1, dtype=complex)
     g2 = np.asarray(gamma2, dtype=complex)
     return _F_core(ym, xm, zm, ypt, xpt, zpt, eta, b, g1, g2, np.asarray(k, dtype=complex), np.log)
@@ -192,12 +192,11 @@ def generating_psi(
 
     Returns two arrays of shape ``(..., 3)``.
     """
-    chi_minus = _vec3(chi_minus, "chi_minus")
-    chi_plus_new = _vec3(chi_plus_new, "chi_plus_new")
+    cm = _vec3(chi_minus, "chi_minus")
+    cp = _vec3(chi_plus_new, "chi_plus_new")
     b = nonzero_field(b)
-    args = [chi_minus[..., j] for j in range(3)] + [chi_plus_new[..., j] for j in range(3)]
-    out = _psi_core(*args, complex(eta), b, np.asarray(gamma1, dtype=complex), np.asarray(gamma2, dtype=complex),
-                    np.asarray(k, dtype=complex))
+    out = _psi_core(cm[..., 0], cm[..., 1], cm[..., 2], cp[..., 0], cp[..., 1], cp[..., 2], complex(eta), b,
+                    np.asarray(gamma1, dtype=complex), np.asarray(gamma2, dtype=complex), np.asarray(k, dtype=complex))
     out = np.broadcast_arrays(*out)
     return np.stack(out[:3], axis=-1), np.stack(out[3:], axis=-1)
 
@@ -212,8 +211,8 @@ def casimir_elimination(psi: ArrayLike, chi: ArrayLike, gamma1: ArrayLike, gamma
 
     (printed: ``2γ1 − 1`` in place of ``2γ1 − (x³)² − x⁺x⁻``).  Returns shape ``(..., 3)``.
     """
-    psi = _vec3(psi, "psi")
-    chi = _vec3(chi, "chi")
-    out = _elim_core(*(psi[..., j] for j in range(3)), *(chi[..., j] for j in range(3)),
+    ps = _vec3(psi, "psi")
+    ch = _vec3(chi, "chi")
+    out = _elim_core(ps[..., 0], ps[..., 1], ps[..., 2], ch[..., 0], ch[..., 1], ch[..., 2],
                      np.asarray(gamma1, dtype=complex), np.asarray(gamma2, dtype=complex))
     return np.stack(np.broadcast_arrays(*out), axis=-1)

@@ -99,9 +99,9 @@ def appendix1_arrays(b: float, eta: complex, s: Any, t: Any, *, restore_i: bool 
 
     eta = complex(eta)
     s, t = np.broadcast_arrays(np.asarray(s, dtype=complex), np.asarray(t, dtype=complex))
-    A, B, X0 = appendix1(b, eta.real, eta.imag, s, t, alpha_fix=restore_i)
-    A = np.stack([np.stack(row, -1) for row in A], -2)
-    B = np.stack([np.stack(row, -1) for row in B], -2)
+    A_rows, B_rows, X0 = appendix1(b, eta.real, eta.imag, s, t, alpha_fix=restore_i)
+    A = np.stack([np.stack(row, -1) for row in A_rows], -2)
+    B = np.stack([np.stack(row, -1) for row in B_rows], -2)
     return A, B, np.stack(np.broadcast_arrays(*X0), -1)
 
 

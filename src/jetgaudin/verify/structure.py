@@ -9,6 +9,7 @@ The structure constants are rebuilt here from (LP) (``c^{IJ}_K`` with ``I = 3i +
 from __future__ import annotations
 
 import itertools
+from typing import Any
 
 import sympy as sp
 
@@ -51,9 +52,10 @@ def _jacobi_defect(c, n: int) -> int:
     """Number of basis triples violating the Jacobi identity (exact integers)."""
     bad = 0
     for i, j, k in itertools.combinations(range(n), 3):
-        e = {m: 1 for m in (i,)}
-        f, g = {j: 1}, {k: 1}
-        tot: dict[int, object] = {}
+        e: dict[int, Any] = {i: 1}
+        f: dict[int, Any] = {j: 1}
+        g: dict[int, Any] = {k: 1}
+        tot: dict[int, Any] = {}
         for a, b, cc in ((e, f, g), (f, g, e), (g, e, f)):
             for m, x in _br(c, _br(c, a, b), cc).items():
                 tot[m] = tot.get(m, 0) + x
