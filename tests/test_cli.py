@@ -180,9 +180,14 @@ def test_steps_zero_writes_the_initial_state(tmp_path, capsys):
     assert n.tolist() == [0] and np.array_equal(X[0], APPENDIX2_X0)
 
 
-def test_rerun_overwrites_completed_but_not_unfinished_run(tmp_path, capsys):
+def test_rerun_refuses_any_run_without_overwrite(tmp_path, capsys):
+    """A new run never writes into a directory holding a run (completed or not) unless --overwrite (issue 11, 6)."""
     assert run_cli(capsys, "orbit", "--steps", 3, "--no-plots", "--out", tmp_path)[0] == 0
-    assert run_cli(capsys, "orbit", "--steps", 4, "--no-plots", "--out", tmp_path)[0] == 0
+    before = (tmp_path / "orbit.csv").read_bytes()
+    code, _, err = run_cli(capsys, "orbit", "--steps", 4, "--no-plots", "--out", tmp_path)
+    assert_one_line_error(code, err)
+    assert "holds a run (status completed)" in err and "--overwrite" in err
+    assert (tmp_path / "orbit.csv").read_bytes() == before  # nothing touched
     run = json.loads((tmp_path / "run.json").read_text())
     run["status"] = "interrupted"
     (tmp_path / "run.json").write_text(json.dumps(run))
@@ -190,6 +195,7 @@ def test_rerun_overwrites_completed_but_not_unfinished_run(tmp_path, capsys):
     assert_one_line_error(code, err)
     assert "--resume" in err
     assert run_cli(capsys, "orbit", "--steps", 4, "--no-plots", "--overwrite", "--out", tmp_path)[0] == 0
+    assert json.loads((tmp_path / "run.json").read_text())["inputs"]["steps"] == 4
 
 
 # ---------------------------------------------------------------------------------------------- bad input
@@ -197,8 +203,8 @@ BAD_ORBIT = [
     (["--eta", "five"], "--eta"),
     (["--eta", "5+0.1k"], "--eta"),
     (["--eta", "nan+1i"], "--eta"),
-    (["--eta", "5"], "Im(eta) = 0"),  # the real map would be the identity: refused
-    (["--eta", "5+0i"], "Im(eta) = 0"),
+    (["--eta", "5"], "--eta: eta must have a nonzero imaginary part (Im eta = 0"),  # the identity: refused
+    (["--eta", "5+0i"], "Im eta = 0"),
     (["--init", "1,2"], "multiple of 3"),
     (["--init", "1,2,3,4"], "multiple of 3"),
     (["--init", ""], "--init"),

@@ -151,7 +151,7 @@ def test_cli_csv_and_npz_input(cli, tmp_path):
     assert np.array_equal(load_ensemble(out).states, ref.states)
     npz = tmp_path / "x.npz"
     np.savez(npz, X=X0, b=np.array([1.0, 2.0, 3.0]), eta=np.array([4 + 0.2j, 5 + 0.1j, 3 - 0.3j]))
-    r = runner.invoke(app, ["ensemble", "--input", str(npz), "--steps", "10", "--out", str(out)])
+    r = runner.invoke(app, ["ensemble", "--input", str(npz), "--steps", "10", "--out", str(out), "--overwrite"])
     assert r.exit_code == 0, r.output
     ref = iterate_ensemble(X0, [1.0, 2.0, 3.0], [4 + 0.2j, 5 + 0.1j, 3 - 0.3j], 10)
     assert np.array_equal(load_ensemble(out).states, ref.states)
@@ -160,7 +160,10 @@ def test_cli_csv_and_npz_input(cli, tmp_path):
 @pytest.mark.parametrize(
     "args",
     [
-        ["--steps", "10"],  # neither --input nor --sample
+        ["--input", "x.csv", "--sample", "leaf"],  # two sources of initial states
+        ["--sample", "leaf", "--casimirs", "0,0,1", "--seed", "-1"],  # issue 11, 9: a negative seed is input
+        ["--sample", "leaf", "--casimirs", "0,0,1", "--orbits", "1e23"],  # far beyond memory: refused, exit 2
+        ["--b", "1+1i", "--orbits", "3"],  # b must be real (issue 11, 10)
         ["--sample", "leaf", "--casimirs", "1,2", "--orbits", "3"],  # wrong number of Casimirs
         ["--sample", "energy", "--orbits", "3"],  # no --energy
         ["--sample", "leaf", "--casimirs", "0,0,1", "--orbits", "3", "--eta", "5"],  # real eta
@@ -175,6 +178,18 @@ def test_cli_bad_input_one_line_exit_2(cli, args, tmp_path):
     lines = [ln for ln in r.output.splitlines() if ln.strip()]
     assert len(lines) == 1 and "error" in lines[0]
     assert "Traceback" not in r.output
+
+
+def test_cli_default_sampling(cli, tmp_path):
+    """Neither --input nor --sample: the documented default leaf (docs/cli.md), seeded (issue 11, item 10)."""
+    from jetgaudin.ensemble import DEFAULT_CASIMIRS
+    from jetgaudin.ensemble_recording import load_ensemble
+
+    runner, app = cli
+    r = runner.invoke(app, ["ensemble", "--orbits", "4", "--steps", "3", "--out", str(tmp_path / "d")])
+    assert r.exit_code == 0, r.output
+    X0 = sample_on_leaf(3, DEFAULT_CASIMIRS, 4, seed=0)
+    assert np.array_equal(load_ensemble(tmp_path / "d").X0, X0)
 
 
 def test_cli_bad_csv(cli, tmp_path):

@@ -152,11 +152,10 @@ def test_singular_step_stops_as_failed(tmp_path):
     X0 = np.array([[0.3, -0.2, 0.5], [0.0, 0.0, 1.0]])
     with pytest.raises(jg.BranchPointError):
         iterate_ensemble(X0, 1.0, -1 + 0.5j, 1)
-    res = er.run_ensemble(er.EnsembleSpec(X0, 1.0, -1 + 0.5j, 5), tmp_path)
-    assert res.status.startswith("failed: BranchPointError") and "orbit 1" in res.status
-    assert read_run(tmp_path)["status"] == res.status
-    data = er.load_ensemble(tmp_path)  # the data before the failure (here the initial states) are kept
-    assert np.array_equal(data.states, X0[None]) and res.last_safe_step == 0
+    # refused before running, exactly as `orbit` refuses it (issue 11, item 9): nothing is created
+    with pytest.raises(jg.BranchPointError, match="orbit 1"):
+        er.run_ensemble(er.EnsembleSpec(X0, 1.0, -1 + 0.5j, 5), tmp_path / "e")
+    assert not (tmp_path / "e").exists()
 
 
 def test_bad_specs():

@@ -131,10 +131,10 @@ def test_kernels_state_sees_the_cache():
     assert maps._kernels_state(("no_such_kernel",)) == "cold"
 
 
-def test_real_eta_is_identity():
-    B = jg.TwoPointBacklund(1.0, 2.0)
-    orb = B.iterate(APPENDIX2_X0, 3, kernel="compiled")
-    assert np.array_equal(orb, np.broadcast_to(APPENDIX2_X0, (4, 9)))
+def test_real_eta_is_refused():
+    """Im eta = 0 (the identity map) is refused by the map itself, whatever the route (docs/architecture.md)."""
+    with pytest.raises(jg.InvalidParameterError, match="Im eta = 0"):
+        jg.TwoPointBacklund(1.0, 2.0, backend="compiled")
 
 
 def test_state_along_the_field_is_a_fixed_point():

@@ -9,11 +9,14 @@ from ._errors import (
     JetGaudinError,
     OffLeafError,
     RecordingError,
+    RunDirectoryError,
+    RunIOError,
+    RunLockedError,
     SingularStepError,
 )
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
-from .flows import Trajectory, integrate
+from .flows import FlowMap, Trajectory, integrate
 from .gaudin import (
     ChainHamiltonian,
     ChainOnePointBacklund,
@@ -33,6 +36,7 @@ from .hamiltonians import (
     physical_hamiltonian,
 )
 from .lax import lax_matrix, r_matrix, uvw
+from .maps import Advance, Backend, Branch, Map, map_from_description
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
 from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material_point
 
@@ -48,6 +52,9 @@ __all__ = [
     "OffLeafError",
     "IntegrationError",
     "RecordingError",
+    "RunDirectoryError",
+    "RunLockedError",
+    "RunIOError",
     "structure_constants",
     "poisson_tensor",
     "bracket",
@@ -61,7 +68,13 @@ __all__ = [
     "nu",
     "nu_squared",
     "branch_points",
+    "Map",
     "MapProperties",
+    "Advance",
+    "Backend",
+    "Branch",
+    "map_from_description",
+    "FlowMap",
     "OnePointBacklund",
     "TwoPointBacklund",
     "Trajectory",

@@ -16,6 +16,9 @@ __all__ = [
     "OffLeafError",
     "IntegrationError",
     "RecordingError",
+    "RunDirectoryError",
+    "RunLockedError",
+    "RunIOError",
 ]
 
 
@@ -49,3 +52,17 @@ class IntegrationError(JetGaudinError):
 
 class RecordingError(JetGaudinError):
     """A run directory cannot be written, read or resumed (unwritable, corrupted, inconsistent)."""
+
+
+class RunDirectoryError(RecordingError):
+    """A run directory (or a file in it) is refused: it holds another run or foreign files, a file in it is a
+    symbolic link, a FIFO or too large, or it cannot be created.  Nothing has been written (CLI exit code 2)."""
+
+
+class RunLockedError(RunDirectoryError):
+    """Another process holds the run directory's lock (one writer per run directory)."""
+
+
+class RunIOError(RecordingError):
+    """Writing a run failed (I/O error, full disk): the run ends as failed with its last durable checkpoint
+    (CLI exit code 1, not 2: the input was fine)."""

@@ -14,15 +14,23 @@ Prop. 2 fixed) and :func:`sample_on_energy_shell` (states with ``H = H_2/2`` of 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
-from .backlund.maps import _sheet
+from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
+from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
+from .spectral import integrals as _jg_integrals
 
-__all__ = ["EnsembleResult", "iterate_ensemble", "dask_client", "sample_on_leaf", "sample_on_energy_shell"]
+__all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
+           "sample_on_energy_shell", "DEFAULT_CASIMIRS"]
+
+#: the leaf ``ensemble`` samples when given neither ``--input`` nor ``--sample`` (N = 3): the Casimirs of the
+#: Appendix 2 initial state rounded, ``C = (0.4, -0.3, 1.5)`` (any leaf with ``C_N > 0`` works)
+DEFAULT_CASIMIRS = (0.4, -0.3, 1.5)
 
 
 @dataclass(frozen=True)
@@ -68,16 +76,97 @@ def _per_orbit(value, B, name, dtype):
 
 
 def _check_int(value, name, minimum):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise InvalidParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    return check_count(value, name, minimum)
+
+
+def per_orbit_integrals(X, b):
+    """``jg.integrals`` with a per-orbit field ``b`` (shape ``(B,)``, broadcast over leading axes of ``X``).
+
+    One field for all orbits (the usual case): exactly :func:`jetgaudin.integrals`.  Several: ``H_k`` is affine
+    in ``b`` (``H_k = 2 b y_{k-1}^3 + …``, ``C_k`` does not depend on it), so ``I(b) = I(1) + 2 (b − 1) y^3``.
+    """
+    b = np.asarray(b, dtype=float)
+    if b.size == 0 or np.all(b == b.flat[0]):
+        return np.asarray(_jg_integrals(X, float(b.flat[0]) if b.size else 1.0), dtype=float)
+    X = np.asarray(X, dtype=float)
+    N = X.shape[-1] // 3
+    I = np.array(_jg_integrals(X, 1.0), dtype=float)
+    I[..., :N] += 2.0 * (b[..., None] - 1.0) * X[..., 2::3]
+    return I
+
+
+@dataclass(frozen=True, eq=False)
+class BatchBacklund(Map):
+    r"""The real two-point map on a batch ``(B, 3N)`` with a field ``b_i`` and a parameter ``η_i`` per orbit
+    (arrays ``(B,)``), compiled route (:func:`iterate_ensemble`; the carry is ``ν1`` ``(B,)``).  Orbit ``i`` equals
+    ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ..., kernel="compiled")`` bit for bit.  ``scheduler`` /
+    ``chunk_size``: run each call on a Dask cluster (same bits)."""
+
+    b: np.ndarray
+    eta: np.ndarray
+    branch: Branch = Branch.DEFAULT
+    scheduler: Any = field(default=None, repr=False)
+    chunk_size: int | None = None
+    properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        b = np.atleast_1d(np.asarray(self.b))
+        B = b.shape[0] if b.ndim == 1 else -1
+        bb = _per_orbit(self.b, B, "b", float)
+        if np.any(bb == 0):
+            raise InvalidParameterError("the field strength b must be nonzero for every orbit (the map divides by b)")
+        ee = _per_orbit(self.eta, B, "eta", complex)
+        if np.any(ee.imag == 0):
+            raise InvalidParameterError(
+                "eta must have a nonzero imaginary part for every orbit (Im eta = 0 is the identity map); "
+                "give eta off the real axis"
+            )
+        object.__setattr__(self, "b", bb)
+        object.__setattr__(self, "eta", ee)
+        object.__setattr__(self, "branch", Branch.parse(self.branch))
+
+    @property
+    def backend(self) -> Backend:
+        return Backend.COMPILED
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        return per_orbit_integrals(X, self.b)
+
+    def start(self, X: np.ndarray) -> np.ndarray:
+        from .backlund._compiled import kernels
+
+        X, _ = as_state(X)
+        return kernels().nu_default(np.ascontiguousarray(X.reshape(-1, X.shape[-1])), self.b, self.eta,
+                                    self.branch.sheet)
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        """One NumPy step per orbit (the reference route; for checks, not speed)."""
+        from .backlund.maps import TwoPointBacklund
+
+        out = [TwoPointBacklund(self.b[i], self.eta[i], self.branch).step(X[i], None if carry is None else carry[i])
+               for i in range(len(X))]
+        return (np.array([o[0] for o in out]), np.array([o[1] for o in out], dtype=complex),
+                np.array([o[2] for o in out], dtype=float))
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        res = iterate_ensemble(X, self.b, self.eta, steps, save_every=save_every, branch=self.branch, nu1=carry,
+                               scheduler=self.scheduler, chunk_size=self.chunk_size)
+        return Advance(rows=res.states[1:], X=res.final, carry=res.nu, imag_max=np.zeros(len(res.final)))
+
+    def inverse(self) -> BatchBacklund:
+        other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
+        return BatchBacklund(self.b, self.eta, other, self.scheduler, self.chunk_size)
+
+    def describe(self) -> dict:
+        return {"kind": "two_point_batch", "b": self.b.tolist(), "eta": [[e.real, e.imag] for e in self.eta],
+                "branch": self.branch.value}
 
 
 def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise):
     """Run one chunk with the compiled kernels; returns arrays and status (no exception: for Dask)."""
-    from .backlund import _kernels
+    from .backlund._compiled import kernels
 
-    return _kernels.run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
+    return kernels().run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
 
 
 def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="default", nu1=None,
@@ -123,9 +212,9 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     X = np.ascontiguousarray(X)
     if nu1 is None:
         cont = False
-        from .backlund._kernels import nu_default
+        from .backlund._compiled import kernels
 
-        nu0 = nu_default(X, bb, ee, sheet)
+        nu0 = kernels().nu_default(X, bb, ee, sheet)
     else:
         cont = True
         nu0 = _per_orbit(nu1, B, "nu1", complex)
@@ -137,10 +226,10 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
         )
     bad = np.flatnonzero(status)
     if bad.size:
-        from .backlund._kernels import status_error
+        from .backlund._compiled import kernels
 
         i = int(bad[0])
-        exc = status_error(status[i], fail[i], i)
+        exc = kernels().status_error(status[i], fail[i], i)
         raise type(exc)(f"{exc} ({bad.size} orbit(s) of {B} failed)")
     return EnsembleResult(
         states=np.moveaxis(out, 0, 1),

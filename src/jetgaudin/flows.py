@@ -3,12 +3,15 @@ r"""Continuous Hamiltonian flows ``Ẋ = Π(X) ∇H`` on :math:`\mathfrak g^{(N)
 One driver, :func:`integrate`, for any :class:`~jetgaudin.hamiltonians.IntegralHamiltonian`
 (or any object with ``vector_field(X)``); methods: SciPy's DOP853 (default) or heyoka's
 Taylor integrator (``method="heyoka"``, extra ``jetgaudin[heyoka]``).  Returns a
-:class:`Trajectory` with the drift of every integral.
+:class:`Trajectory` with the drift of every integral.  :class:`FlowMap` is the flow over a fixed time step
+``dt`` as a :class:`~jetgaudin.maps.Map`, so that the run layer records a flow like an orbit.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
@@ -16,9 +19,24 @@ from ._errors import IntegrationError, InvalidParameterError
 from ._validate import as_state
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
+from .maps import Advance, Map, MapProperties, check_count, register_map
 from .spectral import integrals
 
-__all__ = ["Trajectory", "integrate"]
+__all__ = ["Trajectory", "integrate", "Method", "FlowMap"]
+
+
+class Method(StrEnum):
+    """Integration method of :func:`integrate`: SciPy's DOP853 or heyoka's Taylor integrator."""
+
+    DOP853 = "DOP853"
+    HEYOKA = "heyoka"
+
+    @classmethod
+    def parse(cls, value: Method | str) -> Method:
+        try:
+            return cls(value)
+        except ValueError:
+            raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {value!r}") from None
 
 
 @dataclass(frozen=True)
@@ -140,8 +158,8 @@ def _check_tol(name, val, positive):
     return val
 
 
-def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: float = 1e-12, atol: float = 1e-12,
-              b=None) -> Trajectory:
+def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP853, rtol: float = 1e-12,
+              atol: float = 1e-12, b=None) -> Trajectory:
     r"""Integrate ``Ẋ = Π(X) ∇H`` from ``X0`` over ``[0, T]`` (``T < 0``: backwards).
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
@@ -163,8 +181,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     T, t_eval = _check_times(T, t_eval)
     rtol = _check_tol("rtol", rtol, True)
     atol = _check_tol("atol", atol, False)
-    if method not in ("DOP853", "heyoka"):
-        raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {method!r}")
+    method = Method.parse(method)
     is_integral = isinstance(H, IntegralHamiltonian)
     # quadratic Hamiltonians on another Lie-Poisson space (a chain) declare their structure constants
     affine = is_integral or getattr(H, "structure_constants", None) is not None
@@ -180,7 +197,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     shape = X0.shape
     if T == 0:
         Xs = np.broadcast_to(X0, (len(t_eval),) + shape).copy()
-    elif method == "DOP853":
+    elif method is Method.DOP853:
         if affine:
             rhs = _fast_rhs(H, X0)
         else:
@@ -218,4 +235,98 @@ def integrate(H, X0, T: float, *, t_eval=None, method: str = "DOP853", rtol: flo
     if not np.all(np.isfinite(Xs)):
         raise IntegrationError(f"{method} produced non-finite states (the orbit blew up); reduce T or the tolerances")
     recorded = record(Xs) if callable(record) else integrals(Xs, bb, cc)
-    return Trajectory(t=t_eval, X=Xs, integrals=recorded, method=method)
+    return Trajectory(t=t_eval, X=Xs, integrals=recorded, method=method.value)
+
+
+#: largest time step of a FlowMap: an adaptive integrator takes at least one step per unit of the orbit's own time
+#: scale (O(1) for states of size O(1)); a step of 1e6 time units already means millions of integrator steps per
+#: map step.  Larger steps are refused rather than left running without end (issue 11, item 8).
+MAX_FLOW_DT = 1e6
+
+_FLOW_PROPERTIES = MapProperties(
+    preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True, interpolates_flow=False
+)
+
+
+@dataclass(frozen=True, eq=False)
+class FlowMap(Map):
+    r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) over a fixed time step ``dt``, as a :class:`~jetgaudin.maps.Map`.
+
+    ``H``: an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian`, or
+    :func:`jetgaudin.interpolating_flow_hamiltonian`, whose time-1 flow from its ``X0`` is the two-point map);
+    ``method``, ``rtol``, ``atol`` as in :func:`integrate`.  :meth:`advance` integrates ``steps * dt`` in one
+    call sampled every ``save_every * dt`` (an adaptive integrator restarted at other times gives other
+    round-off: a flow is reproducible for a given chunking, not bit for bit across chunkings; the run layer
+    therefore cuts flows into fixed chunks, ``chunk_invariant = False``).  No carry (zeros).
+    """
+
+    H: IntegralHamiltonian
+    dt: float
+    method: Method = Method.DOP853
+    rtol: float = 1e-12
+    atol: float = 1e-12
+    properties: MapProperties = field(default=_FLOW_PROPERTIES, init=False, repr=False, compare=False)
+    chunk_invariant = False
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.H, IntegralHamiltonian):
+            raise InvalidParameterError("H must be an IntegralHamiltonian (physical_hamiltonian, ...)")
+        dt = _check_tol("dt", self.dt, True)
+        if dt > MAX_FLOW_DT:
+            raise InvalidParameterError(f"dt = {dt:g} is too large: one map step would integrate over {dt:g} time "
+                                        f"units (hours to forever); give dt <= {MAX_FLOW_DT:g} and more steps")
+        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "method", Method.parse(self.method))
+        object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
+        object.__setattr__(self, "atol", _check_tol("atol", self.atol, False))
+
+    @property
+    def n_state(self) -> int:
+        return 3 * self.H.N
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        return np.asarray(integrals(X, self.H.b, self.H.c), dtype=float)
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        tr = integrate(self.H, X, self.dt, method=self.method, rtol=self.rtol, atol=self.atol)
+        X1 = tr.X[-1]
+        return X1, np.zeros(X1.shape[:-1], dtype=complex), np.zeros(X1.shape[:-1])
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X, _ = as_state(X)
+        zeros = np.zeros(X.shape[:-1], dtype=complex)
+        if steps == 0:
+            return Advance(rows=np.empty((0,) + X.shape), X=X.copy(), carry=zeros, imag_max=zeros.real)
+        k = steps // save_every
+        t = np.arange(1, k + 1) * (save_every * self.dt)
+        T = steps * self.dt
+        t_eval = t if (k and steps % save_every == 0) else np.concatenate([t, [T]])
+        tr = integrate(self.H, X, T, t_eval=t_eval, method=self.method, rtol=self.rtol, atol=self.atol)
+        return Advance(rows=tr.X[:k], X=tr.X[-1], carry=zeros, imag_max=zeros.real)
+
+    def inverse(self) -> FlowMap:
+        """The flow backwards in time (``dt → −dt``)."""
+        return _flow_map(self.H, -self.dt, self.method, self.rtol, self.atol)
+
+    def describe(self) -> dict:
+        b = np.asarray(self.H.b, dtype=float)
+        return {"kind": "flow", "b": b.tolist(), "weights": np.asarray(self.H.weights).tolist(),
+                "c": None if self.H.c is None else np.asarray(self.H.c).tolist(), "dt": self.dt,
+                "method": self.method.value, "rtol": self.rtol, "atol": self.atol}
+
+
+def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float) -> FlowMap:
+    """A flow map with any nonzero ``dt`` (the constructor takes ``dt > 0``; the inverse runs backwards)."""
+    m = FlowMap(H, abs(dt), method, rtol, atol)
+    object.__setattr__(m, "dt", float(dt))
+    return m
+
+
+def _flow_from(d: dict) -> FlowMap:
+    H = IntegralHamiltonian(d["b"], np.asarray(d["weights"], dtype=float), d.get("c"))
+    return _flow_map(H, float(d["dt"]), Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
+
+
+register_map("flow", _flow_from)

@@ -18,13 +18,16 @@ Conventions (see ``docs/backlund.md``, section 1):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import as_state, nonzero_field, spectral_parameter
 from ..lax import ell_coefficients, state_from_ell
-from ..spectral import _nu_from_kappa, curve_coefficients
+from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
+from ..spectral import _nu_from_kappa, curve_coefficients, integrals
+from . import _compiled
 from ._dressing import (
     _safe_ratio,
     dress_one_point,
@@ -38,6 +41,8 @@ from ._dressing import (
 )
 
 __all__ = [
+    "Backend",
+    "Branch",
     "MapProperties",
     "OnePointBacklund",
     "TwoPointBacklund",
@@ -46,35 +51,14 @@ __all__ = [
     "two_point_general",
 ]
 
-_BRANCHES = {"default": 1, "opposite": -1}
-
 #: tolerance on the relative residual of the exact division (round-off level: the division
 #: is exact in exact arithmetic; values above this mean the spectral data are inconsistent)
 _RESIDUAL_TOL = 1e-8
 
 
-def _sheet(branch) -> int:
-    if branch in _BRANCHES:
-        return _BRANCHES[branch]
-    if branch in (1, -1):
-        return int(branch)
-    raise InvalidParameterError(f"branch must be 'default' or 'opposite' (or +1/-1), got {branch!r}")
-
-
-@dataclass(frozen=True)
-class MapProperties:
-    """Declared properties of a map; every ``True`` claim is asserted by ``tests/test_backlund.py``.
-
-    ``order`` is the order of the map as an integrator of the flow of ``ν(Re η)`` with time step
-    ``−2 Im η`` in the limit ``Im η → 0`` (``None``: not an integrator of a real flow).
-    """
-
-    preserves_integrals: bool
-    poisson: bool
-    real: bool
-    order: int | None
-    symmetric: bool  # the map with the other branch (or conj eta) is the inverse
-    interpolates_flow: bool  # equals the time-1 flow of G_eta
+def _sheet(branch: Branch | str | int) -> int:
+    """``+1``/``-1`` for a branch (enum, name or sheet); :class:`InvalidParameterError` otherwise."""
+    return Branch.parse(branch).sheet
 
 
 def _nu_default(X, b, eta, sheet):
@@ -140,15 +124,43 @@ def _check_residual(res, ell, what):
         )
 
 
+def _check_nu(nu: Any, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """``nu`` broadcast to ``shape`` (complex, finite); :class:`InvalidParameterError` otherwise."""
+    try:
+        arr = np.broadcast_to(np.asarray(nu, dtype=complex), shape)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a complex number or an array of shape {shape}") from None
+    if not np.all(np.isfinite(arr)):
+        raise InvalidParameterError(f"{name} must be finite (NaN or inf given)")
+    return arr
+
+
+def _empty_advance(X: np.ndarray, steps: int, save_every: int, carry: Any) -> Advance:
+    """The advance of a batch of zero orbits (both routes: nothing to compute)."""
+    return Advance(rows=np.empty((steps // save_every,) + X.shape, dtype=X.dtype), X=X.copy(), carry=carry,
+                   imag_max=np.zeros(X.shape[:-1]))
+
+
+_TWO_POINT_PROPERTIES = MapProperties(
+    preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
+)
+_ONE_POINT_PROPERTIES = MapProperties(
+    preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
+)
+
+
 @dataclass(frozen=True)
-class TwoPointBacklund:
+class TwoPointBacklund(Map):
     r"""The real two-point Bäcklund map ``B_η: X ↦ X̆`` (Section 6.2, Appendix 1), any N.
 
     ``X̆`` solves ``M(λ) L(λ) = L̆(λ) M(λ)`` (eq. (128)) with ``M = λ + M0(s, t)`` of (mm),
     ``η1 = η``, ``η2 = η̄``, ``ν1 = ν(η)`` on the chosen branch and ``ν2 = conj ν1``.
-    Field ``b e_3`` (``b ≠ 0``).  Maps real states ``(..., 3N)`` to real states; it preserves the
-    2N integrals, is a Poisson map, commutes with itself for other ``η``, has the ``"opposite"``
-    branch as inverse, and equals the time-1 flow of ``G_η`` (:func:`jetgaudin.interpolating_hamiltonian`).
+    Field ``b e_3`` (``b ≠ 0``); ``Im η ≠ 0`` (``Im η`` is the time step: ``Im η = 0`` would be the identity
+    map and is refused with :class:`InvalidParameterError`).  Maps real states ``(..., 3N)`` to real states;
+    it preserves the 2N integrals, is a Poisson map, commutes with itself for other ``η``, has the
+    ``"opposite"`` branch as inverse, and equals the time-1 flow of ``G_η``
+    (:func:`jetgaudin.interpolating_hamiltonian`).  ``backend``: :class:`~jetgaudin.maps.Backend` of
+    :meth:`advance` / :meth:`iterate` (the carry is ``ν1``).
 
     >>> import jetgaudin as jg
     >>> B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
@@ -163,28 +175,41 @@ class TwoPointBacklund:
 
     b: float
     eta: complex
-    branch: str = "default"
-    properties: MapProperties = field(
-        default=MapProperties(
-            preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
-        ),
-        init=False,
-        repr=False,
-        compare=False,
-    )
+    branch: Branch = Branch.DEFAULT
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
-        _sheet(self.branch)
+        object.__setattr__(self, "branch", Branch.parse(self.branch))
+        object.__setattr__(self, "backend", Backend.parse(self.backend))
+        if self.eta.imag == 0:
+            raise InvalidParameterError(
+                "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: Im eta is the time step "
+                "of the real two-point map); give e.g. eta = 5+0.1i"
+            )
 
     @property
     def sheet(self) -> int:
-        return _sheet(self.branch)
+        return self.branch.sheet
 
     def inverse(self) -> TwoPointBacklund:
         """The inverse map: the same ``η`` on the other branch."""
-        return TwoPointBacklund(self.b, self.eta, "opposite" if self.sheet == 1 else "default")
+        other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
+        return TwoPointBacklund(self.b, self.eta, other, self.backend)
+
+    def describe(self) -> dict:
+        return {"kind": "two_point", "b": self.b, "eta": [self.eta.real, self.eta.imag],
+                "branch": self.branch.value, "backend": self.backend.value}
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        """``(H_1..H_N, C_1..C_N)`` at ``X`` (:func:`jetgaudin.integrals` with this field), shape ``(..., 2N)``."""
+        return np.asarray(integrals(X, self.b), dtype=float)
+
+    def start(self, X: np.ndarray) -> np.ndarray:
+        """``ν1`` by the branch rule at ``X`` (as :meth:`nu1`)."""
+        return np.asarray(self.nu1(X), dtype=complex)
 
     def nu1(self, X):
         """``ν1 = ±ν(η)`` used by the map at ``X`` (default branch times the sheet)."""
@@ -207,14 +232,12 @@ class TwoPointBacklund:
         ``nu1=None``: ``ν1`` from the branch rule; otherwise the root of ``ν(η)²`` closest to ``nu1``
         (continuation along an orbit)."""
         X, _ = as_state(X)
-        if self.eta.imag == 0:
-            return X.copy(), nu1, np.zeros(X.shape[:-1])
         # work on a 2-D batch: NumPy's scalar and 0-d paths round complex arithmetic differently from its
         # array loops, and a single orbit must equal its ensemble member bit for bit
         shape = X.shape
         X = X.reshape(-1, shape[-1])
         if nu1 is not None:
-            nu1 = np.asarray(nu1, dtype=complex).reshape(-1)
+            nu1 = _check_nu(nu1, shape[:-1], "nu1").reshape(-1)
         ell = ell_coefficients(X, self.b)
         if nu1 is None:
             nu1 = _nu_default(X, self.b, self.eta, self.sheet)
@@ -232,76 +255,72 @@ class TwoPointBacklund:
             raise SingularStepError("two-point Bäcklund step produced non-finite values; change eta")
         return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
-    def __call__(self, X):
-        """Apply the map to states of shape ``(..., 3N)``."""
-        return self.step(X)[0]
+    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
+        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` (``AUTO`` resolved by
+        :func:`auto_kernel`)."""
+        if self.backend is not Backend.AUTO:
+            return self.backend
+        return Backend(auto_kernel(steps, X.shape[-1], X.shape[:-1]))
 
-    def iterate(self, X0, steps: int, *, save_every: int = 1, kernel: str = "auto", nu1=None,
-                return_nu: bool = False):
-        """Orbit ``X_0, X_k, X_2k, …, X_{⌊steps/k⌋k}`` (``k = save_every``), shape ``(steps//k + 1, ..., 3N)``.
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """``steps`` steps from ``X`` ``(..., 3N)`` continuing from ``carry = ν1`` (``None``: the branch rule at
+        ``X``); rows every ``save_every`` steps.  NumPy route: a loop over :meth:`step` (imaginary residue of
+        every step); compiled route: the Numba kernels (``ν1`` at ``X`` by the compiled branch rule, equal to
+        the NumPy rule to round-off; ``imag_max`` zeros: the residue is not computed)."""
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X, _ = as_state(X)
+        if carry is not None:
+            carry = _check_nu(carry, X.shape[:-1], "nu1")
+        if X.size == 0:
+            return _empty_advance(X, steps, save_every, carry)
+        if self.resolved_backend(steps, X) is Backend.COMPILED:
+            return self._advance_compiled(X, carry, steps, save_every)
+        return step_loop(self, X, carry, steps, save_every)
 
-        ``ν(η)`` is taken on the chosen branch at ``X_0`` and continued along the orbit (it depends on
-        the state only through the preserved integrals).  ``nu1`` (shape ``(...)``): continue from
-        this value instead (the ``ν1`` of the step before ``X_0``; a run split in chunks, each given
-        the previous chunk's last ``ν1``, equals the unsplit run bit for bit).  ``return_nu=True``
-        returns ``(orbit, ν1)`` with the last ``ν1`` used.
-
-        ``kernel``: ``"numpy"`` (the reference route), ``"compiled"`` (Numba kernels of
-        :mod:`jetgaudin.backlund._kernels`, N = 3 with a specialised kernel; the same orbits to round-off,
-        ``ν1`` at ``X_0`` by the compiled branch rule; the imaginary residue of the steps is not computed)
-        or ``"auto"`` (:func:`auto_kernel`: compiled when its kernels are already loaded in the process,
-        or from 2000 orbit-steps on when Numba's on-disk cache holds them (loading costs about 1000 NumPy
-        steps), or from 20000 on when they must first be compiled (about 6 s); NumPy otherwise).
-        A batch ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both kernels).
-        """
-        steps = _check_steps(steps)
-        if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
-            raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
-        save_every = int(save_every)
-        if kernel not in ("auto", "numpy", "compiled"):
-            raise InvalidParameterError(f"kernel must be 'auto', 'numpy' or 'compiled', got {kernel!r}")
-        X, _ = as_state(X0)
-        if nu1 is not None:
-            nu1 = np.broadcast_to(np.asarray(nu1, dtype=complex), X.shape[:-1])
-            if not np.all(np.isfinite(nu1)):
-                raise InvalidParameterError("nu1 must be finite")
-        use_compiled = kernel == "compiled" or (
-            kernel == "auto" and auto_kernel(steps, X.shape[-1], X.shape[:-1]) == "compiled"
-        )
-        if self.eta.imag == 0:  # the map is the identity (step() returns X)
-            use_compiled = False
-        if use_compiled:
-            orbit, nu_last = self._iterate_compiled(X, steps, save_every, nu1)
-        else:
-            orbit = np.empty((steps // save_every + 1,) + X.shape)
-            orbit[0] = X
-            nu_last = nu1
-            for n in range(steps):
-                X, nu_last, _ = self.step(X, nu_last)
-                if (n + 1) % save_every == 0:
-                    orbit[(n + 1) // save_every] = X
-        return (orbit, nu_last) if return_nu else orbit
-
-    def _iterate_compiled(self, X, steps, save_every, nu1):
-        from . import _kernels
-
-        cont = nu1 is not None
+    def _advance_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
+        K = _compiled.kernels()
+        cont = carry is not None
         lead = X.shape[:-1]
         Xb = X.reshape(-1, X.shape[-1])
         B = Xb.shape[0]
         bb, ee = np.full(B, self.b), np.full(B, self.eta, dtype=complex)
-        # ν1 at X0 by the compiled branch rule (equal to the NumPy rule to round-off), as in jetgaudin.ensemble
-        nu0 = np.reshape(nu1, -1) if cont else _kernels.nu_default(Xb, bb, ee, self.sheet)
+        nu0 = np.reshape(carry, -1) if cont else K.nu_default(Xb, bb, ee, self.sheet)
         if X.ndim == 1:
-            out, _, _, nu = _kernels.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
-                                                   want_drift=False)
-            return out, np.complex128(nu)
-        out, _, _, nu = _kernels.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every)
+            out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
+                                                 want_drift=False)
+            return Advance(rows=out[1:], X=final, carry=np.complex128(nu), imag_max=np.zeros(()))
+        out, final, _, nu = K.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
-        return orbit, nu.reshape(lead)
+        return Advance(rows=orbit[1:], X=final.reshape(X.shape), carry=nu.reshape(lead), imag_max=np.zeros(lead))
+
+    def iterate(self, X0, steps: int, *, save_every: int = 1, kernel: Backend | str | None = None, nu1=None,
+                return_nu: bool = False, carry=None, return_carry: bool = False):
+        """Orbit ``X_0, X_k, X_2k, …, X_{⌊steps/k⌋k}`` (``k = save_every``), shape ``(steps//k + 1, ..., 3N)``.
+
+        ``ν(η)`` is taken on the chosen branch at ``X_0`` and continued along the orbit (it depends on
+        the state only through the preserved integrals).  ``nu1`` (alias ``carry``, shape ``(...)``): continue
+        from this value instead (the ``ν1`` of the step before ``X_0``; a run split in chunks, each given
+        the previous chunk's last ``ν1``, equals the unsplit run bit for bit).  ``return_nu=True`` (alias
+        ``return_carry``) returns ``(orbit, ν1)`` with the last ``ν1`` used.
+
+        ``kernel`` (a :class:`~jetgaudin.maps.Backend` or its value; default: the map's ``backend``):
+        ``"numpy"`` (the reference route), ``"compiled"`` (Numba kernels, N = 3 with a specialised kernel; the
+        same orbits to round-off, ``ν1`` at ``X_0`` by the compiled branch rule; the imaginary residue of the
+        steps is not computed) or ``"auto"`` (:func:`auto_kernel`: compiled when its kernels are already
+        loaded in the process, or from 2000 orbit-steps on when Numba's on-disk cache holds them (loading costs
+        about 1000 NumPy steps), or from 20000 on when they must first be compiled (about 6 s); NumPy
+        otherwise).  A batch ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both
+        routes).
+        """
+        m = self if kernel is None else TwoPointBacklund(self.b, self.eta, self.branch, Backend.parse(kernel))
+        X0, _ = as_state(X0)
+        out = Map.iterate(m, X0, steps, save_every=save_every, carry=nu1 if carry is None else carry,
+                          return_carry=True)
+        return out if (return_nu or return_carry) else out[0]
 
 
-#: "auto" uses the compiled kernels once they are loaded, and otherwise from this many orbit-steps on.
+#: AUTO uses the compiled kernels once they are loaded, and otherwise from this many orbit-steps on.
 #: Measured (benchmarks/, part f): in a fresh process, importing Numba and loading the cached kernels costs
 #: ~0.3 s, the time of ~1000 steps of the NumPy route (~3500 steps/s); once loaded, the compiled route is
 #: faster from the first step (~0.1 µs per step against ~300 µs).
@@ -310,40 +329,12 @@ _AUTO_MIN_WORK = 2000
 #: them takes ~6 s here (measured: 5.9 s for the N = 3 orbit kernel and the branch rule), ~20000 NumPy steps.
 _AUTO_MIN_WORK_COLD = 20000
 
-
-def _kernel_names(n_state: int, batch: bool) -> tuple[str, ...]:
-    """The compiled functions a run of this shape calls (see ``_kernels.iterate_single/iterate_batch``)."""
-    if batch:
-        return ("run_ensemble", "_nu_default_serial")
-    return ("run_orbit3" if n_state == 9 else "run_orbit", "_nu_default_serial")
+_kernel_names = _compiled.kernel_names
+_kernels_state = _compiled.kernel_state
 
 
-def _kernels_state(names) -> str:
-    """``"loaded"`` (compiled in this process), ``"cached"`` (index files in Numba's cache) or ``"cold"``.
-
-    Looks at the files only (no Numba import): Numba caches next to the source in ``__pycache__`` when that
-    is writable, else under ``NUMBA_CACHE_DIR`` or the user-wide cache directory.  A wrong guess costs time,
-    never correctness: both kernels give the same orbits to round-off.
-    """
-    import glob
-    import os
-    import sys
-
-    mod = sys.modules.get("jetgaudin.backlund._kernels")
-    if mod is not None and all(getattr(getattr(mod, n, None), "signatures", None) for n in names):
-        return "loaded"
-    in_tree = os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__")
-    elsewhere = [d for d in (os.environ.get("NUMBA_CACHE_DIR"), os.path.expanduser("~/.cache/numba")) if d]
-    for n in names:
-        pattern = f"_kernels.{n}-*.nbi"
-        if not (glob.glob(os.path.join(in_tree, pattern))
-                or any(glob.glob(os.path.join(d, "**", pattern), recursive=True) for d in elsewhere)):
-            return "cold"
-    return "cached"
-
-
-def auto_kernel(steps: int, n_state: int, batch_shape=()) -> str:
-    """The kernel ``kernel="auto"`` picks for ``steps`` steps of ``prod(batch_shape)`` orbits of ``n_state`` = 3N
+def auto_kernel(steps: int, n_state: int, batch_shape: tuple[int, ...] = ()) -> str:
+    """The backend ``"auto"`` picks for ``steps`` steps of ``prod(batch_shape)`` orbits of ``n_state`` = 3N
     components: ``"compiled"`` when it pays off (kernels loaded; or cached and at least ``_AUTO_MIN_WORK``
     orbit-steps; or at least ``_AUTO_MIN_WORK_COLD`` orbit-steps), else ``"numpy"``."""
     work = int(steps) * max(1, int(np.prod(batch_shape)))
@@ -354,14 +345,8 @@ def auto_kernel(steps: int, n_state: int, batch_shape=()) -> str:
     return "compiled" if work >= threshold else "numpy"
 
 
-def _check_steps(steps) -> int:
-    if isinstance(steps, bool) or not isinstance(steps, (int, np.integer)) or steps < 0:
-        raise InvalidParameterError(f"steps must be a non-negative integer, got {steps!r}")
-    return int(steps)
-
-
 @dataclass(frozen=True)
-class OnePointBacklund:
+class OnePointBacklund(Map):
     r"""The complex one-point Bäcklund map ``B_(η, ν)`` of Section 6.1 (or its inverse), any N,
     field ``b e_3``.
 
@@ -374,34 +359,40 @@ class OnePointBacklund:
     ``B_(η, −μ)``; it is *not* the forward map on the other sheet.
 
     ``ν = ±ν(η)`` by the branch rule of :func:`jetgaudin.nu` (principal root at ``Re η`` for complex
-    states), ``branch="opposite"`` taking ``−ν(η)``.  Real input gives complex output.
+    states), ``branch="opposite"`` taking ``−ν(η)``.  Real input gives complex output.  The carry of
+    :meth:`advance` is ``ν``; the imaginary residue is not defined (zeros).
     """
 
     b: float
     eta: complex
-    branch: str = "default"
+    branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
-    properties: MapProperties = field(
-        default=MapProperties(
-            preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
-        ),
-        init=False,
-        repr=False,
-        compare=False,
-    )
+    properties: MapProperties = field(default=_ONE_POINT_PROPERTIES, init=False, repr=False, compare=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
-        _sheet(self.branch)
+        object.__setattr__(self, "branch", Branch.parse(self.branch))
 
     @property
     def sheet(self) -> int:
-        return _sheet(self.branch)
+        return self.branch.sheet
 
     def inverse(self) -> OnePointBacklund:
         """The inverse map (same ``η`` and branch)."""
         return OnePointBacklund(self.b, self.eta, self.branch, not self.inverse_map)
+
+    def describe(self) -> dict:
+        return {"kind": "one_point", "b": self.b, "eta": [self.eta.real, self.eta.imag],
+                "branch": self.branch.value, "inverse": bool(self.inverse_map)}
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        """``(H_1..H_N, C_1..C_N)`` at (complex) ``X``, shape ``(..., 2N)``."""
+        X, _ = as_state(X, allow_complex=True)
+        return np.asarray(integrals(X, self.b))
+
+    def start(self, X: np.ndarray) -> np.ndarray:
+        return np.asarray(self.nu(X), dtype=complex)
 
     def nu(self, X):
         """``±ν(η)`` at ``X`` on the chosen branch."""
@@ -417,7 +408,7 @@ class OnePointBacklund:
         if nu is None:
             nu = _nu_default(X, self.b, self.eta, self.sheet)
         else:
-            nu = _continue_nu(ell, self.eta, np.asarray(nu, dtype=complex))
+            nu = _continue_nu(ell, self.eta, _check_nu(nu, X.shape[:-1], "nu"))
         L = horner(ell, self.eta)
         u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
         if self.inverse_map:
@@ -432,8 +423,9 @@ class OnePointBacklund:
         return p, q, nu
 
     def step(self, X, nu=None):
-        """One step; returns ``(X̃, ν)`` (``X̃`` complex).  ``nu``: continue from this ``ν`` (the root of
-        ``ν(η)²`` closest to it) instead of applying the branch rule."""
+        """One step; returns ``(X̃, ν, imag_residue)`` (``X̃`` complex, the residue zeros: not defined for a
+        complex map).  ``nu``: continue from this ``ν`` (the root of ``ν(η)²`` closest to it) instead of
+        applying the branch rule."""
         X, _ = as_state(X, allow_complex=True)
         p, q, nu = self.parameters(X, nu)
         ell = ell_coefficients(X, self.b)
@@ -442,24 +434,40 @@ class OnePointBacklund:
         out = state_from_ell(new_ell)
         if not np.all(np.isfinite(out)):
             raise SingularStepError("one-point Bäcklund step produced non-finite values; change eta")
-        return out, nu
+        return out, nu, np.zeros(X.shape[:-1])
 
     def __call__(self, X):
         """Apply the map to states of shape ``(..., 3N)`` (real or complex); complex output."""
         return self.step(X)[0]
 
-    def iterate(self, X0, steps: int):
-        """Orbit ``X_0, …, X_steps`` (complex), shape ``(steps + 1, ..., 3N)``.
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
+        """Orbit ``X_0, …, X_steps`` (complex), shape ``(steps//save_every + 1, ..., 3N)``.
 
         ``ν`` is taken by the branch rule at ``X_0`` and continued along the orbit (the map preserves ``ν(η)²``).
         The states grow complex and, in general, large: the one-point map is not a physical (real) map.
         """
-        steps = _check_steps(steps)
         X, _ = as_state(X0, allow_complex=True)
-        out = np.empty((steps + 1,) + X.shape, dtype=complex)
-        out[0] = X
-        nu = None
-        for n in range(steps):
-            X, nu = self.step(X, nu)
-            out[n + 1] = X
-        return out
+        return Map.iterate(self, X.astype(complex), steps, save_every=save_every, carry=carry,
+                           return_carry=return_carry)
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """A loop over :meth:`step` (``carry=None``: the branch rule at the first step)."""
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X, _ = as_state(X, allow_complex=True)
+        X = X.astype(complex)
+        if X.size == 0:
+            return _empty_advance(X, steps, save_every, carry)
+        return step_loop(self, X, carry, steps, save_every)
+
+
+def _two_point_from(d: dict) -> TwoPointBacklund:
+    return TwoPointBacklund(d["b"], complex(*d["eta"]), d.get("branch", "default"), d.get("backend", "auto"))
+
+
+def _one_point_from(d: dict) -> OnePointBacklund:
+    return OnePointBacklund(d["b"], complex(*d["eta"]), d.get("branch", "default"), bool(d.get("inverse", False)))
+
+
+register_map("two_point", _two_point_from)
+register_map("one_point", _one_point_from)

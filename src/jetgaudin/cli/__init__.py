@@ -5,7 +5,7 @@ of ``H_2/2`` or ``G_η``, ``--compare`` with the map), ``info`` (integrals, Casi
 state).  Other modules add commands with ``from . import app`` and ``@app.command()``; they are imported
 at the end of this module if present (``ensemble``, ``bench``, ``verify``).
 
-Errors never show a traceback: bad input prints one line ``jetgaudin: error: ...`` on stderr and exits
+Errors never show a traceback: bad input prints one line ``jetgaudin <command>: error: ...`` on stderr and exits
 with code 2; a run that fails (singular step, health check) exits with 1; SIGINT/SIGTERM exit with
 130/143 after saving a checkpoint.
 """
@@ -23,7 +23,7 @@ import typer
 try:  # typer >= 0.24 vendors click as typer._click; older typer uses click itself
     from typer._click import exceptions as _click_exc
 except ImportError:  # pragma: no cover
-    from click import exceptions as _click_exc
+    from click import exceptions as _click_exc  # type: ignore[no-redef]
 
 __all__ = ["app", "main"]
 
@@ -84,7 +84,9 @@ def main(argv: list[str] | None = None) -> None:
         typer.echo("jetgaudin: aborted", err=True)
         sys.exit(130)
     except _click_exc.ClickException as exc:
-        typer.echo(f"jetgaudin: error: {' '.join(exc.format_message().split())}", err=True)
+        ctx = getattr(exc, "ctx", None)
+        cmd = f" {ctx.info_name}" if ctx is not None and ctx.parent is not None else ""
+        typer.echo(f"jetgaudin{cmd}: error: {' '.join(exc.format_message().split())}", err=True)
         sys.exit(exc.exit_code)
     except BrokenPipeError:  # e.g. `jetgaudin info | head`: the reader left; not an error of the run
         _silence_stdout()

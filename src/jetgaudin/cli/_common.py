@@ -11,6 +11,7 @@ import sys
 import time
 from enum import StrEnum
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -47,10 +48,40 @@ def one_line(msg) -> str:
     return re.sub(r"\s+", " ", str(msg)).strip()
 
 
+def prog() -> str:
+    """``jetgaudin <command>`` of the command being run (``jetgaudin`` outside a command)."""
+    try:  # typer >= 0.24 vendors click as typer._click (its own context stack)
+        from typer._click.globals import get_current_context
+    except ImportError:  # pragma: no cover
+        from click import get_current_context  # type: ignore[no-redef]
+
+    ctx = get_current_context(silent=True)
+    return f"jetgaudin {ctx.info_name}" if ctx is not None and ctx.parent is not None else "jetgaudin"
+
+
 def fail(msg, code: int = EXIT_INPUT):
-    """Print ``jetgaudin: error: <msg>`` (one line) on stderr and exit with ``code``."""
-    typer.echo(f"jetgaudin: error: {one_line(msg)}", err=True)
+    """Print ``jetgaudin <command>: error: <msg>`` (one line) on stderr and exit with ``code``."""
+    typer.echo(f"{prog()}: error: {one_line(msg)}", err=True)
     raise typer.Exit(code)
+
+
+class blame:  # noqa: N801 - a context manager: ``with blame("--b"): ...``
+    """Report a library error raised inside as bad input of ``option``: the library decides the rule, the command
+    line names the option (``--b: the field strength b must be nonzero ...``)."""
+
+    def __init__(self, option: str):
+        self.option = option
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        import jetgaudin as jg
+
+        if exc_type is not None and issubclass(exc_type, jg.JetGaudinError) and not isinstance(
+                exc, jg.RecordingError):
+            raise CliInputError(f"{self.option}: {one_line(exc)}") from None
+        return False
 
 
 def parse_eta(text: str, option: str = "--eta") -> complex:
@@ -110,21 +141,48 @@ def parse_init(text: str, option: str = "--init") -> list[float]:
     return vals
 
 
-def parse_b(value: float, option: str = "--b") -> float:
-    if not math.isfinite(value):
-        raise CliInputError(f"{option}: the field strength must be finite, got {value}")
-    if value == 0.0:
-        raise CliInputError(f"{option}: the field strength b must be nonzero (the map divides by b); give b != 0")
+def parse_b(text, option: str = "--b") -> float:
+    """A real field strength (``1+1i`` is refused: b must be real); the library checks the rest (nonzero, finite)."""
+    from jetgaudin._validate import nonzero_field
+
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        try:
+            complex(str(text).replace("i", "j"))
+        except ValueError:
+            raise CliInputError(f"{option}: cannot read {text!r} as a number; give a real number, e.g. 1.0") from None
+        raise CliInputError(f"{option}: {text!r} is complex; the field strength b must be real (field b e_3)") from None
+    with blame(option):
+        value = nonzero_field(value)
     if abs(value) > MAX_SCALE:
         raise CliInputError(f"{option}: |b| = {abs(value):.3g} is too large (b^2 enters nu^2 and would overflow); "
                             f"give |b| <= {MAX_SCALE:g}")
     return float(value)
 
 
-def parse_steps(value: int, option: str = "--steps") -> int:
-    if value < 0:
-        raise CliInputError(f"{option}: the number of steps must be >= 0, got {value}")
-    return int(value)
+def parse_count(text, option: str, minimum: int = 0) -> int:
+    """An integer count: ``1000``, ``1e6`` or ``2**20`` written out; the library's rule (``check_count``: an integer
+    >= minimum that fits in 64 bits) decides."""
+    from jetgaudin.maps import check_count
+
+    s = str(text).strip().replace("_", "")
+    try:
+        value = int(s)
+    except ValueError:
+        try:
+            f = float(s)
+        except ValueError:
+            raise CliInputError(f"{option}: cannot read {text!r} as an integer") from None
+        if not math.isfinite(f) or f != int(f):
+            raise CliInputError(f"{option}: {text!r} is not an integer") from None
+        value = int(f)
+    with blame(option):
+        return check_count(value, option.lstrip("-").replace("-", "_"), minimum)
+
+
+def parse_steps(value, option: str = "--steps") -> int:
+    return parse_count(value, option, 0)
 
 
 def eta_label(eta: complex) -> str:
@@ -138,8 +196,8 @@ class LazyProgress:
     def __init__(self, description: str, delay: float = 1.0, force: bool = False):
         self.description, self.delay, self.force = description, delay, force
         self.t0 = time.monotonic()
-        self._p = None
-        self._task = None
+        self._p: Any = None
+        self._task: Any = None
 
     def __call__(self, n: int, total: int) -> None:
         if self._p is None:
@@ -189,7 +247,7 @@ def integrals_table(names, I0, drift_abs, drift_rel, title: str):
     t.add_column("I_k(0)", justify="right")
     t.add_column("max |I_k - I_k(0)|", justify="right")
     t.add_column("relative", justify="right")
-    rows = range(len(names))
+    rows: list[int] = list(range(len(names)))
     if len(names) > 12:  # large N: the integrals with the largest relative drift only
         rows = sorted(sorted(rows, key=lambda k: -drift_rel[k])[:6])
         t.caption = f"{len(names) - 6} more integrals in run.json"
@@ -205,22 +263,14 @@ def resume_dir(text) -> Path:
     return Path(text)
 
 
-def check_out_dir(path) -> Path:
-    """Create ``path`` (a string or path) if needed and check that it is writable (exit 2 otherwise)."""
-    if str(path).strip() == "":
+def out_path(text, default: str) -> Path:
+    """The ``--out`` directory (an empty string is refused: it would mean the current directory)."""
+    if text is None:
+        return Path(default)
+    if str(text).strip() == "":
         raise CliInputError("--out: empty path; give a directory name (an empty one would write into the current "
                             "directory)")
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise CliInputError(f"--out: {path} exists and is not a directory; choose another --out")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-        probe = path / ".jetgaudin-write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as exc:
-        raise CliInputError(f"--out: cannot write to {path}: {exc.strerror or exc}") from None
-    return path
+    return Path(text)
 
 
 def check_state_scale(X, b, option: str = "--init") -> None:
@@ -231,13 +281,13 @@ def check_state_scale(X, b, option: str = "--init") -> None:
 
     with np.errstate(all="ignore"):
         try:
-            ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), b)))
+            ok = bool(np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), b))))
         except jg.InvalidStateError:  # the library refuses overflowing integrals itself
             ok = False
     if not ok:
         with np.errstate(all="ignore"):
             try:  # the same state in a unit field: is the field the culprit (the term 2 b y^3)?
-                state_ok = np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), 1.0)))
+                state_ok = bool(np.all(np.isfinite(jg.integrals(np.asarray(X, dtype=float), 1.0))))
             except jg.InvalidStateError:
                 state_ok = False
         if state_ok:
@@ -269,6 +319,8 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
             return False
         import jetgaudin as jg
 
+        if issubclass(exc_type, jg.RunIOError):  # writing failed: the input was fine
+            fail(exc, EXIT_FAILED)
         if issubclass(exc_type, (CliInputError, jg.JetGaudinError)):
             fail(exc, EXIT_INPUT)
         if issubclass(exc_type, BrokenPipeError):  # the reader of stdout left: handled by main()
@@ -283,37 +335,52 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
         return False
 
 
-def refuse_unfinished_run(out_dir: Path) -> None:
-    """Refuse to start a new run in a directory that holds an unfinished one (``--resume`` or ``--overwrite``)."""
-    import jetgaudin as jg
-    from jetgaudin import recording as rec
-
-    if not (out_dir / rec.RUN_JSON).exists():
-        return
-    try:
-        old = rec.read_run(out_dir)["status"]
-    except jg.JetGaudinError:
-        old = "unreadable"
-    if old in ("running", "interrupted"):
-        raise CliInputError(
-            f"--out: {out_dir} holds an unfinished run (status {old}); continue it with "
-            f"--resume {out_dir}, or pass --overwrite, or choose another --out"
-        )
-
-
 def run_with_progress(description: str, progress: bool | None, run):
     """Call ``run(bar)`` with a :class:`LazyProgress` bar (``None`` with ``--no-progress``); an interrupted run
-    (:class:`jetgaudin.recording.RunInterrupted`, checkpoint written) prints its one line and exits 130 / 143."""
-    from jetgaudin import recording as rec
+    (:class:`jetgaudin.run.RunInterrupted`, checkpoint written) prints its one line and exits 130 / 143."""
+    from jetgaudin.run import RunInterrupted
 
     bar = LazyProgress(description, force=bool(progress)) if progress is not False else None
     try:
         return run(bar)
-    except rec.RunInterrupted as exc:
+    except RunInterrupted as exc:
         if bar:
             bar.close()
-        typer.echo(f"jetgaudin: {exc}", err=True)
+        typer.echo(f"{prog()}: {exc}", err=True)
         raise typer.Exit(exc.exit_code) from None
     finally:
         if bar:
             bar.close()
+
+
+class _Interrupted(Exception):  # noqa: N818
+    def __init__(self, signum: int):
+        self.signum = signum
+
+
+def after_run(out_dir: Path, what: str, work):
+    """Run ``work()`` (figures, extra tables) after a run, with the run directory locked; SIGINT/SIGTERM stop it
+    with one line saying what was not written (exit 130/143), never a traceback.  Returns ``work()``'s result."""
+    import signal
+    import threading
+
+    from jetgaudin import _fs
+
+    def handler(signum, _frame):
+        raise _Interrupted(signum)
+
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for s in (signal.SIGINT, signal.SIGTERM):
+            old[s] = signal.signal(s, handler)
+    try:
+        with _fs.RunDirLock(out_dir):
+            return work()
+    except _Interrupted as exc:
+        name = signal.Signals(exc.signum).name
+        typer.echo(f"{prog()}: interrupted by {name} while writing {what}; the run's data in {out_dir} are complete "
+                   f"but {what} are missing or partial", err=True)
+        raise typer.Exit(128 + exc.signum) from None
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)

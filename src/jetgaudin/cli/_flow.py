@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import time
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -13,23 +11,30 @@ import typer
 
 import jetgaudin as jg
 
-from .. import recording as rec
+from .. import run as runlayer
+from ..flows import FlowMap
+from ..flows import Method as FlowMethod
 from . import app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
     APPENDIX2_INIT,
     APPENDIX2_STEPS,
+    EXIT_FAILED,
     CliInputError,
-    check_out_dir,
+    after_run,
+    blame,
     check_state_scale,
     console,
+    fail,
     integrals_table,
+    out_path,
     parse_b,
     parse_eta,
     parse_init,
     parse_steps,
     reported_errors,
+    run_with_progress,
 )
 
 
@@ -43,17 +48,11 @@ class Method(StrEnum):
     heyoka = "heyoka"
 
 
-def _drifts(I):
-    I = np.asarray(I, dtype=float)
-    d = np.max(np.abs(I - I[0]), axis=0)
-    return d, d / np.where(I[0] != 0, np.abs(I[0]), 1.0)
-
-
 @app.command()
 def flow(
-    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3), nonzero")] = APPENDIX2_B,
+    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = str(APPENDIX2_B),
     eta: Annotated[str, typer.Option("--eta", help="η of G_η (and of the map for --compare)")] = APPENDIX2_ETA,
-    steps: Annotated[int, typer.Option("--steps", help="number of samples after t = 0")] = APPENDIX2_STEPS,
+    steps: Annotated[str, typer.Option("--steps", help="number of samples after t = 0")] = str(APPENDIX2_STEPS),
     init: Annotated[str, typer.Option("--init", help="3N comma-separated numbers y_0, y_1, ...")] = APPENDIX2_INIT,
     hamiltonian: Annotated[
         Hamiltonian,
@@ -76,6 +75,16 @@ def flow(
         ),
     ] = False,
     out: Annotated[str, typer.Option("--out", help="output directory")] = "jetgaudin-flow",
+    init_from_dir: Annotated[
+        str | None, typer.Option("--init-from", help="start from the last saved state of this run directory")
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing")
+    ] = False,
+    progress: Annotated[
+        bool | None,
+        typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
+    ] = None,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
@@ -86,103 +95,91 @@ def flow(
     """
     con = console()
     with reported_errors():
-        b = parse_b(b)
+        bf = parse_b(b)
         eta_c = parse_eta(eta)
-        steps = parse_steps(steps)
-        X0 = np.array(parse_init(init))
+        n_steps = parse_steps(steps)
+        if init_from_dir is not None:
+            from ._orbit import init_from
+
+            X0 = init_from(init_from_dir)[0]
+        else:
+            X0 = np.array(parse_init(init))
         N = len(X0) // 3
-        check_state_scale(X0, b)
-        if not (dt > 0) or dt == float("inf"):
-            raise CliInputError(f"--dt: must be a finite number > 0, got {dt}")
+        check_state_scale(X0, bf)
         if not (0 < rtol < 1):
             raise CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
             raise CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:
             raise CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
-        if hamiltonian is Hamiltonian.interpolating and eta_c.imag == 0:
-            raise CliInputError("--eta: Im(eta) = 0 makes G_η = 0 (its flow is the identity); give Im(eta) != 0")
-        out_dir = check_out_dir(out)
-        t0 = time.monotonic()
+        with blame("--eta"):
+            B = jg.TwoPointBacklund(bf, eta_c)  # the map's rules for eta (Im eta = 0: G_eta = 0, refused)
         if hamiltonian is Hamiltonian.interpolating:
-            H = jg.interpolating_flow_hamiltonian(X0, b, eta_c)
+            with blame("--eta"):
+                H = jg.interpolating_flow_hamiltonian(X0, bf, eta_c)
         else:
-            H = jg.physical_hamiltonian(N, b)
-        t = np.arange(steps + 1) * dt
-        tr = jg.integrate(H, X0, float(t[-1]), t_eval=t, method=method.value, rtol=rtol, atol=rtol)
-        names = rec.integral_names(N)
-        d_abs, d_rel = _drifts(tr.integrals)
-        files = rec.write_table(out_dir, "flow", t, tr.X, index_name="t")
-        run = {
-            "program": "jetgaudin flow",
-            "version": jg.__version__,
-            "inputs": {
-                "b": b,
-                "eta": [eta_c.real, eta_c.imag],
-                "steps": steps,
-                "init": X0.tolist(),
-                "N": N,
-                "hamiltonian": hamiltonian.value,
-                "dt": dt,
-                "method": method.value,
-                "rtol": rtol,
-                "compare": compare,
-            },
-            "status": "completed",
-            "integral_names": names,
-            "integrals0": tr.integrals[0].tolist(),
-            "max_drift_abs": d_abs.tolist(),
-            "max_drift_rel": d_rel.tolist(),
-        }
-        if hamiltonian is Hamiltonian.interpolating:
-            run["G_eta_weights"] = np.asarray(H.weights).tolist()
-        orbit_X = None
-        if compare:
-            orbit_X = jg.TwoPointBacklund(b, eta_c).iterate(X0, steps)
-            files += rec.write_table(out_dir, "orbit", np.arange(steps + 1), orbit_X)
-            dist = np.linalg.norm(orbit_X - tr.X, axis=-1)
-            cpath = out_dir / "compare.csv"
-            cpath.write_text("n,distance\n" + "".join(f"{i},{v:.17g}\n" for i, v in enumerate(dist)), encoding="utf-8")
-            files.append(cpath)
-            run["compare"] = {
-                "max_distance": float(dist.max()),
-                "final_distance": float(dist[-1]),
-                "distance": "Euclidean norm of X_map(n) - X_flow(n) in R^(3N)",
-            }
-        if not no_plots:
-            from .. import plotting
+            H = jg.physical_hamiltonian(N, bf)
+        with blame("--dt"):
+            fm = FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
+        with blame("--init"):
+            spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
+                                    program="jetgaudin flow")
+        out_dir = out_path(out, "jetgaudin-flow")
+        res = run_with_progress("flow", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
+                                                                             progress=bar))
+        files = list(res.files)
+        names = runlayer.integral_names(N)
 
-            title = (
-                f"flow of {'G_η' if hamiltonian is Hamiltonian.interpolating else 'H_2/2'}: b = {b:g}, "
-                f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {steps} samples"
-            )
+        def extras():
+            written, extra = [], {"inputs_cli": {"b": bf, "eta": [eta_c.real, eta_c.imag], "hamiltonian":
+                                                 hamiltonian.value, "dt": dt, "method": method.value, "rtol": rtol,
+                                                 "compare": compare}}
+            data = runlayer.load(out_dir)
+            t = data.n * dt
+            orbit_X = None
             if compare:
-                files += plotting.save_orbit_figures(
-                    out_dir,
-                    np.arange(steps + 1),
-                    orbit_X,
-                    b,
-                    title=title + " (points: map, lines: flow)",
-                    overlay=tr.X,
-                    overlay_label="flow of G_η",
+                from .. import _fs
+                from ..recording import write_table
+
+                orbit_X = B.iterate(X0, n_steps)
+                written += write_table(out_dir, "orbit", np.arange(n_steps + 1), orbit_X)
+                dist = np.linalg.norm(orbit_X - data.X, axis=-1)
+                _fs.atomic_write_text(out_dir, "compare.csv", "n,distance\n" + "".join(
+                    f"{i},{v:.17g}\n" for i, v in enumerate(dist)))
+                written.append(out_dir / "compare.csv")
+                extra["compare"] = {"max_distance": float(dist.max()), "final_distance": float(dist[-1]),
+                                    "distance": "Euclidean norm of X_map(n) - X_flow(n) in R^(3N)"}
+            if not no_plots:
+                from .. import plotting
+
+                title = (
+                    f"flow of {'G_η' if hamiltonian is Hamiltonian.interpolating else 'H_2/2'}: bf = {bf:g}, "
+                    f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
                 )
-            else:
-                files += plotting.save_orbit_figures(out_dir, t, tr.X, b, title=title, xlabel="time t")
-        run["elapsed_seconds"] = time.monotonic() - t0
-        run["files"] = [Path(f).name for f in files] + ["run.json"]
-        (out_dir / "run.json").write_text(json.dumps(run, indent=1) + "\n", encoding="utf-8")
-        con.print(
-            integrals_table(
-                names,
-                tr.integrals[0],
-                d_abs,
-                d_rel,
-                title=f"integrals along the flow ({hamiltonian.value}, t = 0 .. {t[-1]:g}, {method.value})",
-            )
-        )
+                if compare:
+                    written += plotting.save_orbit_figures(out_dir, np.arange(n_steps + 1), orbit_X, bf,
+                                                           title=title + " (points: map, lines: flow)",
+                                                           overlay=data.X, overlay_label="flow of G_η")
+                else:
+                    written += plotting.save_orbit_figures(out_dir, t, data.X, bf, title=title, xlabel="time t")
+            if hamiltonian is Hamiltonian.interpolating:
+                extra["G_eta_weights"] = np.asarray(H.weights).tolist()
+            from ..recording import update_run
+
+            update_run(out_dir, files=[Path(f).name for f in files + written], plots=not no_plots, **extra)
+            return written, extra
+
+        written, extra = after_run(out_dir, "the figures and tables", extras)
+        files += written
+        con.print(integrals_table(names, res.integrals0, res.max_drift_abs, res.max_drift_rel,
+                                  title=f"integrals along the flow ({hamiltonian.value}, t = 0 .. {n_steps * dt:g}, "
+                                        f"{method.value})"))
         if compare:
             con.print(
-                f"distance map - flow of G_η: max {run['compare']['max_distance']:.3e}, "
-                f"at n = {steps}: {run['compare']['final_distance']:.3e}"
+                f"distance map - flow of G_η: max {extra['compare']['max_distance']:.3e}, "
+                f"at n = {n_steps}: {extra['compare']['final_distance']:.3e}"
             )
-        con.print("wrote: " + ", ".join(str(f) for f in files + [out_dir / "run.json"]))
+        con.print(f"status: {res.status}; {res.rows} rows; {res.elapsed:.2f} s")
+        con.print("wrote: " + ", ".join(str(f) for f in files))
+        if res.failed:
+            fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)

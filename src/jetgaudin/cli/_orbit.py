@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
 
-from .. import recording as rec
+from .. import run as runlayer
 from . import app
 from ._common import (
     APPENDIX2_B,
@@ -20,17 +19,18 @@ from ._common import (
     EXIT_FAILED,
     Branch,
     CliInputError,
-    check_out_dir,
+    after_run,
+    blame,
     check_state_scale,
     console,
-    eta_label,
     fail,
     integrals_table,
+    out_path,
     parse_b,
+    parse_count,
     parse_eta,
     parse_init,
     parse_steps,
-    refuse_unfinished_run,
     reported_errors,
     resume_dir,
     run_with_progress,
@@ -51,19 +51,20 @@ def figure_title(b, eta, steps, init) -> str:
     )
 
 
-def print_summary(con, res: rec.RunResult, N: int, files) -> None:
+def print_summary(con, res: runlayer.RunResult, files) -> None:
+    N = res.spec.n_state // 3
     con.print(
         integrals_table(
-            rec.integral_names(N),
+            runlayer.integral_names(N),
             res.integrals0,
             res.max_drift_abs,
             res.max_drift_rel,
-            title=f"integrals over {res.last_safe_step} steps (saved rows)",
+            title=f"integrals over {res.last_safe_step} steps (saved rows and chunk ends)",
         )
     )
     block = "z" if N == 3 else f"y_{N - 1}"
     con.print(
-        f"|{block}| = {res.sphere_radius0:.17g} at n = 0; max ||{block}(n)| - |{block}(0)|| = "
+        f"|{block}| = {float(res.sphere_radius0):.17g} at n = 0; max ||{block}(n)| - |{block}(0)|| = "
         f"{res.sphere_max_deviation:.3e}"
     )
     con.print(f"max imaginary residue of the real map: {res.max_imag_residue:.3e}")
@@ -71,10 +72,28 @@ def print_summary(con, res: rec.RunResult, N: int, files) -> None:
     con.print("wrote: " + ", ".join(str(f) for f in files))
 
 
+def init_from(path: str, option: str = "--init-from"):
+    """``(state, record)`` of the last safe saved state of a run directory (one state: an orbit, or an ensemble
+    of one orbit)."""
+    if str(path).strip() == "":
+        raise CliInputError(f"{option}: empty path; give the directory of a run")
+    d = runlayer.load(path)
+    if len(d.n) == 0:
+        raise CliInputError(f"{option}: {path} holds no saved state")
+    X = np.asarray(d.last_state, dtype=float)
+    if X.ndim == 2:
+        if X.shape[0] != 1:
+            raise CliInputError(f"{option}: {path} holds an ensemble of {X.shape[0]} orbits; use "
+                                "`jetgaudin ensemble --init-from` (or give one orbit)")
+        X = X[0]
+    return X, d.record
+
+
 @app.command()
 def orbit(
     b: Annotated[
-        float | None, typer.Option("--b", help=f"field strength b (field b e_3), nonzero [default: {APPENDIX2_B:g}]")
+        str | None,
+        typer.Option("--b", help=f"field strength b (field b e_3), real, nonzero [default: {APPENDIX2_B:g}]"),
     ] = None,
     eta: Annotated[
         str | None,
@@ -84,7 +103,7 @@ def orbit(
             f"step and must be nonzero [default: {APPENDIX2_ETA}]",
         ),
     ] = None,
-    steps: Annotated[int | None, typer.Option("--steps", help=f"number of steps [default: {APPENDIX2_STEPS}]")] = None,
+    steps: Annotated[str | None, typer.Option("--steps", help=f"number of steps [default: {APPENDIX2_STEPS}]")] = None,
     init: Annotated[
         str | None,
         typer.Option(
@@ -101,7 +120,12 @@ def orbit(
     ] = None,
     out: Annotated[str | None, typer.Option("--out", help="output directory [default: ./jetgaudin-orbit]")] = None,
     save_every: Annotated[
-        int | None, typer.Option("--save-every", help="save every K-th step (and the last) [default: 1]")
+        str | None, typer.Option("--save-every", help="save every K-th step (and the last) [default: 1]")
+    ] = None,
+    init_from_dir: Annotated[
+        str | None,
+        typer.Option("--init-from", help="start from the last saved state of this run directory (its b, eta and "
+                     "branch unless given)"),
     ] = None,
     no_csv: Annotated[bool, typer.Option("--no-csv", help="do not write orbit.csv (orbit.h5 only)")] = False,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
@@ -109,14 +133,15 @@ def orbit(
         str | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
     ] = None,
     overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="replace an interrupted run in --out instead of refusing")
+        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing (never a "
+                           "run in progress)")
     ] = False,
     max_drift: Annotated[
         float | None,
         typer.Option(
             "--max-drift",
             help="stop as failed when an integral drifts by more "
-            f"than this (relative to max(1, |I_k(0)|)) [default: {rec.DEFAULT_MAX_DRIFT:g}]",
+            f"than this (relative to max(1, |I_k(0)|)) [default: {runlayer.DEFAULT_MAX_DRIFT:g}]",
         ),
     ] = None,
     max_imag: Annotated[
@@ -124,7 +149,7 @@ def orbit(
         typer.Option(
             "--max-imag",
             help="stop as failed when the imaginary residue of a step "
-            f"exceeds this [default: {rec.DEFAULT_MAX_IMAG:g}]",
+            f"exceeds this [default: {runlayer.DEFAULT_MAX_IMAG:g}]",
         ),
     ] = None,
     checkpoint_seconds: Annotated[
@@ -150,14 +175,7 @@ def orbit(
     """
     con = console()
     with reported_errors():
-        if save_every is not None and save_every < 1:
-            raise CliInputError(f"--save-every: must be an integer >= 1, got {save_every}")
-        for name, v in (("--max-drift", max_drift), ("--max-imag", max_imag)):
-            if v is not None and not (v >= 0):
-                raise CliInputError(f"{name}: must be a number >= 0 (inf disables the check), got {v}")
-        if not (checkpoint_seconds >= 0) or checkpoint_seconds == float("inf"):
-            raise CliInputError(f"--checkpoint-seconds: must be a finite number >= 0, got {checkpoint_seconds}")
-        expect = {}
+        expect: dict = {}
         if b is not None:
             expect["b"] = parse_b(b)
         if eta is not None:
@@ -170,77 +188,85 @@ def orbit(
         if branch is not None:
             expect["branch"] = branch.value
         if save_every is not None:
-            expect["save_every"] = save_every
+            expect["save_every"] = parse_count(save_every, "--save-every", 1)
         if no_csv:
             expect["csv"] = False
         if kernel is not None and kernel is not Kernel.auto:
             expect["kernel"] = kernel.value
-        if max_drift is not None:
-            expect["max_drift"] = max_drift
-        if max_imag is not None:
-            expect["max_imag"] = max_imag
-        options = rec.RecordOptions(
-            save_every=save_every or 1,
-            csv=not no_csv,
-            checkpoint_seconds=checkpoint_seconds,
-            kernel=kernel.value if kernel is not None else "auto",
+        with blame("--max-drift"):
+            runlayer.HealthLimits(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift)
+        with blame("--max-imag"):
+            runlayer.HealthLimits(max_imag=runlayer.DEFAULT_MAX_IMAG if max_imag is None else max_imag)
+        limits = runlayer.HealthLimits(
+            max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
+            max_imag=runlayer.DEFAULT_MAX_IMAG if max_imag is None else max_imag,
         )
+        for name, v in (("max_drift", max_drift), ("max_imag", max_imag)):
+            if v is not None:
+                expect[name] = v
+        opts: dict[str, Any] = dict(checkpoint_seconds=checkpoint_seconds)
         if resume is not None:
             if out is not None and Path(out).resolve() != Path(resume).resolve():
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
+            if init_from_dir is not None:
+                raise CliInputError("--init-from starts a new run; it cannot be combined with --resume")
             out_dir = resume_dir(resume)
-            spec = limits = None
-            if not (out_dir / rec.RUN_JSON).exists():
+            if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
+            with blame("--checkpoint-seconds"):
+                runlayer.RunSpec.check_checkpoint_seconds(checkpoint_seconds)
+            res = run_with_progress("orbit", progress, lambda bar: runlayer.resume(
+                out_dir, expect=expect, program="jetgaudin orbit", progress=bar, **opts))
+            plots = not no_plots and res.record.get("plots", True)
         else:
-            out_dir = check_out_dir(out if out is not None else "jetgaudin-orbit")
-            eta_c = parse_eta(eta) if eta is not None else parse_eta(APPENDIX2_ETA)
-            if eta_c.imag == 0:
-                raise CliInputError(
-                    "--eta: Im(eta) = 0 makes the real two-point map the identity (Im eta is its time step); "
-                    "give eta with a nonzero imaginary part, e.g. 5+0.1i"
-                )
-            check_state_scale(expect.get("init", parse_init(APPENDIX2_INIT)), expect.get("b", APPENDIX2_B))
-            spec = rec.OrbitSpec(
-                b=expect.get("b", APPENDIX2_B),
-                eta=eta_c,
-                steps=expect.get("steps", APPENDIX2_STEPS),
-                X0=tuple(expect.get("init", parse_init(APPENDIX2_INIT))),
-                branch=expect.get("branch", "default"),
-            )
-            limits = rec.HealthLimits(
-                max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
-                max_imag=rec.DEFAULT_MAX_IMAG if max_imag is None else max_imag,
-            )
-            if not overwrite:
-                refuse_unfinished_run(out_dir)
-        res = run_with_progress("orbit", progress, lambda bar: rec.run_orbit(
-            spec,
-            out_dir,
-            options=options,
-            limits=limits,
-            resume=resume is not None,
-            expect=expect if resume is not None else None,
-            progress=bar,
-        ))
-        run = rec.read_run(out_dir)
-        spec = rec.OrbitSpec.from_json(run["inputs"])
+            out_dir = out_path(out, "jetgaudin-orbit")
+            defaults: dict[str, Any] = {"b": APPENDIX2_B, "eta": parse_eta(APPENDIX2_ETA), "branch": "default",
+                        "init": parse_init(APPENDIX2_INIT)}
+            if init_from_dir is not None:
+                X_last, rec = init_from(init_from_dir)
+                defaults["init"] = X_last.tolist()
+                m = rec.get("map", {})
+                if m.get("kind") == "two_point":
+                    defaults.update(b=m["b"], eta=complex(*m["eta"]), branch=m["branch"])
+            X0 = expect.get("init", defaults["init"])
+            bb = expect.get("b", defaults["b"])
+            ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
+            check_state_scale(X0, bb)
+            with blame("--eta"):
+                m = _two_point(bb, ee, expect.get("branch", defaults["branch"]), kernel)
+            with blame("--init" if init_from_dir is None else "--init-from"):
+                spec = runlayer.RunSpec(m, np.array(X0, dtype=float), expect.get("steps", APPENDIX2_STEPS),
+                                        expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
+                                        **opts)
+            res = run_with_progress("orbit", progress, lambda bar: runlayer.start(
+                spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar))
+            plots = not no_plots
         files = list(res.files)
-        if not no_plots and res.rows > 0:
-            from .. import plotting
 
-            n_rows, X = rec.load_orbit(out_dir)
-            files += plotting.save_orbit_figures(
-                out_dir, n_rows, X, spec.b, title=figure_title(spec.b, spec.eta, spec.steps, spec.X0)
-            )
-        rec.update_run(out_dir, files=[Path(f).name for f in files])
-        print_summary(con, res, spec.N, files)
-        if res.status.startswith("failed"):
+        def figures():
+            written = []
+            if plots and res.rows > 0:
+                from .. import plotting
+
+                data = runlayer.load(out_dir)
+                m = res.spec.map.describe()
+                title = figure_title(m["b"], complex(*m["eta"]), res.spec.steps, res.spec.X0)
+                written = plotting.save_orbit_figures(out_dir, data.n, data.X, m["b"], title=title)
+            from ..recording import update_run
+
+            update_run(out_dir, files=[Path(f).name for f in files + written], plots=bool(plots))
+            return written
+
+        files += after_run(out_dir, "the figures", figures)
+        print_summary(con, res, files)
+        if res.failed:
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
 
 
-def orbit_json_summary(out_dir) -> str:  # pragma: no cover - convenience for scripts
-    return json.dumps(rec.read_run(out_dir), indent=1)
+def _two_point(b: float, eta: complex, branch: str, kernel):
+    import jetgaudin as jg
+
+    return jg.TwoPointBacklund(b, eta, jg.Branch.parse(branch), jg.Backend.parse("auto" if kernel is None else
+                                                                                kernel.value))
 
 
-_ = (np, eta_label)

@@ -5,7 +5,9 @@ optionally per-orbit ``b`` and ``eta``) or from a seeded sampler (``--sample lea
 ``--sample energy`` with ``--energy``).  Runs locally on all cores or on a Dask cluster
 (``--scheduler tcp://host:port``), streams every k-th state into ``DIR/ensemble.h5`` with checkpoints
 (``--resume DIR`` continues an interrupted or killed run bit for bit) and prints the per-orbit drift of
-the integrals.  No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
+the integrals.  With neither ``--input`` nor ``--sample`` (nor ``--init-from``) it samples the default leaf
+``--sample leaf --casimirs 0.4,-0.3,1.5`` (N = 3; :data:`jetgaudin.ensemble.DEFAULT_CASIMIRS`).
+No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
 :mod:`jetgaudin.ensemble_recording`.
 """
 
@@ -14,29 +16,33 @@ from __future__ import annotations
 import warnings
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
 
-from .. import recording as rec
+from .. import run as runlayer
 from . import app
 from ._common import (
     EXIT_FAILED,
     Branch,
     CliInputError,
-    check_out_dir,
+    blame,
     console,
     fail,
     one_line,
+    out_path,
     parse_b,
+    parse_count,
     parse_eta,
     parse_steps,
-    refuse_unfinished_run,
     reported_errors,
     resume_dir,
     run_with_progress,
 )
+
+#: largest --input file read (a CSV of 10^6 states of N = 3 is ~0.2 GB)
+MAX_INPUT_BYTES = 1 << 31
 
 
 class Sampler(StrEnum):
@@ -56,12 +62,15 @@ def _floats(text: str, option: str) -> list[float]:
 
 def _read_input(path: Path):
     """``(X, b or None, eta or None)`` from a CSV or NPZ file."""
-    if not path.exists():
-        raise CliInputError(f"--input: no such file: {path}")
+    import io
+
+    from .. import _fs
+
+    raw = _fs.read_user_file(path, MAX_INPUT_BYTES, option="--input")
     b = eta = None
     if path.suffix.lower() == ".npz":
         try:
-            with np.load(path) as d:
+            with np.load(io.BytesIO(raw)) as d:
                 if "X" not in d:
                     raise CliInputError(f"--input: {path} has no array 'X' (the initial states, shape (B, 3N))")
                 X = np.array(d["X"], dtype=float)
@@ -73,7 +82,12 @@ def _read_input(path: Path):
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
-                X = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+                text = raw.decode("utf-8")
+                lines = text.splitlines()
+                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0_1,...)
+                X = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2, skiprows=skip)
+                if skip and lines[0].startswith("n,"):
+                    X = X[:, 1:]  # orbit.csv: drop the step column
         except (ValueError, UnicodeDecodeError) as exc:
             raise CliInputError(f"--input: cannot read {path} as CSV of numbers: {one_line(exc)}") from None
     if X.ndim != 2 or X.shape[0] == 0 or X.shape[1] == 0 or X.shape[1] % 3:
@@ -99,17 +113,21 @@ def ensemble_command(
             help="draw the initial states: on a leaf (--casimirs) or on the energy shell H_2/2 = E (--energy)",
         ),
     ] = None,
-    orbits: Annotated[int, typer.Option("--orbits", help="number of sampled orbits")] = 100,
-    seed: Annotated[int, typer.Option("--seed", help="seed of the sampler")] = 0,
+    orbits: Annotated[str, typer.Option("--orbits", help="number of sampled orbits")] = "100",
+    seed: Annotated[str, typer.Option("--seed", help="seed of the sampler (an integer >= 0)")] = "0",
     n: Annotated[int, typer.Option("--n", help="jet order N of the sampled states")] = 3,
     casimirs: Annotated[str | None, typer.Option("--casimirs", help="C_1,...,C_N of the leaf (C_N > 0)")] = None,
     energy: Annotated[float | None, typer.Option("--energy", help="energy E of the shell H_2/2 = E")] = None,
     scale: Annotated[float, typer.Option("--scale", help="spread of the sampled components")] = 1.0,
-    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3)")] = 1.0,
+    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = "1.0",
     eta: Annotated[str, typer.Option("--eta", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
-    steps: Annotated[int | None, typer.Option("--steps", help="number of steps [default: 100]")] = None,
+    steps: Annotated[str | None, typer.Option("--steps", help="number of steps [default: 100]")] = None,
     save_every: Annotated[
-        int | None, typer.Option("--save-every", help="keep every k-th state (and the last) [default: 1]")
+        str | None, typer.Option("--save-every", help="keep every k-th state (and the last) [default: 1]")
+    ] = None,
+    init_from_dir: Annotated[
+        str | None,
+        typer.Option("--init-from", help="start from the last saved states of this run directory (orbit or ensemble)"),
     ] = None,
     out: Annotated[
         str | None,
@@ -119,12 +137,13 @@ def ensemble_command(
         str | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
     ] = None,
     overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="replace an unfinished run in --out instead of refusing")
+        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing (never a "
+                           "run in progress)")
     ] = False,
     max_drift: Annotated[
         float | None,
         typer.Option("--max-drift", help="stop as failed when an orbit's relative integral drift exceeds this "
-                     f"[default: {rec.DEFAULT_MAX_DRIFT:g}]"),
+                     f"[default: {runlayer.DEFAULT_MAX_DRIFT:g}]"),
     ] = None,
     checkpoint_seconds: Annotated[
         float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
@@ -133,7 +152,7 @@ def ensemble_command(
         str | None,
         typer.Option("--scheduler", help="Dask scheduler address tcp://host:port (needs jetgaudin[distributed])"),
     ] = None,
-    chunk_size: Annotated[int | None, typer.Option("--chunk-size", help="orbits per Dask task")] = None,
+    chunk_size: Annotated[str | None, typer.Option("--chunk-size", help="orbits per Dask task")] = None,
     branch: Annotated[
         Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
     ] = None,
@@ -148,89 +167,116 @@ def ensemble_command(
     from jetgaudin import ensemble_recording as er
 
     with reported_errors():
-        if chunk_size is not None and chunk_size < 1:
-            raise CliInputError(f"--chunk-size: must be >= 1, got {chunk_size}")
-        if max_drift is not None and not (max_drift >= 0):
-            raise CliInputError(f"--max-drift: must be a number >= 0, got {max_drift}")
-        if not (checkpoint_seconds >= 0) or checkpoint_seconds == float("inf"):
-            raise CliInputError(f"--checkpoint-seconds: must be a finite number >= 0, got {checkpoint_seconds}")
-        expect = {}
+        chunk = None if chunk_size is None else parse_count(chunk_size, "--chunk-size", 1)
+        with blame("--max-drift"):
+            runlayer.HealthLimits(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift)
+        with blame("--checkpoint-seconds"):
+            runlayer.RunSpec.check_checkpoint_seconds(checkpoint_seconds)
+        expect: dict = {}
         if steps is not None:
             expect["steps"] = parse_steps(steps)
         if save_every is not None:
-            if save_every < 1:
-                raise CliInputError(f"--save-every: must be >= 1, got {save_every}")
-            expect["save_every"] = save_every
+            expect["save_every"] = parse_count(save_every, "--save-every", 1)
         if branch is not None:
             expect["branch"] = branch.value
         if max_drift is not None:
             expect["max_drift"] = max_drift
+        common: dict[str, Any] = dict(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
+                      checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk)
         if resume is not None:
-            if input is not None or sample is not None:
-                raise CliInputError("--resume continues a recorded ensemble: do not give --input or --sample")
+            if input is not None or sample is not None or init_from_dir is not None:
+                raise CliInputError("--resume continues a recorded ensemble: do not give --input, --sample or "
+                                    "--init-from")
             if out is not None and Path(out).resolve() != Path(resume).resolve():
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
-            out_dir, spec = resume_dir(resume), None
-            if not (out_dir / rec.RUN_JSON).exists():
+            out_dir = resume_dir(resume)
+            if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
+            res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
+                None, out_dir, resume=True, expect=expect, progress=bar, **common))
         else:
-            if (input is None) == (sample is None):
-                raise CliInputError("give exactly one of --input FILE and --sample leaf|energy")
+            if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
+                raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
             bb = parse_b(b)
             ee = parse_eta(eta)
             if input is not None:
                 X0, b_file, eta_file = _read_input(input)
                 bb = bb if b_file is None else b_file
                 ee = ee if eta_file is None else eta_file
+            elif init_from_dir is not None:
+                X0 = _init_from(init_from_dir)
             else:
-                if orbits < 1:
-                    raise CliInputError(f"--orbits: must be >= 1, got {orbits}")
+                n_orbits = parse_count(orbits, "--orbits", 1)
+                s_seed = parse_count(seed, "--seed", 0)
+                if sample is None:  # the documented default: the leaf DEFAULT_CASIMIRS (N = 3)
+                    sample, casimirs = Sampler.leaf, casimirs or ",".join(map(str, ens.DEFAULT_CASIMIRS))
                 if sample is Sampler.leaf:
                     if casimirs is None:
                         raise CliInputError("--sample leaf needs --casimirs C_1,...,C_N")
                     c = _floats(casimirs, "--casimirs")
                     if len(c) != n:
                         raise CliInputError(f"--casimirs: give N = {n} numbers (set N with --n), got {len(c)}")
-                    X0 = ens.sample_on_leaf(n, c, orbits, seed=seed, scale=scale)
+                    with blame("--orbits"):
+                        _check_memory(n_orbits, 3 * n)
+                    with blame("--casimirs"):
+                        X0 = ens.sample_on_leaf(n, c, n_orbits, seed=s_seed, scale=scale)
                 else:
                     if energy is None:
                         raise CliInputError("--sample energy needs --energy E")
-                    X0 = ens.sample_on_energy_shell(n, bb, energy, orbits, seed=seed, scale=scale)
-            spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
-                                   expect.get("branch", "default"))
-            out_dir = check_out_dir(out if out is not None else "jetgaudin-ensemble")
-            if not overwrite:
-                refuse_unfinished_run(out_dir)
-        res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
-            spec,
-            out_dir,
-            resume=resume is not None,
-            max_drift=rec.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
-            checkpoint_seconds=checkpoint_seconds,
-            scheduler=scheduler,
-            chunk_size=chunk_size,
-            expect=expect if resume is not None else None,
-            progress=bar,
-        ))
-        run = rec.read_run(out_dir)
-        _report(res, run, show)
-        if res.status.startswith("failed"):
+                    with blame("--orbits"):
+                        _check_memory(n_orbits, 3 * n)
+                    with blame("--energy"):
+                        X0 = ens.sample_on_energy_shell(n, bb, energy, n_orbits, seed=s_seed, scale=scale)
+            with blame("--input" if input is not None else "--init-from" if init_from_dir is not None else "--eta"):
+                spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
+                                       expect.get("branch", "default"))
+            out_dir = out_path(out, "jetgaudin-ensemble")
+            res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
+                spec, out_dir, overwrite=overwrite, progress=bar, **common))
+        _report(res, show)
+        if res.failed:
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
 
 
-def _report(res, run, show):
+def _check_memory(orbits: int, n_state: int) -> None:
+    """Refuse an ensemble whose states alone would not fit in memory (before anything is allocated)."""
+    import os
+
+    from jetgaudin import InvalidParameterError
+
+    need = 8 * orbits * n_state * 4  # the states, the kernel's output and final state, the checkpoint
+    try:
+        avail = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        avail = 1 << 40
+    if need > avail:
+        raise InvalidParameterError(f"{orbits} orbits need about {need / 2**30:.3g} GiB, more than this machine's "
+                                    f"{avail / 2**30:.3g} GiB; give fewer orbits")
+
+
+def _init_from(path: str) -> np.ndarray:
+    if str(path).strip() == "":
+        raise CliInputError("--init-from: empty path; give the directory of a run")
+    d = runlayer.load(path)
+    if len(d.n) == 0:
+        raise CliInputError(f"--init-from: {path} holds no saved state")
+    X = np.asarray(d.last_state, dtype=float)
+    return X[None] if X.ndim == 1 else X
+
+
+def _report(res, show):
     from rich.table import Table
 
     B = res.drift.shape[0]
     N = res.drift.shape[1] // 2
-    steps = int(run["inputs"]["steps"])
+    steps = res.spec.steps
     con = console()
     t = Table(
         title=f"relative drift max_n |I(X_n) - I(X_0)| / max(1, |I(X_0)|) (first {min(show, B)} of {B})",
         title_justify="left",
     )
     t.add_column("orbit", justify="right")
-    for name in rec.integral_names(N):
+    for name in runlayer.integral_names(N):
         t.add_column(name, justify="right")
     for i in range(min(show, B)):
         t.add_row(str(i), *[f"{d:.2e}" for d in res.drift[i]])
@@ -239,6 +285,7 @@ def _report(res, run, show):
     rate = B * steps / res.elapsed if res.elapsed > 0 else float("inf")
     con.print(
         f"{B} orbits x {steps} steps in {res.elapsed:.3f} s ({rate:.3g} orbit-steps/s); "
-        f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}"
+        f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}" if B else
+        f"{B} orbits: nothing to iterate"
     )
     con.print(f"status: {res.status}; {res.rows} saved rows of {B} states in {res.out_dir / 'ensemble.h5'}")

@@ -1,0 +1,404 @@
+"""Start, resume and describe runs: the public entry points of the run layer (:func:`start`, :func:`resume`) and
+the layouts' records in ``run.json`` (private helpers)."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _fs
+from .._errors import InvalidParameterError, JetGaudinError, RecordingError, RunDirectoryError
+from ..maps import Backend, Map, map_from_description
+from .driver import Driver, Position, RunInterrupted
+from .files import (
+    ENSEMBLE_H5,
+    ORBIT_CSV,
+    ORBIT_H5,
+    RUN_JSON,
+    RowDigest,
+    hex_floats,
+    one_line,
+    open_h5_read,
+    read_run,
+    unhex,
+)
+from .health import Health
+from .spec import HealthLimits, Layout, RunSpec, RunStatus, integral_names
+from .store import EnsembleStore, OrbitStore, Store, now, read_checkpoint_npz
+
+__all__ = ["RunResult", "start", "resume"]
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """Everything a finished (or failed) run reports; also in ``run.json``.
+
+    ``status``: the text recorded (``completed``, ``failed: <reason>``), ``state``: the :class:`RunStatus`;
+    ``drift_abs`` ``(..., k)``: ``max |I_k(n) − I_k(0)|`` over the checked states (saved rows and chunk ends);
+    ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``
+    (absolute where ``I_k(0) = 0``).  ``spec``: the run's :class:`RunSpec`; ``record``: the final ``run.json``.
+    """
+
+    out_dir: Path
+    status: str
+    state: RunStatus
+    last_safe_step: int
+    rows: int
+    integrals0: np.ndarray
+    drift_abs: np.ndarray
+    drift: np.ndarray
+    max_imag_residue: float
+    sphere_radius0: Any
+    sphere_max_deviation: float
+    elapsed: float
+    files: tuple
+    kernel: str
+    spec: RunSpec
+    record: dict
+
+    @property
+    def max_drift_abs(self) -> np.ndarray:
+        return self.drift_abs
+
+    @property
+    def max_drift_rel(self) -> np.ndarray:
+        return self.drift_abs / np.where(self.integrals0 != 0, np.abs(self.integrals0), 1.0)
+
+    @property
+    def max_drift(self) -> np.ndarray:
+        """Largest relative integral drift of each orbit, shape ``(B,)`` (ensembles) or ``()`` (orbits)."""
+        return np.max(self.drift, axis=-1)
+
+    @property
+    def failed(self) -> bool:
+        return self.state in (RunStatus.FAILED, RunStatus.FAILED_IO)
+
+
+# ------------------------------------------------------------------------------------------ records
+def _orbit_inputs(spec: RunSpec) -> dict:
+    d = spec.map.describe()
+    inputs: dict[str, Any] = {}
+    if d.get("kind") == "two_point":  # the format-1 keys of an orbit of the two-point map
+        inputs.update(b=d["b"], eta=d["eta"])
+    inputs.update(steps=spec.steps, init=spec.X0.tolist())
+    if d.get("kind") == "two_point":
+        inputs["branch"] = d["branch"]
+    inputs.update(N=spec.n_state // 3, save_every=spec.save_every, csv=bool(spec.csv), kernel=spec.map.backend.value,
+                  max_drift=spec.limits.max_drift, max_imag=spec.limits.max_imag)
+    return inputs
+
+
+def _batch_params(m: Map, B: int) -> tuple[np.ndarray, np.ndarray, str]:
+    try:
+        params: Any = m
+        b = np.broadcast_to(np.asarray(params.b, dtype=np.float64), (B,)).copy()
+        eta = np.broadcast_to(np.asarray(params.eta, dtype=np.complex128), (B,)).copy()
+        return b, eta, str(params.branch.value)
+    except AttributeError:
+        raise InvalidParameterError("an ensemble run needs a Bäcklund map (fields b, eta, branch)") from None
+
+
+def inputs_digest(X0: np.ndarray, b: np.ndarray, eta: np.ndarray) -> str:
+    """SHA-256 of ``X0``, ``b``, ``eta`` (little-endian), recorded in an ensemble's ``run.json``."""
+    h = hashlib.sha256()
+    for a, dt in ((X0, "<f8"), (b, "<f8"), (eta, "<c16")):
+        h.update(np.ascontiguousarray(a, dtype=dt).tobytes())
+    return h.hexdigest()
+
+
+def _ensemble_inputs(spec: RunSpec) -> dict:
+    b, eta, branch = _batch_params(spec.map, spec.B)
+    return {"B": spec.B, "N": spec.n_state // 3, "steps": spec.steps, "save_every": spec.save_every, "branch": branch,
+            "inputs_sha256": inputs_digest(spec.X0, b, eta), "max_drift": spec.limits.max_drift}
+
+
+def _summary(spec: RunSpec) -> Callable[[Health, float], dict]:
+    if spec.layout is Layout.ORBIT:
+        N = spec.n_state // 3
+
+        def orbit(h: Health, elapsed: float) -> dict:
+            return dict(
+                max_drift_abs=h.drift.tolist(),
+                max_drift_rel=(h.drift / np.where(h.I0 != 0, np.abs(h.I0), 1.0)).tolist(),
+                max_drift_rel_note="|I_k(n) - I_k(0)| / |I_k(0)| over the saved rows and chunk ends (absolute "
+                                   "where I_k(0) = 0)",
+                max_imag_residue=h.imag,
+                sphere={"block": f"y_{N - 1}", "radius0": float(h.r0), "max_deviation": h.sphere},
+                elapsed_seconds=elapsed,
+            )
+
+        return orbit
+
+    def ensemble(h: Health, elapsed: float) -> dict:
+        rel = h.relative
+        md = rel.max(axis=1) if len(rel) else np.zeros(0)
+        return dict(
+            max_drift_per_integral=(rel.max(axis=0) if len(rel) else np.zeros(rel.shape[-1])).tolist(),
+            max_drift_note="max over orbits of |I_k(n) - I_k(0)| / max(1, |I_k(0)|) over the saved rows and chunk "
+                           "ends",
+            worst_orbit=int(np.argmax(md)) if len(md) else None,
+            max_imag_residue=h.imag,
+            elapsed_seconds=elapsed,
+        )
+
+    return ensemble
+
+
+def _new_record(spec: RunSpec, health: Health) -> dict:
+    run: dict[str, Any] = {"program": spec.program, "version": _version(), "created": now()}
+    if spec.layout is Layout.ORBIT:
+        run.update(inputs=_orbit_inputs(spec), map=spec.map.describe(), status="running", last_safe_step=0,
+                   integral_names=health.names, integrals0=health.I0.tolist(), integrals0_hex=hex_floats(health.I0),
+                   checkpoint={"step": 0, "X_hex": hex_floats(spec.X0), "nu1_hex": None, "rows": 0, "csv_bytes": 0,
+                               "rows_sha256": RowDigest().hexdigest(), "csv_sha256": hashlib.sha256().hexdigest()})
+    else:
+        run.update(inputs=_ensemble_inputs(spec), status="running", last_safe_step=0,
+                   integral_names=integral_names(spec.n_state // 3),
+                   checkpoint={"step": 0, "rows": 0, "rows_sha256": RowDigest().hexdigest()})
+    run.update(_summary(spec)(health, 0.0))  # complete from the start: a failure at the first checkpoint resumes
+    return run
+
+
+def _version() -> str:
+    import jetgaudin
+
+    return jetgaudin.__version__
+
+
+def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool) -> Store:
+    if spec.layout is Layout.ORBIT:
+        dt = _time_step(spec.map)
+        return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv,
+                          stem="orbit" if dt is None else "flow", time_step=dt)
+    b, eta, _ = _batch_params(spec.map, spec.B)
+    extra = {"X0": spec.X0, "b": b, "eta": eta} if fresh else None
+    store = EnsembleStore(out_dir, run, spec.X0.shape, fresh=fresh, extra=extra)
+    return store
+
+
+def _time_step(m: Map) -> float | None:
+    """The time step of a flow map (its rows are indexed by time ``t = n dt`` in ``flow.csv``), else ``None``."""
+    dt = getattr(m, "dt", None)
+    return None if dt is None else float(dt)
+
+
+def _files(spec: RunSpec, out_dir: Path) -> tuple[Path, ...]:
+    if spec.layout is Layout.ORBIT:
+        stem = "orbit" if _time_step(spec.map) is None else "flow"
+        h5, csv = (ORBIT_H5, ORBIT_CSV) if stem == "orbit" else ("flow.h5", "flow.csv")
+        return (out_dir / h5,) + ((out_dir / csv,) if spec.csv else ()) + (out_dir / RUN_JSON,)
+    return (out_dir / ENSEMBLE_H5, out_dir / RUN_JSON)
+
+
+def _resolved(spec: RunSpec) -> RunSpec:
+    """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
+    resolve = getattr(spec.map, "resolved_backend", None)
+    if spec.map.backend is Backend.AUTO and resolve is not None:
+        m = dataclasses.replace(spec.map, backend=resolve(spec.steps, spec.X0))  # type: ignore[type-var]
+        return dataclasses.replace(spec, map=m)
+    return spec
+
+
+# --------------------------------------------------------------------------------------- entry points
+def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record: dict | None = None,
+          **options: Any) -> RunResult:
+    """Run ``spec`` into the new run directory ``out_dir``.
+
+    The directory is checked before anything is written (:func:`jetgaudin._fs.check_new_run_dir`: a directory
+    holding a run or other files is refused unless ``overwrite``; a directory in use by another writer always) and
+    locked for the run's life.  ``options``: ``progress(n, steps)``, ``handle_signals``, ``max_chunk_steps``,
+    ``max_chunk_bytes``, ``chunk_rows`` (how a run is cut never changes its bits).  ``record``: extra top-level
+    fields of ``run.json`` (e.g. the command line's ``plots`` choice, honoured by a resume).
+
+    Returns a :class:`RunResult`; raises :class:`RunInterrupted` on SIGINT/SIGTERM (checkpoint written),
+    :class:`jetgaudin.RunDirectoryError` / :class:`jetgaudin.RunLockedError` for a refused directory.
+    """
+    out_dir = Path(out_dir)
+    _fs.check_new_run_dir(out_dir, overwrite=overwrite)
+    _fs.make_run_dir(out_dir)
+    spec = _resolved(spec)
+    with _fs.RunDirLock(out_dir):
+        if overwrite:
+            _clear(out_dir)
+        health = Health(spec.map, spec.X0, spec.limits)
+        run = dict(_new_record(spec, health), **(record or {}))
+        store = _open_store(spec, out_dir, run, fresh=True)
+        pos = Position(0, spec.X0.copy(), None)
+        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, **options)
+
+
+def _clear(out_dir: Path) -> None:
+    """Remove the files of an old run (``--overwrite``; the lock is held): links removed, never followed."""
+    import os
+
+    for name in os.listdir(out_dir):
+        if name == _fs.LOCK_NAME:
+            continue
+        path = out_dir / name
+        if path.is_dir() and not path.is_symlink():
+            raise RunDirectoryError(f"--overwrite: {out_dir} holds a directory {name!r}; not a run directory, "
+                                    "refusing to clear it")
+        _fs.remove_file(out_dir, name)
+
+
+def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: Health, elapsed0: float, *,
+           first: bool, progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
+           max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20, chunk_rows: int = 4096) -> RunResult:
+    if isinstance(store, EnsembleStore):
+        store.drift_rel = health.relative
+        original = store.checkpoint
+
+        def checkpoint(step: int, X: np.ndarray, carry: Any, summary: dict) -> None:
+            store.drift_rel = health.relative
+            original(step, X, carry, summary)
+
+        store.checkpoint = checkpoint  # type: ignore[method-assign]
+    driver = Driver(spec, store, pos, health, summary=_summary(spec), elapsed0=elapsed0, progress=progress,
+                    handle_signals=handle_signals, max_chunk_steps=max_chunk_steps, max_chunk_bytes=max_chunk_bytes,
+                    chunk_rows=chunk_rows, first=first)
+    try:
+        out = driver.run()
+    except BaseException as exc:  # a bug or an unexpected error: the checkpointed data stay valid and resumable
+        store.mark("interrupted", error=one_line(f"{type(exc).__name__}: {exc}"))
+        raise
+    finally:
+        store.close()
+    result = RunResult(
+        out_dir=out_dir, status=str(store.run["status"]), state=out.status, last_safe_step=out.last_safe_step,
+        rows=int(store.run["checkpoint"]["rows"]), integrals0=health.I0, drift_abs=health.drift.copy(),
+        drift=health.relative, max_imag_residue=health.imag, sphere_radius0=health.r0,
+        sphere_max_deviation=health.sphere, elapsed=out.elapsed, files=_files(spec, out_dir),
+        kernel=spec.map.backend.value, spec=spec, record=store.run)
+    if out.status is RunStatus.INTERRUPTED:
+        raise RunInterrupted(out.signum, out.last_safe_step, out_dir, command=spec.program, result=result)
+    return result
+
+
+def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_seconds: float | None = None,
+           map_options: dict | None = None, program: str | None = None, **options: Any) -> RunResult:
+    """Continue the run recorded in ``out_dir`` from its last durable checkpoint (bit for bit the uninterrupted run).
+
+    ``expect`` maps names of ``run.json["inputs"]`` to the values the user gave: a difference is refused with
+    :class:`jetgaudin.RecordingError`.  The checkpoint is cross-checked against the last saved row (step, state bits
+    when the checkpoint is on a row, the integrals, and ``ν1`` against the branch rule at the checkpoint state).
+    ``map_options``: extra fields of an ensemble's map (``scheduler``, ``chunk_size``).  Other ``options`` as in
+    :func:`start`.  ``program``: refuse a run of another command (e.g. an orbit given to ``ensemble --resume``).
+    """
+    out_dir = Path(out_dir)
+    if not out_dir.is_dir():
+        raise RecordingError(f"{out_dir} does not exist: not a jetgaudin run directory")
+    with _fs.RunDirLock(out_dir):
+        run = read_run(out_dir, verify=True)
+        if program is not None and run.get("program") != program:
+            kind = "an ensemble" if program == "jetgaudin ensemble" else f"a {program!r} run"
+            raise RecordingError(f"{out_dir} holds a run of {run.get('program')!r}, not {kind}; cannot resume it "
+                                 "with this command")
+        state = RunStatus.of(run)
+        if state is RunStatus.COMPLETED:
+            raise RecordingError(f"the run in {out_dir} is already completed; nothing to resume")
+        if not state.resumable:
+            raise RecordingError(f"the run in {out_dir} {run['status']}; it cannot be resumed (it would fail again)")
+        try:
+            spec, pos, health, elapsed0 = _restore(out_dir, run, map_options or {})
+        except (KeyError, TypeError, ValueError, IndexError, OSError, AttributeError, JetGaudinError) as exc:
+            if isinstance(exc, RunDirectoryError):
+                raise
+            raise RecordingError(f"{out_dir} holds a corrupted run ({one_line(exc)}); cannot resume") from None
+        if checkpoint_seconds is not None:
+            spec = dataclasses.replace(spec, checkpoint_seconds=checkpoint_seconds)
+        diff = [k for k, v in (expect or {}).items() if run["inputs"].get(k, object()) != v]
+        if diff:
+            raise RecordingError(f"cannot resume {out_dir} with different inputs ({', '.join(diff)}); drop those "
+                                 "options or start a new run in another --out directory")
+        store = _open_store(spec, out_dir, run, fresh=False)
+        try:
+            _cross_check(store, spec, pos, health)
+        except BaseException:
+            store.close()
+            raise
+        return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, **options)
+
+
+def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float]:
+    rec, ck = run["inputs"], run["checkpoint"]
+    limits = HealthLimits(float(rec["max_drift"]), float(rec.get("max_imag", np.inf)))
+    program = str(run.get("program", "jetgaudin orbit"))
+    elapsed0 = float(run.get("elapsed_seconds", 0.0))
+    if "B" not in rec:  # an orbit directory
+        m = map_from_description(run["map"]) if "map" in run else _legacy_two_point(rec)
+        spec = RunSpec(m, np.array(rec["init"], dtype=float), rec["steps"], rec["save_every"], limits,
+                       csv=bool(rec["csv"]), program=program)
+        I0 = unhex(run["integrals0_hex"])
+        health = Health(spec.map, spec.X0, limits, I0=I0)
+        health.drift = np.array(run["max_drift_abs"], dtype=float)
+        health.imag = float(run["max_imag_residue"])
+        health.sphere = float(run["sphere"]["max_deviation"])
+        X = unhex(ck["X_hex"])
+        carry: Any = None if ck["nu1_hex"] is None else np.complex128(complex(*unhex(ck["nu1_hex"])))
+        n0 = int(ck["step"])
+        if X.shape != spec.X0.shape or health.drift.shape != I0.shape or I0.shape != health.scale.shape:
+            raise ValueError("inconsistent checkpoint")
+    else:
+        if program != "jetgaudin ensemble":
+            raise RecordingError(f"{out_dir} holds a run of {program!r}, not an ensemble; cannot resume")
+        from ..ensemble import BatchBacklund
+
+        with open_h5_read(out_dir / ENSEMBLE_H5) as f:
+            X0, b, eta = np.array(f["X0"]), np.array(f["b"]), np.array(f["eta"])
+        if inputs_digest(X0, b, eta) != rec["inputs_sha256"]:
+            raise ValueError("the stored X0, b, eta do not match their digest in run.json")
+        m = BatchBacklund(b, eta, rec["branch"], **map_options)
+        spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
+        d = read_checkpoint_npz(out_dir, ck, X0.shape)
+        n0, X = int(d["step"]), d["X"]
+        carry = d["nu1"] if d["nu1"].size else None
+        health = Health(spec.map, spec.X0, limits)
+        if d["drift"].shape != health.I0.shape or X.shape != X0.shape or n0 != int(ck["step"]):
+            raise ValueError("inconsistent checkpoint")
+        health.drift = d["drift"] * health.scale
+    if not (0 <= n0 <= spec.steps) or not np.all(np.isfinite(X)):
+        raise ValueError("inconsistent checkpoint")
+    return spec, Position(n0, X, carry), health, elapsed0
+
+
+def _legacy_two_point(rec: dict) -> Map:
+    from ..backlund.maps import TwoPointBacklund
+
+    return TwoPointBacklund(rec["b"], complex(*rec["eta"]), rec["branch"], Backend.parse(rec["kernel"]))
+
+
+def _cross_check(store: Store, spec: RunSpec, pos: Position, health: Health) -> None:
+    """Refuse a checkpoint that does not belong to its rows: its step must follow the last saved row within one
+    save interval, its state must equal that row bit for bit when on it, its integrals must match the run's, and
+    ``ν1`` must be the branch-rule root at its state (a hand-edited ``run.json`` with a recomputed digest is
+    refused)."""
+    bad = RecordingError(f"{store.out_dir / RUN_JSON}: the checkpoint does not match the saved rows (edited or "
+                         "corrupted); cannot resume")
+    if store.rows < 1:  # nothing was durable (a failure at the first checkpoint): start again from X0
+        if pos.n != 0 or not np.array_equal(pos.X, spec.X0):
+            raise bad
+        return
+    n_last = int(store.dn[store.rows - 1])
+    X_last = np.array(store.dS[store.rows - 1])
+    if not (n_last <= pos.n < n_last + spec.save_every or pos.n == n_last):
+        raise bad
+    if pos.n == n_last and not np.array_equal(X_last, pos.X):
+        raise bad
+    with np.errstate(all="ignore"):  # the checkpoint state was health-checked: its drift is within the record
+        d = np.abs(spec.map.integrals(pos.X) - health.I0)
+    if not np.all(d <= 2 * health.drift + 1e-10 * health.scale):
+        raise bad
+    if pos.carry is not None:
+        try:
+            ref = np.asarray(spec.map.start(pos.X), dtype=complex)
+        except JetGaudinError:
+            raise bad from None
+        c = np.asarray(pos.carry, dtype=complex)
+        if not np.all(np.abs(c - ref) <= 1e-6 * np.maximum(1.0, np.abs(ref))):
+            raise bad

@@ -1,0 +1,270 @@
+"""The one driver loop of every run (orbit, ensemble, flow): chunking, signals, health, checkpoints, progress.
+
+The loop advances ``spec.map`` through :meth:`jetgaudin.maps.Map.advance` only.  Kernel calls are bounded in
+time, not in saved rows: a call lasts about :data:`CALL_SECONDS` (its length adapts to the measured step rate,
+independently of ``save_every``), so SIGINT/SIGTERM are honoured within a fraction of a second.  Maps whose
+``advance`` gives the same bits however a run is split (``chunk_invariant``, the Bäcklund maps) are cut anywhere;
+other maps (flows) in fixed chunks on the save grid, so that a resumed run meets the same cuts.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._errors import JetGaudinError, RunIOError
+from ..maps import Backend
+from .files import one_line
+from .health import Health
+from .spec import RunSpec, RunStatus
+from .store import Store
+
+#: target duration of one kernel call (signals are handled between calls)
+CALL_SECONDS = 0.05
+#: at most this long between two health checks / appends of the accumulated rows
+FLUSH_SECONDS = 0.1
+
+
+class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input), hence not a JetGaudinError
+    """The run stopped on SIGINT / SIGTERM after writing a checkpoint (``signum``, ``last_safe_step``)."""
+
+    def __init__(self, signum: int, last_safe_step: int, out_dir: Path, command: str = "jetgaudin orbit",
+                 result: Any = None):
+        self.signum = int(signum)
+        self.last_safe_step = int(last_safe_step)
+        self.out_dir = Path(out_dir)
+        self.result = result
+        name = signal.Signals(self.signum).name
+        super().__init__(
+            f"interrupted by {name} at step {last_safe_step} (saved); resume with: {command} --resume {out_dir}"
+        )
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + self.signum
+
+
+class SignalFlag:
+    """Install SIGINT/SIGTERM handlers that only set a flag (main thread only; a no-op elsewhere)."""
+
+    def __init__(self, enabled: bool):
+        self.signum = 0
+        self._old: dict[int, Any] = {}
+        self.enabled = enabled and threading.current_thread() is threading.main_thread()
+
+    def _handler(self, signum: int, _frame: Any) -> None:
+        self.signum = signum
+
+    def __enter__(self) -> SignalFlag:
+        if self.enabled:
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self._old[s] = signal.signal(s, self._handler)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        for s, h in self._old.items():
+            signal.signal(s, h)
+
+
+@dataclass
+class Position:
+    """Where a run stands: step ``n``, state ``X`` and ``carry`` (``None``: not started)."""
+
+    n: int
+    X: np.ndarray
+    carry: Any
+
+
+@dataclass
+class Outcome:
+    """What the loop ends with: the status, its reason and the position of the last durable checkpoint."""
+
+    status: RunStatus
+    reason: str | None
+    last_safe_step: int
+    elapsed: float
+    signum: int = 0
+    extra: dict = field(default_factory=dict)
+
+
+def piece(n: int, L: int, steps: int, every: int) -> tuple[int, int]:
+    """The next kernel call from step ``n`` with at most ``L`` steps: ``(k, save_every)``; whole save intervals when
+    on the save grid, else up to the grid (or to ``steps``)."""
+    rem, off = steps - n, n % every
+    if off:
+        k = min(every - off, rem, L)
+    elif rem < every:
+        k = min(rem, L)
+    elif L >= every:
+        k = min(L, rem) // every * every
+    else:
+        k = L
+    return k, (every if off == 0 and k % every == 0 else k)
+
+
+class Driver:
+    """Runs ``spec`` from ``pos`` into ``store`` (see the module doc); ``summary(health, elapsed)`` gives the
+    layout's summary fields of ``run.json``."""
+
+    def __init__(self, spec: RunSpec, store: Store, pos: Position, health: Health, *,
+                 summary: Callable[[Health, float], dict], elapsed0: float = 0.0,
+                 progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
+                 max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20, chunk_rows: int = 4096,
+                 first: bool = False):
+        self.spec, self.store, self.pos, self.health = spec, store, pos, health
+        self.summary_fn, self.elapsed0, self.progress = summary, elapsed0, progress
+        self.handle_signals, self.first = handle_signals, first
+        row_bytes = 8 * spec.B * spec.n_state
+        self.max_rows = max(1, min(int(chunk_rows), int(max_chunk_bytes) // max(1, row_bytes)))
+        self.max_steps = max_chunk_steps
+        self.t_start = time.monotonic()
+
+    def summary(self, status: str) -> dict:
+        return dict(self.summary_fn(self.health, self.elapsed()), status=status)
+
+    def elapsed(self) -> float:
+        return self.elapsed0 + time.monotonic() - self.t_start
+
+    def _limit(self, L: int) -> int:
+        every = self.spec.save_every
+        L = min(L, self.max_rows * every)
+        return max(1, L if self.max_steps is None else min(L, self.max_steps))
+
+    def run(self) -> Outcome:
+        spec, store, pos, health = self.spec, self.store, self.pos, self.health
+        steps, every, m = spec.steps, spec.save_every, spec.map
+        per_step = m.backend is Backend.NUMPY and getattr(m, "chunk_invariant", True)
+        invariant = getattr(m, "chunk_invariant", True)
+        sample_imag = m.backend is Backend.COMPILED and m.properties.real and np.isfinite(spec.limits.max_imag)
+        L = 1 if per_step else (every * max(1, 256 // every) if not invariant else max(1, (1 << 12) // spec.B))
+        failure: str | None = None
+        t_ck = time.monotonic()
+        with SignalFlag(self.handle_signals) as sig:
+            try:
+                if self.first:
+                    bad = health.check([0], pos.X[None])
+                    failure = bad.reason if bad else None
+                    store.append(np.array([0]), pos.X[None])
+                    store.checkpoint(0, pos.X, pos.carry, self.summary("running"))
+                while failure is None and pos.n < steps and not sig.signum:
+                    failure = self._chunk(sig, L if not invariant else None, sample_imag, per_step)
+                    if invariant and not per_step:
+                        L = self._L
+                    now = time.monotonic()
+                    if failure is None and now - t_ck >= spec.checkpoint_seconds:
+                        store.checkpoint(pos.n, pos.X, pos.carry, self.summary("running"))
+                        t_ck = now
+                if sig.signum and failure is None and pos.n < steps:
+                    status, text = RunStatus.INTERRUPTED, "interrupted"
+                elif failure is not None:
+                    status, text = RunStatus.FAILED, f"failed: {failure}"
+                else:
+                    status, text = RunStatus.COMPLETED, "completed"
+                store.checkpoint(pos.n, pos.X, pos.carry, self.summary(text))
+            except RunIOError as exc:
+                reason = one_line(exc)
+                store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())
+                return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
+            if self.progress is not None:
+                self.progress(pos.n, steps)
+        return Outcome(status, failure, pos.n, self.elapsed(), signum=sig.signum if status is RunStatus.INTERRUPTED
+                       else 0)
+
+    _L = 1
+
+    def _chunk(self, sig: SignalFlag, fixed: int | None, sample_imag: bool, per_step: bool) -> str | None:
+        """Advance by kernel calls for about :data:`FLUSH_SECONDS` (or one fixed chunk), then check the health of
+        the rows and the end state and append the rows that passed.  Returns a failure reason or ``None``."""
+        spec, pos, health, m = self.spec, self.pos, self.health, self.spec.map
+        steps, every = spec.steps, spec.save_every
+        rows_n: list[int] = []
+        rows: list[np.ndarray] = []
+        ends: list[tuple[int, np.ndarray, Any]] = []  # (step, X, carry) after each call
+        failure: str | None = None
+        if sample_imag:  # the compiled route does not compute the residue: one reference step per chunk
+            Xs = pos.X if pos.X.ndim == 1 else pos.X[:64]
+            cs = pos.carry if (pos.carry is None or pos.X.ndim == 1) else pos.carry[:64]
+            try:
+                imag = m.step(Xs, cs)[2]
+            except JetGaudinError:
+                imag = np.zeros(0)  # the kernel call below meets the same singularity and reports it
+            failure = health.check_imag(pos.n + 1, imag)
+            if failure:
+                return failure
+        t0 = time.monotonic()
+        n, X, carry = pos.n, pos.X, pos.carry
+        while n < steps:
+            L = fixed if fixed is not None else (1 if per_step else self._limit(self._L))
+            k, se = piece(n, L, steps, every)
+            tc = time.monotonic()
+            try:
+                adv = m.advance(X, carry, k, se)
+            except JetGaudinError as exc:  # SingularStepError, BranchPointError met along the orbit
+                failure = f"{type(exc).__name__} after step {n}: {one_line(exc)}"
+                break
+            dt = time.monotonic() - tc
+            if fixed is None and not per_step:
+                self._L = self._adapt(self._L, k, dt)
+            if se == every and k >= every:
+                rows_n.extend(range(n + every, n + k + 1, every))
+                rows.extend(adv.rows)
+            elif (n + k) % every == 0 or n + k == steps:
+                rows_n.append(n + k)
+                rows.append(adv.rows[-1])
+            n, X, carry = n + k, adv.X, adv.carry
+            if per_step or not sample_imag:
+                failure = health.check_imag(n, adv.imag_max)
+                if failure:
+                    if rows_n and rows_n[-1] == n:
+                        rows_n.pop()
+                        rows.pop()
+                    n, X, carry = ends[-1] if ends else (pos.n, pos.X, pos.carry)
+                    break
+            ends.append((n, X, carry))
+            if self.progress is not None:  # after every kernel call (a display: the rows are checked below)
+                self.progress(n, steps)
+            if fixed is not None or sig.signum or time.monotonic() - t0 >= FLUSH_SECONDS or len(rows_n) >= \
+                    self.max_rows:
+                break
+        return self._commit(rows_n, rows, ends, failure)
+
+    def _commit(self, rows_n: list[int], rows: list[np.ndarray], ends: list[tuple[int, np.ndarray, Any]],
+                failure: str | None) -> str | None:
+        """Health-check the rows and the last end state; append the rows that passed; move the position to the last
+        state that passed (the last step that passed is what ``last_safe_step`` reports)."""
+        health, pos = self.health, self.pos
+        S = np.asarray(rows) if rows else np.empty((0,) + pos.X.shape)
+        bad = health.check(rows_n, S)
+        if bad is not None:
+            keep = bad.index
+            self.store.append(np.asarray(rows_n[:keep], dtype=np.int64), S[:keep])
+            if keep:
+                pos.n, pos.X, pos.carry = rows_n[keep - 1], S[keep - 1], None
+            return bad.reason
+        if ends:
+            n_end, X_end, c_end = ends[-1]
+            if not rows_n or rows_n[-1] != n_end:
+                bad = health.check([n_end], X_end[None])
+                if bad is not None:
+                    self.store.append(np.asarray(rows_n, dtype=np.int64), S)
+                    if rows_n:
+                        pos.n, pos.X, pos.carry = rows_n[-1], S[-1], None
+                    return bad.reason
+        self.store.append(np.asarray(rows_n, dtype=np.int64), S)
+        if ends:
+            pos.n, pos.X, pos.carry = ends[-1]
+        return failure
+
+    def _adapt(self, L: int, k: int, dt: float) -> int:
+        """The next call length: about :data:`CALL_SECONDS` at the measured rate, at most 4x the last one."""
+        if k < L:  # a short piece (grid alignment, end of run): no information on the rate at length L
+            return L
+        rate = k / max(dt, 1e-6)
+        return int(max(1, min(4 * L, rate * CALL_SECONDS)))

@@ -1,0 +1,82 @@
+"""Numerical health of a run: drift of the preserved integrals, the radius ``|y_{N-1}|`` and the imaginary residue
+(private; the one home of these checks)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..maps import Map
+from .spec import HealthLimits, integral_names
+
+
+@dataclass
+class Failure:
+    """The first breach met: ``reason`` (one line) and ``index`` of the first bad row in the rows checked."""
+
+    reason: str
+    index: int
+
+
+class Health:
+    """Running maxima over the checked states of a run: ``drift`` ``(..., k)`` = ``max |I(X_n) − I(X_0)|``
+    (absolute; relative to ``max(1, |I(X_0)|)`` for the check), ``sphere`` = ``max ||y_{N-1}(n)| − |y_{N-1}(0)||``
+    (a Casimir, ``√C_N``) and ``imag`` = the largest imaginary residue."""
+
+    def __init__(self, map_: Map, X0: np.ndarray, limits: HealthLimits, *, I0: np.ndarray | None = None):
+        self.map, self.limits = map_, limits
+        self.I0 = np.asarray(map_.integrals(X0), dtype=float) if I0 is None else np.asarray(I0, dtype=float)
+        self.scale = np.maximum(1.0, np.abs(self.I0))
+        self.drift = np.zeros_like(self.I0)
+        self.r0 = np.linalg.norm(np.asarray(X0)[..., -3:], axis=-1)
+        self.sphere = 0.0
+        self.imag = 0.0
+        k = self.I0.shape[-1]
+        self.names = integral_names(k // 2) if k % 2 == 0 else [f"I_{i + 1}" for i in range(k)]
+
+    @property
+    def relative(self) -> np.ndarray:
+        """``drift / max(1, |I(X_0)|)``, shape ``(..., k)``."""
+        return self.drift / self.scale
+
+    def check(self, steps: list[int], S: np.ndarray) -> Failure | None:
+        """Check the states ``S`` ``(m, ..., n)`` reached at ``steps``; update the maxima with the rows up to the
+        first bad one; return the first breach or ``None``."""
+        if len(steps) == 0:
+            return None
+        S = np.asarray(S)
+        with np.errstate(all="ignore"):
+            d = np.abs(self.map.integrals(S) - self.I0)
+            sph = np.abs(np.linalg.norm(S[..., -3:], axis=-1) - self.r0)
+        rel = d / self.scale
+        rows = rel.reshape(len(steps), -1)
+        bad_row = ~np.all(np.isfinite(rows), axis=1) | np.any(rows > self.limits.max_drift, axis=1)
+        first = int(np.argmax(bad_row)) if np.any(bad_row) else len(steps)
+        upto = min(first + 1, len(steps))
+        fin = np.where(np.isfinite(d[:upto]), d[:upto], 0.0)
+        self.drift = np.maximum(self.drift, fin.max(axis=0))
+        self.sphere = max(self.sphere, float(np.nan_to_num(sph[:upto]).max()))
+        if first == len(steps):
+            return None
+        where = self._where(rel[first])
+        if not np.all(np.isfinite(rel[first])):
+            return Failure(f"non-finite integrals{where[0]} at step {steps[first]}", first)
+        orbit, k = where[1], where[2]
+        return Failure(
+            f"integral drift: {self.names[k]}{orbit} drifted by {float(rel[first][where[3]]):.4e} (relative to "
+            f"max(1, |I(0)|)) at step {steps[first]} > max_drift {self.limits.max_drift:g}", first)
+
+    def _where(self, rel_row: np.ndarray):
+        bad = ~np.isfinite(rel_row) | (rel_row > self.limits.max_drift)
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        orbit = f" of orbit {idx[0]}" if rel_row.ndim == 2 else ""
+        return orbit, orbit, idx[-1], idx
+
+    def check_imag(self, step: int, imag: np.ndarray) -> str | None:
+        """Record the imaginary residue of the step to ``step``; the breach of ``max_imag`` or ``None``."""
+        im = float(np.max(imag)) if np.size(imag) else 0.0
+        self.imag = max(self.imag, im)
+        if im > self.limits.max_imag:
+            return f"imaginary residue {im:.3e} of the real map at step {step} > max_imag {self.limits.max_imag:g}"
+        return None

@@ -1,0 +1,64 @@
+"""Reading a run directory back: :func:`load` (any layout) and the rows ``run.json`` declares safe."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._errors import RecordingError
+from .files import ENSEMBLE_H5, ORBIT_H5, open_h5_read, read_run
+from .spec import Layout, RunStatus
+
+__all__ = ["RunData", "load"]
+
+
+@dataclass(frozen=True)
+class RunData:
+    """A run directory's safe rows: ``n`` (rows,), ``X`` (rows, n) for an orbit or (rows, B, n) for an ensemble, the
+    parsed ``run.json`` (``record``), its status and layout; ensembles also ``X0`` (B, n), ``b`` (B,), ``eta`` (B,)."""
+
+    n: np.ndarray
+    X: np.ndarray
+    record: dict
+    status: RunStatus
+    layout: Layout
+    X0: np.ndarray | None = None
+    b: np.ndarray | None = None
+    eta: np.ndarray | None = None
+
+    @property
+    def states(self) -> np.ndarray:
+        """Alias of ``X`` (the name of ensemble runs)."""
+        return self.X
+
+    @property
+    def last_state(self) -> np.ndarray:
+        """The last safe saved state (``(n,)`` or ``(B, n)``), e.g. to start another run from it."""
+        if len(self.n) == 0:
+            raise RecordingError("the run holds no saved row")
+        return self.X[-1]
+
+
+def load(out_dir: str | Path, *, rows: slice | None = None) -> RunData:
+    """The rows of a run directory that ``run.json`` declares safe (``rows``: a slice of them, to read part of a
+    large run; rows beyond the checkpoint are never read)."""
+    out_dir = Path(out_dir)
+    run = read_run(out_dir)
+    safe = int(run.get("checkpoint", {}).get("rows", 0))
+    layout = Layout.ENSEMBLE if "B" in run.get("inputs", {}) else Layout.ORBIT
+    name, data = (ENSEMBLE_H5, "states") if layout is Layout.ENSEMBLE else (ORBIT_H5, "X")
+    if run.get("map", {}).get("kind") == "flow":
+        name = "flow.h5"
+    path = out_dir / name
+    a, e, _ = (rows or slice(None)).indices(safe)
+    try:
+        with open_h5_read(path) as f:
+            if f[data].shape[0] < safe or f["n"].shape[0] < safe:
+                raise RecordingError(f"{path} holds fewer rows than run.json records: truncated")
+            n, X = f["n"][a:e], f[data][a:e]
+            extra = {k: f[k][()] for k in ("X0", "b", "eta")} if layout is Layout.ENSEMBLE else {}
+    except (OSError, KeyError) as exc:
+        raise RecordingError(f"cannot read {path}: {exc}") from None
+    return RunData(n=n, X=X, record=run, status=RunStatus.of(run), layout=layout, **extra)

@@ -1,0 +1,160 @@
+"""What a run is: a validated :class:`RunSpec` (map, initial states, steps, save cadence, health limits) and the
+run statuses (the *recording* layer; see ``docs/architecture.md``).  Every rule about a run's inputs is checked
+here, once; the command line only converts text to values."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+
+from .._errors import InvalidParameterError
+from .._validate import as_state
+from ..maps import Map, check_count
+
+__all__ = [
+    "DEFAULT_MAX_DRIFT",
+    "DEFAULT_MAX_IMAG",
+    "HealthLimits",
+    "Layout",
+    "RunSpec",
+    "RunStatus",
+    "integral_names",
+]
+
+#: default health thresholds.  The map preserves the integrals up to round-off, which accumulates about
+#: linearly: ~2e-13 (relative) after 10^3 steps and ~1e-8 after 5*10^7 steps for Appendix 2 (measured by
+#: benchmarks/memory_long_run.py), i.e. ~2e-16 per step.  1e-6 leaves room for ~10^9 steps of round-off and
+#: still flags a genuine loss of accuracy (a near-singular step jumps by far more).  The imaginary residue
+#: of a real step is ~1e-18; 1e-8 flags a step that is no longer real.
+DEFAULT_MAX_DRIFT = 1e-6
+DEFAULT_MAX_IMAG = 1e-8
+
+#: largest number of states one run may hold in memory per orbit batch (B * n doubles): 2**31 doubles = 16 GiB
+_MAX_BATCH_VALUES = 1 << 31
+
+
+class RunStatus(StrEnum):
+    """The state of a run directory.  ``FAILED``: the run stopped on a health check or a singular step (not
+    resumable: it would fail again); ``FAILED_IO``: writing failed (full disk, I/O error) after the last
+    durable checkpoint (resumable once the cause is removed)."""
+
+    RUNNING = "running"
+    COMPLETED = "completed"
+    INTERRUPTED = "interrupted"
+    FAILED = "failed"
+    FAILED_IO = "failed_io"
+
+    @classmethod
+    def of(cls, run: dict) -> RunStatus:
+        """The status a ``run.json`` records (its ``status`` text is ``failed: <reason>`` for both failures)."""
+        text = str(run.get("status", ""))
+        if text.startswith("failed"):
+            return cls.FAILED_IO if run.get("failure") == "io" else cls.FAILED
+        try:
+            return cls(text)
+        except ValueError:
+            return cls.FAILED
+
+    @property
+    def resumable(self) -> bool:
+        return self in (RunStatus.RUNNING, RunStatus.INTERRUPTED, RunStatus.FAILED_IO)
+
+
+class Layout(StrEnum):
+    """Files of a run directory: ``ORBIT`` (one state: ``orbit.h5``, ``orbit.csv``, ``run.json``) or ``ENSEMBLE``
+    (a batch ``(B, n)``: ``ensemble.h5``, ``checkpoint-0/1.npz``, ``run.json``)."""
+
+    ORBIT = "orbit"
+    ENSEMBLE = "ensemble"
+
+
+def integral_names(N: int) -> list[str]:
+    """``["H_1", …, "H_N", "C_1", …, "C_N"]``, the order of :func:`jetgaudin.integrals`."""
+    return [f"H_{k}" for k in range(1, N + 1)] + [f"C_{k}" for k in range(1, N + 1)]
+
+
+@dataclass(frozen=True)
+class HealthLimits:
+    """Thresholds of the numerical health checks (defaults :data:`DEFAULT_MAX_DRIFT`, :data:`DEFAULT_MAX_IMAG`;
+    ``inf`` disables a check)."""
+
+    max_drift: float = DEFAULT_MAX_DRIFT
+    max_imag: float = DEFAULT_MAX_IMAG
+
+    def __post_init__(self) -> None:
+        for name in ("max_drift", "max_imag"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int | float) or math.isnan(v) or v < 0:
+                raise InvalidParameterError(f"{name} must be a number >= 0 (inf disables the check), got {v!r}")
+            object.__setattr__(self, name, float(v))
+
+
+@dataclass(frozen=True, eq=False)
+class RunSpec:
+    """A run: ``map`` advanced ``steps`` steps from ``X0`` keeping every ``save_every``-th state (and the last).
+
+    ``X0``: one state ``(n,)`` (an *orbit* directory) or a batch ``(B, n)`` (an *ensemble* directory);
+    ``limits``: health thresholds; ``csv``: also write ``orbit.csv`` (orbits only); ``program``: the command
+    named in ``run.json`` and in resume hints.  Validated once, here: the counts (integers in int64), the
+    state (finite, real, length ``map.n_state``, integrals representable) and the map's set-up at ``X0``
+    (``map.start``: a branch point of ``ν`` is refused with :class:`jetgaudin.BranchPointError` whatever the
+    layout).
+    """
+
+    map: Map
+    X0: np.ndarray
+    steps: int
+    save_every: int = 1
+    limits: HealthLimits = field(default_factory=HealthLimits)
+    csv: bool = True
+    program: str = "jetgaudin orbit"
+    checkpoint_seconds: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.map, Map):
+            raise InvalidParameterError(f"map must be a jetgaudin.maps.Map, got {type(self.map).__name__}")
+        X0, _ = as_state(self.X0, name="the initial state")
+        if X0.ndim not in (1, 2):
+            raise InvalidParameterError(f"X0 must be one state (n,) or a batch (B, n), got shape {X0.shape}")
+        if self.map.n_state is not None and X0.shape[-1] != self.map.n_state:
+            raise InvalidParameterError(f"X0 has {X0.shape[-1]} components, the map acts on {self.map.n_state}")
+        if X0.size > _MAX_BATCH_VALUES:
+            raise InvalidParameterError(f"X0 holds {X0.size} numbers; a run holds at most {_MAX_BATCH_VALUES}")
+        object.__setattr__(self, "X0", np.ascontiguousarray(X0))
+        object.__setattr__(self, "steps", check_count(self.steps, "steps"))
+        object.__setattr__(self, "save_every", check_count(self.save_every, "save_every", 1))
+        if not isinstance(self.limits, HealthLimits):
+            raise InvalidParameterError("limits must be a HealthLimits")
+        object.__setattr__(self, "checkpoint_seconds", self.check_checkpoint_seconds(self.checkpoint_seconds))
+        with np.errstate(all="ignore"):
+            if not np.all(np.isfinite(self.map.integrals(self.X0))):
+                raise InvalidParameterError(
+                    "the initial state is too large: its integrals overflow double precision; scale it down")
+            if self.X0.shape[0] > 0 or self.X0.ndim == 1:
+                carry = np.asarray(self.map.start(self.X0))
+                if not np.all(np.isfinite(carry)):
+                    raise InvalidParameterError(
+                        "the map cannot be set up at the initial state (non-finite nu); b, eta or the state is "
+                        "too large")
+
+    @staticmethod
+    def check_checkpoint_seconds(cs: object) -> float:
+        """The checkpoint cadence: a finite number of seconds >= 0."""
+        if isinstance(cs, bool) or not isinstance(cs, int | float) or not (0 <= cs < math.inf):
+            raise InvalidParameterError(f"checkpoint_seconds must be a finite number >= 0, got {cs!r}")
+        return float(cs)
+
+    @property
+    def layout(self) -> Layout:
+        return Layout.ORBIT if self.X0.ndim == 1 else Layout.ENSEMBLE
+
+    @property
+    def n_state(self) -> int:
+        return int(self.X0.shape[-1])
+
+    @property
+    def B(self) -> int:
+        return 1 if self.X0.ndim == 1 else int(self.X0.shape[0])

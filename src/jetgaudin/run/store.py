@@ -1,0 +1,353 @@
+"""Writing run directories (private): rows appended to HDF5 (and CSV), durable checkpoints, ``run.json``.
+
+One rule for every checkpoint (``docs/reliability.md``): the rows are flushed and ``fsync``-ed, then the
+checkpoint (an ``.npz`` slot for ensembles; inside ``run.json`` for orbits) is written durably, then ``run.json``
+is replaced atomically; the in-memory record is updated only once ``run.json`` is on disk.  Any ``OSError`` or
+HDF5 error on the way raises :class:`jetgaudin.RunIOError` and leaves the last durable checkpoint in force.
+Every file is opened through :mod:`jetgaudin._fs` (no symlink followed, no stray ``.tmp``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import io
+import json
+import os
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _fs
+from .._errors import RecordingError, RunIOError
+from .files import (
+    ENSEMBLE_H5,
+    ORBIT_H5,
+    RowDigest,
+    csv_header,
+    file_sha256,
+    format_rows,
+    hex_floats,
+    open_h5_read,
+    write_run,
+)
+
+#: errors that mean "writing failed" (h5py raises RuntimeError or OSError subclasses for HDF5 failures)
+WRITE_ERRORS = (OSError, RuntimeError)
+
+
+def now() -> str:
+    return time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
+
+
+class Store:
+    """Rows ``(k, ..., n)`` appended to ``<h5_name>`` (datasets ``n`` and ``<data>``), checkpoints, ``run.json``."""
+
+    h5_name = ORBIT_H5
+    data = "X"
+    _COPY_BLOCK_BYTES = 64 << 20
+
+    def __init__(self, out_dir: Path, run: dict, shape: tuple[int, ...], *, fresh: bool,
+                 extra: dict[str, np.ndarray] | None = None):
+        self.out_dir, self.run, self.shape = Path(out_dir), run, tuple(shape)
+        self.h_rows = RowDigest()
+        self.rows = 0 if fresh else int(run["checkpoint"]["rows"])
+        self.f: Any = None
+        self._build_h5(fresh, extra or {})
+        import h5py
+
+        try:
+            self.f = h5py.File(self.out_dir / self.h5_name, "a", libver="latest")
+            self.dn, self.dS = self.f["n"], self.f[self.data]
+            self.f.swmr_mode = True
+        except WRITE_ERRORS as exc:
+            raise RunIOError(f"{_fs.io_failure(exc)} while opening {self.out_dir / self.h5_name}") from exc
+
+    # ------------------------------------------------------------------------------------------- HDF5
+    def _build_h5(self, fresh: bool, extra: dict[str, np.ndarray]) -> None:
+        """A new HDF5 file with the inputs and (on resume) exactly the checkpointed rows of the old one, verified
+        against their digest (drops rows written after the last checkpoint and clears a killed writer's SWMR
+        flag)."""
+        import h5py
+
+        tmp = self.h5_name + ".tmp"
+        path, tmp_path = self.out_dir / self.h5_name, self.out_dir / tmp
+        _fs.remove_file(self.out_dir, tmp)  # a stale file or a planted symlink: removed, never followed
+        old = None
+        try:
+            if not fresh:
+                try:
+                    old = open_h5_read(path)
+                    if old["n"].shape[0] < self.rows or old[self.data].shape[0] < self.rows:
+                        raise RecordingError(f"{path} is truncated: it holds fewer rows than run.json records; "
+                                             "cannot resume")
+                    if old[self.data].shape[1:] != self.shape:
+                        raise ValueError("the stored states do not match the recorded run")
+                    extra = {k: np.array(old[k]) for k in self._extra_names()}
+                except (OSError, KeyError, ValueError, TypeError) as exc:
+                    raise RecordingError(f"{path} is unreadable or corrupted ({exc}); cannot resume") from None
+            try:
+                self._write_h5(h5py, tmp_path, old, extra)
+            except WRITE_ERRORS as exc:
+                raise RunIOError(f"{_fs.io_failure(exc)} while writing {tmp_path}") from exc
+        except BaseException:
+            _fs.remove_file(self.out_dir, tmp)
+            raise
+        finally:
+            if old is not None:
+                old.close()
+        if not fresh and self.h_rows.hexdigest() != self.run["checkpoint"].get("rows_sha256"):
+            _fs.remove_file(self.out_dir, tmp)
+            raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        try:
+            _fs.check_regular_or_absent(self.out_dir, self.h5_name)
+            os.replace(tmp_path, path)
+            _fs.fsync_dir(self.out_dir)
+        except OSError as exc:
+            _fs.remove_file(self.out_dir, tmp)
+            raise RunIOError(f"{_fs.io_failure(exc)} while writing {path}") from exc
+
+    def _extra_names(self) -> tuple[str, ...]:
+        return ()
+
+    def _write_h5(self, h5py: Any, path: Path, old: Any, extra: dict[str, np.ndarray]) -> None:
+        rows = self.rows if old is not None else 0
+        row_values = int(np.prod(self.shape))
+        with h5py.File(path, "w", libver="latest") as f:
+            for k, v in extra.items():
+                f.create_dataset(k, data=v)
+            per_chunk = self._h5_chunks()
+            dn = f.create_dataset("n", shape=(rows,), maxshape=(None,), chunks=(4096,), dtype="i8")
+            dS = f.create_dataset(self.data, shape=(rows,) + self.shape, maxshape=(None,) + self.shape,
+                                  chunks=per_chunk, dtype="f8")
+            block = max(1, self._COPY_BLOCK_BYTES // (8 * max(1, row_values)))
+            for a in range(0, rows, block):
+                e = min(rows, a + block)
+                bn, bS = old["n"][a:e], old[self.data][a:e]
+                dn[a:e], dS[a:e] = bn, bS
+                self.h_rows.update(bn, bS)
+            self._attrs(f)
+
+    def _h5_chunks(self) -> tuple[int, ...]:
+        return (4096,) + self.shape
+
+    def _attrs(self, f: Any) -> None:
+        f.attrs["note"] = "rows beyond run.json checkpoint.rows are not data (see docs/reliability.md)"
+
+    # ------------------------------------------------------------------------------------------ writes
+    def append(self, n_idx: np.ndarray, S: np.ndarray) -> None:
+        """Append rows ``S`` ``(k,) + shape`` at steps ``n_idx`` (not yet durable: see :meth:`checkpoint`)."""
+        k = len(n_idx)
+        if k == 0:
+            return
+        r = self.rows
+        try:
+            self.dn.resize((r + k,))
+            self.dS.resize((r + k,) + self.shape)
+            self.dn[r : r + k] = n_idx
+            self.dS[r : r + k] = S
+            self._append_more(n_idx, S)
+        except WRITE_ERRORS as exc:
+            raise RunIOError(f"{_fs.io_failure(exc)} while appending rows") from exc
+        self.h_rows.update(n_idx, S)
+        self.rows = r + k
+
+    def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
+        pass
+
+    def _sync_data(self) -> None:
+        self.dn.flush()
+        self.dS.flush()
+        self.f.flush()
+        _fs.fsync_file(self.out_dir, self.h5_name)
+
+    def checkpoint(self, step: int, X: np.ndarray, carry: Any, summary: dict) -> None:
+        """Make everything appended durable and record ``(step, X, carry)`` as the checkpoint: data → fsync →
+        checkpoint → fsync → ``run.json``; ``self.run`` changes only after ``run.json`` is on disk."""
+        try:
+            self._sync_data()
+            new = copy.deepcopy(self.run)
+            self._write_checkpoint(new, int(step), X, carry)
+            new["checkpoint"].update(step=int(step), rows=self.rows, rows_sha256=self.h_rows.hexdigest())
+            new.update(summary)
+            new["last_safe_step"] = int(step)
+            new["updated"] = now()
+            write_run(self.out_dir, new)
+        except RunIOError:
+            raise
+        except WRITE_ERRORS as exc:
+            raise RunIOError(f"{_fs.io_failure(exc)} while writing a checkpoint") from exc
+        self._committed()
+        self.run = new
+
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+        raise NotImplementedError
+
+    def _committed(self) -> None:
+        pass
+
+    def mark(self, status: str, **fields: Any) -> None:
+        """Best effort: record ``status`` (and ``fields``) over the last durable checkpoint (the disk may be what
+        failed)."""
+        with contextlib.suppress(Exception):
+            new = copy.deepcopy(self.run)
+            new.update(fields, status=status, updated=now())
+            write_run(self.out_dir, new)
+            self.run = new
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            if self.f is not None:
+                self.f.close()
+
+
+class OrbitStore(Store):
+    """``orbit.h5`` (datasets ``n``, ``X`` rows × n) and ``orbit.csv``; the checkpoint (exact state and ``ν1`` as
+    ``float.hex``, row and CSV digests) lives in ``run.json``."""
+
+    def __init__(self, out_dir: Path, run: dict, n_state: int, *, fresh: bool, csv: bool, stem: str = "orbit",
+                 time_step: float | None = None):
+        self.csv = csv
+        self.h5_name, self.csv_name = f"{stem}.h5", f"{stem}.csv"
+        self.time_step = time_step  # a flow: the CSV's index column is the time t = n dt
+        self.h_csv: Any = None
+        self.csv_bytes = 0
+        self.csv_fh: Any = None
+        super().__init__(out_dir, run, (n_state,), fresh=fresh)
+        try:
+            self._open_csv(fresh)
+        except BaseException:
+            self.close()
+            raise
+
+    def _h5_chunks(self) -> tuple[int, ...]:
+        return (4096,) + self.shape
+
+    def _attrs(self, f: Any) -> None:
+        f.attrs["inputs"] = json.dumps(self.run["inputs"])
+        f.attrs["columns"] = self._header().strip()
+        if self.time_step is not None:
+            f.attrs["dt"] = self.time_step
+        super()._attrs(f)
+
+    def _header(self) -> str:
+        return csv_header(self.shape[0] // 3, "n" if self.time_step is None else "t")
+
+    def _open_csv(self, fresh: bool) -> None:
+        import hashlib
+
+        if not self.csv:
+            return
+        self.h_csv = hashlib.sha256()
+        ck = self.run["checkpoint"]
+        path = self.out_dir / self.csv_name
+        if fresh or int(ck.get("csv_bytes", 0)) == 0:  # new, or nothing durable yet: start the file again
+            head = self._header().encode()
+            self.csv_fh = _fs.open_write(self.out_dir, self.csv_name)
+            self.csv_fh.write(head)
+            self.h_csv.update(head)
+            self.csv_bytes = len(head)
+            return
+        self.csv_bytes = int(ck["csv_bytes"])
+        try:
+            _fs.check_regular_or_absent(self.out_dir, self.csv_name)
+            size = os.lstat(path).st_size
+            with open(path, "rb") as fh:
+                left = self.csv_bytes
+                while left > 0:
+                    block = fh.read(min(left, 1 << 22))
+                    if not block:
+                        break
+                    self.h_csv.update(block)
+                    left -= len(block)
+        except OSError:
+            raise RecordingError(f"{path} is missing or unreadable; cannot resume") from None
+        if size < self.csv_bytes:
+            raise RecordingError(f"{path} is truncated (shorter than run.json records); cannot resume")
+        if self.h_csv.hexdigest() != ck.get("csv_sha256"):
+            raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        self.csv_fh = _fs.open_write(self.out_dir, self.csv_name, append=True)
+        os.ftruncate(self.csv_fh.fileno(), self.csv_bytes)
+
+    def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
+        if self.csv_fh is not None:
+            index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
+            text = format_rows(index, S).encode()
+            self.csv_fh.write(text)
+            self.h_csv.update(text)
+
+    def _sync_data(self) -> None:
+        super()._sync_data()
+        if self.csv_fh is not None:
+            self.csv_fh.flush()
+            os.fsync(self.csv_fh.fileno())
+
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+        ck = new["checkpoint"]
+        ck["X_hex"] = hex_floats(X)
+        c = None if carry is None else complex(np.asarray(carry).reshape(-1)[0])
+        ck["nu1_hex"] = None if c is None else [c.real.hex(), c.imag.hex()]
+        if self.csv_fh is not None:
+            ck["csv_bytes"] = self.csv_fh.tell()
+            ck["csv_sha256"] = self.h_csv.hexdigest()
+
+    def close(self) -> None:
+        super().close()
+        if self.csv_fh is not None:
+            with contextlib.suppress(Exception):
+                self.csv_fh.close()
+
+
+class EnsembleStore(Store):
+    """``ensemble.h5`` (inputs ``X0``, ``b``, ``eta``; rows ``n``, ``states`` (rows, B, n)) and two checkpoint slots
+    ``checkpoint-0.npz`` / ``checkpoint-1.npz`` (state, ``ν1``, relative drift) written alternately; ``run.json``
+    names the valid slot and its SHA-256."""
+
+    h5_name = ENSEMBLE_H5
+    data = "states"
+
+    def __init__(self, out_dir: Path, run: dict, shape: tuple[int, int], *, fresh: bool,
+                 extra: dict[str, np.ndarray] | None = None):
+        super().__init__(out_dir, run, shape, fresh=fresh, extra=extra)
+        self.slot = int(run["checkpoint"].get("slot", 1)) ^ 1  # the next checkpoint goes to the other slot
+        self.drift_rel: np.ndarray = np.zeros(0)
+
+    def _extra_names(self) -> tuple[str, ...]:
+        return ("X0", "b", "eta")
+
+    def _h5_chunks(self) -> tuple[int, ...]:
+        B, n3 = self.shape
+        return (1, max(1, min(B, (1 << 20) // (8 * n3))), n3)  # HDF5 chunks of at most 1 MiB
+
+    def _attrs(self, f: Any) -> None:
+        f.attrs["inputs"] = json.dumps(self.run["inputs"], sort_keys=True)
+        f.attrs["layout"] = "states[r, i, :] is orbit i at step n[r]; components y_0, y_1, ... (3N)"
+        super()._attrs(f)
+
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+        name = f"checkpoint-{self.slot}.npz"
+        buf = io.BytesIO()
+        np.savez(buf, step=np.int64(step), X=X, nu1=np.zeros(0, complex) if carry is None else carry,
+                 drift=self.drift_rel)
+        data = buf.getvalue()
+        _fs.atomic_write_bytes(self.out_dir, name, data)
+        import hashlib
+
+        new["checkpoint"].update(slot=self.slot, file=name, sha256=hashlib.sha256(data).hexdigest())
+
+    def _committed(self) -> None:
+        self.slot ^= 1
+
+
+def read_checkpoint_npz(out_dir: Path, ck: dict, shape: tuple[int, int]) -> dict[str, np.ndarray]:
+    """The arrays of the checkpoint slot ``run.json`` names (a plain file name inside the directory, a regular
+    file of bounded size, matching its digest)."""
+    name = _fs.plain_name(ck["file"])
+    B, n = shape
+    cap = 8 * B * n + 16 * B + 8 * B * n + (1 << 16)
+    if file_sha256(out_dir, name, cap) != ck["sha256"]:
+        raise ValueError(f"{name} does not match its digest")
+    with np.load(io.BytesIO(_fs.read_bytes(out_dir, name, cap))) as d:
+        return {k: np.array(d[k]) for k in ("step", "X", "nu1", "drift")}
