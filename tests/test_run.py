@@ -75,7 +75,7 @@ def test_io_fault_in_a_checkpoint_cycle_loses_nothing(tmp_path, monkeypatch, cod
     out = tmp_path / "r"
     fault = _Faulty(monkeypatch, name, at, code)
     try:
-        res = rl.start(spec(60), out)
+        res = rl.start(spec(60), out, chunk_rows=4)  # >= 15 checkpoint cycles, whatever the machine's speed
     except jg.RunIOError:  # the fault hit the creation of the files: nothing durable, nothing declared
         res = None
     monkeypatch.setattr(os, name, fault.real)
