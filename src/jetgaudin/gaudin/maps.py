@@ -159,6 +159,11 @@ class _ChainMap(Map):
         """``h{i},{m}`` (site ``i`` from 1), the order of :meth:`integrals` (used by the run layer's reports)."""
         return self.model.integral_labels()
 
+    def state_labels(self) -> list[str]:
+        """``s{i}_y{k}^{a}``, the names of the ``3M`` state components (:meth:`GaudinModel.labels`; the run layer's
+        ``orbit.csv`` columns)."""
+        return self.model.labels()
+
     def _nu_rule(self, X):
         """``±ν(η)`` by the branch rule at each state of the batch ``X`` ``(B, 3M)``."""
         from ._curve import branch_points

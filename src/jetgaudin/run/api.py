@@ -177,8 +177,10 @@ def _version() -> str:
 def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool) -> Store:
     if spec.layout is Layout.ORBIT:
         dt = _time_step(spec.map)
+        labels = getattr(spec.map, "state_labels", None)  # a map may name the state's components (the chains)
         return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv,
-                          stem="orbit" if dt is None else "flow", time_step=dt)
+                          stem="orbit" if dt is None else "flow", time_step=dt,
+                          columns=list(labels()) if callable(labels) else None)
     b, eta, _ = _batch_params(spec.map, spec.B)
     extra = {"X0": spec.X0, "b": b, "eta": eta} if fresh else None
     store = EnsembleStore(out_dir, run, spec.X0.shape, fresh=fresh, extra=extra)
