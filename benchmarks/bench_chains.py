@@ -53,7 +53,7 @@ def main():
         X = rng.normal(size=m.n_state)
         eta = 0.9 + 0.05j
         Bn = m.two_point_backlund(eta)
-        Bc = jg.ChainTwoPointBacklund(m, eta, compiled=True)
+        Bc = jg.ChainTwoPointBacklund(m, eta, backend="compiled")
         Bc.iterate(X, 10)  # compile or load from Numba's cache
         rn = rate(Bn, X, a.numpy_steps, 1)
         rc = rate(Bc, X, a.steps, 1000)

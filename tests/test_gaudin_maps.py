@@ -316,7 +316,7 @@ def test_describe_and_surface(rng):
     m = GaudinModel(0.8, [(-1.0, 2), (0.5, 3), (2.0, 1)])
     B = m.two_point_backlund(5 + 0.1j)
     assert B.describe() == {"kind": "chain_two_point", "b": 0.8, "eta": [5.0, 0.1], "branch": "default",
-                            "sites": [[-1.0, 2], [0.5, 3], [2.0, 1]]}
+                            "sites": [[-1.0, 2], [0.5, 3], [2.0, 1]], "backend": "numpy"}
     assert B.n_state == 18 and B.inverse().branch == "opposite" and B.inverse().inverse() == B
     X = rng.normal(size=(2, 18))
     nu1 = B.start(X)
@@ -326,3 +326,40 @@ def test_describe_and_surface(rng):
     assert B.integrals(X).shape == (2, 12)
     P = m.one_point_backlund(5 + 0.1j, inverse_map=True)
     assert P.describe()["kind"] == "chain_one_point" and P.describe()["inverse_map"] is True
+
+
+def test_chain_maps_are_maps_and_rebuild_from_their_description(rng):
+    """Map contract (docs/architecture.md): both chain maps subclass jetgaudin.maps.Map, their description is JSON and
+    map_from_description rebuilds an equal map (same backend) that gives the same bits."""
+    import json
+
+    from jetgaudin.maps import Map, map_from_description
+
+    m = GaudinModel(0.8, [(-1.0, 2), (0.5, 3), (2.0, 1)])
+    X = rng.normal(size=18)
+    maps = [m.two_point_backlund(5 + 0.1j), m.two_point_backlund(5 + 0.1j, "opposite", "compiled"),
+            m.one_point_backlund(0.3 + 0.7j), m.one_point_backlund(0.3 + 0.7j, "opposite", inverse_map=True)]
+    for B in maps:
+        assert isinstance(B, Map)
+        d = json.loads(json.dumps(B.describe()))
+        R = map_from_description(d)
+        assert type(R) is type(B) and R == B and R.describe() == B.describe() and R.backend is B.backend
+        assert np.array_equal(R.iterate(X, 3), B.iterate(X, 3))
+    assert maps[1].branch is jg.Branch.OPPOSITE and maps[1].inverse().branch is jg.Branch.DEFAULT
+
+
+def test_advance_continues_bit_for_bit_and_checks_counts(rng):
+    """advance(X, carry, k) pieces chained by their carry equal one call (NumPy route); counts use the run layer's
+    rule (check_count)."""
+    m = GaudinModel(-0.7, [(-1.0, 2), (0.5, 1)])
+    B = m.two_point_backlund(0.2 + 0.3j)
+    X = rng.normal(size=(2, 9))
+    full = B.advance(X, None, 7, 2)
+    a = B.advance(X, None, 4, 2)
+    b = B.advance(a.X, a.carry, 3, 1)
+    assert np.array_equal(np.concatenate([a.rows, b.rows[1:2]]), full.rows)
+    assert np.array_equal(b.X, full.X) and np.array_equal(b.carry, full.carry)
+    with pytest.raises(jg.InvalidParameterError, match="save_every must be an integer >= 1"):
+        B.advance(X, None, 3, 0)
+    with pytest.raises(jg.InvalidParameterError, match="does not fit in 64 bits"):
+        B.advance(X, None, 2**64, 1)

@@ -84,8 +84,9 @@ class blame:  # noqa: N801 - a context manager: ``with blame("--b"): ...``
         return False
 
 
-def parse_eta(text: str, option: str = "--eta") -> complex:
-    """``5+0.1i``, ``5+0.1j``, ``5 + 0.1 i``, ``0.1i``, ``5`` -> complex (finite)."""
+def parse_eta(text: str, option: str = "--eta", *, pole_at_zero: bool = True) -> complex:
+    """``5+0.1i``, ``5+0.1j``, ``5 + 0.1 i``, ``0.1i``, ``5`` -> complex (finite).  ``pole_at_zero=False`` (a chain
+    without a site at 0: the map checks ``Re η`` against its sites) accepts ``Re η = 0``."""
     s = re.sub(r"\s+", "", str(text)).lower()
     if s.endswith("i"):
         s = s[:-1] + "j"
@@ -104,7 +105,7 @@ def parse_eta(text: str, option: str = "--eta") -> complex:
     if abs(val) > MAX_SCALE:
         raise CliInputError(f"{option}: |eta| = {abs(val):.3g} is too large (nu(eta)^2 would overflow); "
                             f"give |eta| <= {MAX_SCALE:g}")
-    if val.real == 0.0:
+    if val.real == 0.0 and pole_at_zero:
         raise CliInputError(
             f"{option}: Re(eta) = 0: the branch of nu(eta) is continued from lambda = Re(eta), here the pole "
             "lambda = 0 of the Lax matrix; give Re(eta) != 0"

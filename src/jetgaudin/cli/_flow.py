@@ -14,7 +14,7 @@ import jetgaudin as jg
 from .. import run as runlayer
 from ..flows import FlowMap
 from ..flows import Method as FlowMethod
-from . import app
+from . import _chains, app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
@@ -86,6 +86,8 @@ def flow(
         typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
     ] = None,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
+    sites: Annotated[str | None, typer.Option("--sites", help="chain sites: not available for flow yet (refused)")
+                     ] = None,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
@@ -95,6 +97,8 @@ def flow(
     """
     con = console()
     with reported_errors():
+        if sites is not None:
+            raise CliInputError(_chains.FLOW_REFUSAL)
         bf = parse_b(b)
         eta_c = parse_eta(eta)
         n_steps = parse_steps(steps)

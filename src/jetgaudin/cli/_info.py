@@ -12,7 +12,7 @@ import typer
 import jetgaudin as jg
 
 from .. import recording as rec
-from . import app
+from . import _chains, app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
@@ -52,7 +52,8 @@ def _fmt(z) -> str:
 
 @app.command()
 def info(
-    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3), nonzero")] = APPENDIX2_B,
+    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3), nonzero (0 allowed with --sites)")
+                 ] = APPENDIX2_B,
     eta: Annotated[str, typer.Option("--eta", help="spectral parameter η, e.g. 5+0.1i")] = APPENDIX2_ETA,
     init: Annotated[
         str, typer.Option("--init", help="the state: 3N comma-separated numbers y_0, y_1, ...")
@@ -62,9 +63,13 @@ def info(
     plot: Annotated[
         str | None, typer.Option("--plot", help="also draw |ν²| and arg ν over the λ-plane into FILE (.png/.pdf/.svg)")
     ] = None,
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP)] = None,
 ) -> None:
-    """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies."""
+    """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies.
+    With --sites: the chain's integrals h_(i,m), each marked Casimir or Hamiltonian, ν(η), G_η, branch points."""
     with reported_errors():
+        if sites is not None:
+            return _chains.info(sites, b, eta, init, as_json)
         if not (math.isfinite(tol) and tol > 0):
             raise CliInputError(f"--tol: the tolerance must be a finite number > 0, got {tol}")
         b = parse_b(b)

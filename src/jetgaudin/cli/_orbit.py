@@ -10,7 +10,7 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import app
+from . import _chains, app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
@@ -55,14 +55,15 @@ def print_summary(con, res: runlayer.RunResult, files) -> None:
     N = res.spec.n_state // 3
     con.print(
         integrals_table(
-            runlayer.integral_names(N),
+            res.record.get("integral_names") or runlayer.integral_names(N),
             res.integrals0,
             res.max_drift_abs,
             res.max_drift_rel,
             title=f"integrals over {res.last_safe_step} steps (saved rows and chunk ends)",
         )
     )
-    block = "z" if N == 3 else f"y_{N - 1}"
+    labels = getattr(res.spec.map, "state_labels", None)  # a chain: the last site's last block, e.g. s3_y0
+    block = labels()[-1].split("^")[0] if callable(labels) else "z" if N == 3 else f"y_{N - 1}"
     con.print(
         f"|{block}| = {float(res.sphere_radius0):.17g} at n = 0; max ||{block}(n)| - |{block}(0)|| = "
         f"{res.sphere_max_deviation:.3e}"
@@ -167,19 +168,22 @@ def orbit(
         bool | None,
         typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
     ] = None,
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map; with no options, reproduce Appendix 2 of the paper.
 
     Writes into --out: orbit.csv, orbit.h5, figure1.png (material point x − z and centre of mass z in 3D, with
-    the sphere |z| = const), figure2.png (x–y projection), integrals.png and run.json.
+    the sphere |z| = const), figure2.png (x–y projection), integrals.png and run.json.  With --sites (a chain of
+    more than one site, or one site of order N != 3): chain_y0.png (each site's y_0 in 3D) and
+    chain_integrals.png (drift of the h_{i,m}) instead of the figures of the paper.
     """
     con = console()
     with reported_errors():
         expect: dict = {}
         if b is not None:
-            expect["b"] = parse_b(b)
+            expect["b"] = parse_b(b) if sites is None else _chains.parse_chain_b(b)
         if eta is not None:
-            e = parse_eta(eta)
+            e = parse_eta(eta, pole_at_zero=sites is None)
             expect["eta"] = [e.real, e.imag]
         if steps is not None:
             expect["steps"] = parse_steps(steps)
@@ -210,6 +214,8 @@ def orbit(
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
             if init_from_dir is not None:
                 raise CliInputError("--init-from starts a new run; it cannot be combined with --resume")
+            if sites is not None:
+                raise CliInputError("--sites: a resumed run keeps its recorded sites; drop --sites with --resume")
             out_dir = resume_dir(resume)
             if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
@@ -226,14 +232,21 @@ def orbit(
                 X_last, rec = init_from(init_from_dir)
                 defaults["init"] = X_last.tolist()
                 m = rec.get("map", {})
-                if m.get("kind") == "two_point":
+                if m.get("kind") in ("two_point", "chain_two_point"):
                     defaults.update(b=m["b"], eta=complex(*m["eta"]), branch=m["branch"])
+                sites = sites if sites is not None else _chains.sites_of(rec)
             X0 = expect.get("init", defaults["init"])
             bb = expect.get("b", defaults["b"])
             ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
-            check_state_scale(X0, bb)
-            with blame("--eta"):
-                m = _two_point(bb, ee, expect.get("branch", defaults["branch"]), kernel)
+            if sites is not None:
+                model = _chains.chain_model(sites, bb)
+                X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
+                m = _chains.chain_map(model, ee, expect.get("branch", defaults["branch"]),
+                                      None if kernel is None else kernel.value)
+            else:
+                check_state_scale(X0, bb)
+                with blame("--eta"):
+                    m = _two_point(bb, ee, expect.get("branch", defaults["branch"]), kernel)
             with blame("--init" if init_from_dir is None else "--init-from"):
                 spec = runlayer.RunSpec(m, np.array(X0, dtype=float), expect.get("steps", APPENDIX2_STEPS),
                                         expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
@@ -248,7 +261,18 @@ def orbit(
             if plots and res.rows > 0:
                 from .. import plotting
 
-                written = plotting.save_run_figures(out_dir)  # streamed from orbit.h5: constant memory
+                model = getattr(res.spec.map, "model", None)
+                if model is not None and _chains.multi_site(model):
+                    from .. import plotting_chains
+
+                    data = runlayer.load(out_dir)
+                    m = res.spec.map.describe()
+                    sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
+                    title = (f"chain (λ:N) = {sites_text}; b = {m['b']:g}; η = {m['eta'][0]:g}{m['eta'][1]:+g}i; "
+                             f"{res.spec.steps} steps")
+                    written = plotting_chains.save_chain_figures(out_dir, data.n, data.X, model, title=title)
+                else:
+                    written = plotting.save_run_figures(out_dir)  # streamed from orbit.h5: constant memory
             from ..recording import update_run
 
             update_run(out_dir, files=[Path(f).name for f in files + written], plots=bool(plots))

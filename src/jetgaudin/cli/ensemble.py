@@ -22,7 +22,7 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import app
+from . import _chains, app
 from ._common import (
     EXIT_FAILED,
     Branch,
@@ -157,6 +157,8 @@ def ensemble_command(
         Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
     ] = None,
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; needs --input or "
+                                              "--init-from")] = None,
     progress: Annotated[
         bool | None,
         typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
@@ -194,6 +196,10 @@ def ensemble_command(
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
             res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
                 None, out_dir, resume=True, expect=expect, progress=bar, **common))
+        elif sites is not None:
+            out_dir = out_path(out, "jetgaudin-ensemble")
+            res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
+                                  overwrite, progress)
         else:
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
                 raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
@@ -238,6 +244,37 @@ def ensemble_command(
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
 
 
+def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir, overwrite,
+                    progress):
+    """``ensemble --sites``: the chain's two-point map on the states of ``--input`` or ``--init-from``."""
+    if sample is not None:
+        raise CliInputError("--sites: the samplers (--sample) draw states of one site; give the chain's states with "
+                            "--input FILE or --init-from DIR")
+    if scheduler is not None:
+        raise CliInputError("--sites: chain ensembles run locally; drop --scheduler")
+    if (input is None) == (init_from_dir is None):
+        raise CliInputError("--sites: give the chain's initial states with exactly one of --input FILE and "
+                            "--init-from DIR")
+    bb = _chains.parse_chain_b(b)
+    ee = parse_eta(eta, pole_at_zero=False)
+    model = _chains.chain_model(sites, bb)
+    if input is not None:
+        X0, b_file, eta_file = _read_input(input)
+        if b_file is not None or eta_file is not None:
+            raise CliInputError("--sites: per-orbit b and eta in --input are not supported for chains; give --b and "
+                                "--eta")
+    else:
+        X0 = _init_from(init_from_dir)
+    X0 = _chains.check_chain_state(model, X0, "--input" if input is not None else "--init-from")
+    m = _chains.chain_map(model, ee, expect.get("branch", "default"), None)
+    with blame("--input" if input is not None else "--init-from"):
+        spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
+                                runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
+                                program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
+    return run_with_progress("ensemble", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
+                                                                              progress=bar))
+
+
 def _check_memory(orbits: int, n_state: int) -> None:
     """Refuse an ensemble whose states alone would not fit in memory (before anything is allocated)."""
     import os
@@ -276,7 +313,7 @@ def _report(res, show):
         title_justify="left",
     )
     t.add_column("orbit", justify="right")
-    for name in runlayer.integral_names(N):
+    for name in res.record.get("integral_names") or runlayer.integral_names(N):
         t.add_column(name, justify="right")
     for i in range(min(show, B)):
         t.add_row(str(i), *[f"{d:.2e}" for d in res.drift[i]])

@@ -130,7 +130,7 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
 
 @njit(cache=True)
 def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_every):
-    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), last ν1)``."""
+    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
     n = x0.shape[0]
     M = n // 3
     rows = np.empty((steps // save_every + 1, n))
@@ -147,7 +147,7 @@ def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_eve
         x, y = y, x
         if (s + 1) % save_every == 0:
             rows[(s + 1) // save_every] = x
-    return rows, nu
+    return rows, x, nu
 
 
 def orbit_constants(model, eta):

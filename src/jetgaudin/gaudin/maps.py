@@ -25,21 +25,20 @@ the two-point map, ``p = S^-/(2b)`` with ``S = Σ_i y^{(i)}_0`` for the one-poin
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
-from ..backlund import MapProperties
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
-from ..backlund.maps import _check_steps
 from ..lax import ell_coefficients, state_from_ell
+from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ._curve import _component_poles, nu_with_roots
 from .model import GaudinModel
 
 __all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
 
-_BRANCHES = {"default": 1, "opposite": -1}
 #: relative size of the would-be residue at eta above which a step is refused (as backlund.maps: round-off
 #: level in exact arithmetic zero; larger means eta is numerically at a branch point)
 _RESIDUAL_TOL = 1e-8
@@ -48,10 +47,9 @@ _E22 = np.array([[0.0, 0.0], [0.0, 1.0]], dtype=complex)
 _ID = np.eye(2, dtype=complex)
 
 
-def _sheet(branch) -> int:
-    if branch in _BRANCHES:
-        return _BRANCHES[branch]
-    raise InvalidParameterError(f"branch must be 'default' or 'opposite', got {branch!r}")
+#: ``Backend.AUTO`` runs the compiled kernel from this many orbit-steps on (compiling it costs a few seconds
+#: the first time, ~10^4 NumPy steps of a small chain; Numba caches it on disk afterwards)
+_AUTO_MIN_WORK = 20000
 
 
 def _check_model(model) -> None:
@@ -123,21 +121,23 @@ def _continue(nu2, nu_prev):
     return np.where((np.conj(r) * nu_prev).real >= 0, r, -r)
 
 
-class _ChainMap:
-    """Shared surface of the chain maps (the Map contract of the BRIEF; the lead re-bases them on
-    ``jetgaudin.maps.Map`` at merge)."""
+class _ChainMap(Map):
+    """Shared surface of the chain maps: a :class:`jetgaudin.maps.Map` on states ``(..., 3M)`` whose carry is
+    ``ν1 = ±ν(η)`` (the branch rule at the first state, then the root of ``ν(η)²`` closest to the previous one)."""
 
     model: GaudinModel
     eta: complex
-    branch: str
+    branch: Branch
     properties: MapProperties
     kind: str
 
-    def _setup(self, X, carry) -> tuple:  # pragma: no cover - every concrete map defines it
+    def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
 
-    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # pragma: no cover
-        raise NotImplementedError
+    def _init_common(self) -> None:
+        _check_model(self.model)
+        object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
+        object.__setattr__(self, "branch", Branch.parse(self.branch))
 
     @property
     def b(self) -> float:
@@ -145,15 +145,24 @@ class _ChainMap:
 
     @property
     def sheet(self) -> int:
-        return _sheet(self.branch)
+        return self.branch.sheet
 
     @property
     def n_state(self) -> int:
         return self.model.n_state
 
-    def integrals(self, X) -> np.ndarray:
+    def integrals(self, X: np.ndarray) -> np.ndarray:
         """The ``2M`` preserved integrals ``h_{i,m}``, shape ``(..., 2M)``."""
         return self.model.integrals(X)
+
+    def integral_names(self) -> list[str]:
+        """``h{i},{m}`` (site ``i`` from 1), the order of :meth:`integrals` (used by the run layer's reports)."""
+        return self.model.integral_labels()
+
+    def state_labels(self) -> list[str]:
+        """``s{i}_y{k}^{a}``, the names of the ``3M`` state components (:meth:`GaudinModel.labels`; the run layer's
+        ``orbit.csv`` columns)."""
+        return self.model.labels()
 
     def _nu_rule(self, X):
         """``±ν(η)`` by the branch rule at each state of the batch ``X`` ``(B, 3M)``."""
@@ -162,39 +171,37 @@ class _ChainMap:
         lam = np.full(X.shape[:-1], self.eta, dtype=complex)
         return nu_with_roots(self.model, X, lam, branch_points(self.model, X), self.sheet)
 
-    def start(self, X) -> np.ndarray:
+    def start(self, X: np.ndarray) -> np.ndarray:
         """``ν1 = ±ν(η)`` at ``X`` by the branch rule (the carry of an orbit), shape ``(...)``."""
         X = self.model.check_state(X, allow_complex=not self.properties.real)
         shape = X.shape[:-1]
         return self._setup(X.reshape(-1, X.shape[-1]), None)[2].reshape(shape)
 
-    def __call__(self, X):
-        return self.step(X, None)[0]
-
-    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
-        """Orbit ``X_0, X_k, …`` (``k = save_every``), shape ``(steps//k + 1, ..., 3M)``; ``ν(η)`` by the branch
-        rule at ``X_0`` (or continued from ``carry``) and continued along the orbit.  ``return_carry=True``
-        returns ``(orbit, carry)``."""
-        steps = _check_steps(steps)
-        if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
-            raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
-        X = self.model.check_state(X0, allow_complex=not self.properties.real)
+    def _checked(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> tuple:
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X = self.model.check_state(X, allow_complex=not self.properties.real)
+        if not self.properties.real:
+            X = X.astype(complex)
         if carry is not None:
-            carry = np.broadcast_to(np.asarray(carry, dtype=complex), X.shape[:-1])
+            try:
+                carry = np.broadcast_to(np.asarray(carry, dtype=complex), X.shape[:-1])
+            except (TypeError, ValueError):
+                raise InvalidParameterError(f"carry (nu1) must be a complex number or an array of shape "
+                                            f"{X.shape[:-1]}") from None
             if not np.all(np.isfinite(carry)):
                 raise InvalidParameterError("carry (nu1) must be finite")
-        dtype = float if self.properties.real else complex
-        orbit = np.empty((int(steps) // int(save_every) + 1,) + X.shape, dtype=dtype)
-        orbit[0] = X
-        for n in range(int(steps)):
-            X, carry, _ = self.step(X, carry)
-            if (n + 1) % save_every == 0:
-                orbit[(n + 1) // save_every] = X
-        return (orbit, carry) if return_carry else orbit
+        return X, carry, steps, save_every
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """``steps`` steps from ``X`` ``(..., 3M)`` continuing from ``carry = ν1`` (``None``: the branch rule at
+        ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`)."""
+        X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
+        return step_loop(self, X, carry, steps, save_every)
 
     def describe(self) -> dict:
-        return {"kind": self.kind, "b": self.model.b, "eta": [self.eta.real, self.eta.imag], "branch": self.branch,
-                "sites": [[p, N] for p, N in self.model.sites]}
+        return {"kind": self.kind, "b": self.model.b, "eta": [self.eta.real, self.eta.imag],
+                "branch": self.branch.value, "sites": [[p, N] for p, N in self.model.sites]}
 
 
 @dataclass(frozen=True)
@@ -206,8 +213,10 @@ class ChainTwoPointBacklund(_ChainMap):
     model : GaudinModel
     eta : complex
         ``Re η`` off the sites, ``Im η ≠ 0``.
-    branch : {"default", "opposite"}
+    branch : Branch or {"default", "opposite"}
         ``ν1 = ±ν(η)`` by the branch rule; ``"opposite"`` is the inverse map.
+    backend : Backend or {"numpy", "compiled", "auto"}
+        Route of :meth:`advance` / :meth:`iterate` (default NumPy, the reference route).
 
     Raises
     ------
@@ -217,8 +226,8 @@ class ChainTwoPointBacklund(_ChainMap):
 
     model: GaudinModel
     eta: complex
-    branch: str = "default"
-    compiled: bool = False
+    branch: Branch = Branch.DEFAULT
+    backend: Backend = field(default=Backend.NUMPY, compare=False)
     kind = "chain_two_point"
     properties: MapProperties = field(
         default=MapProperties(
@@ -229,49 +238,58 @@ class ChainTwoPointBacklund(_ChainMap):
         compare=False,
     )
 
-    def __post_init__(self):
-        _check_model(self.model)
-        object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
+    def __post_init__(self) -> None:
+        self._init_common()
+        object.__setattr__(self, "backend", Backend.parse(self.backend))
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 f"Im(eta) = 0 (eta = {self.eta.real}): the real two-point map needs eta1 = eta != eta2 = conj(eta) "
                 "(at Im eta = 0 it degenerates to the identity); give Im(eta) != 0, its time step is -2 Im(eta)"
             )
-        _sheet(self.branch)
 
     def inverse(self) -> ChainTwoPointBacklund:
-        """The same ``η`` on the other branch."""
-        return ChainTwoPointBacklund(self.model, self.eta, "opposite" if self.sheet == 1 else "default", self.compiled)
+        """The same ``η`` on the other branch (same backend)."""
+        other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
+        return ChainTwoPointBacklund(self.model, self.eta, other, self.backend)
 
-    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
-        """As :meth:`_ChainMap.iterate`; with ``compiled=True`` the steps run in the Numba kernel of
-        :mod:`jetgaudin.gaudin._kernels` (the same orbits to round-off; ``ν1`` at ``X0`` by the NumPy branch rule;
-        the residual check and imaginary residue are not computed).  A batch member equals its single run bit for
-        bit on both routes."""
-        if not self.compiled:
-            return super().iterate(X0, steps, save_every=save_every, carry=carry, return_carry=return_carry)
+    def describe(self) -> dict:
+        return {**super().describe(), "backend": self.backend.value}
+
+    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
+        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``: ``AUTO`` is the
+        compiled kernel from ``_AUTO_MIN_WORK`` orbit-steps on, NumPy below."""
+        if self.backend is not Backend.AUTO:
+            return self.backend
+        work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
+        return Backend.COMPILED if work >= _AUTO_MIN_WORK else Backend.NUMPY
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """As :meth:`_ChainMap.advance`; on the compiled route (``backend``, :meth:`resolved_backend`) the steps run
+        in the Numba kernel of :mod:`jetgaudin.gaudin._kernels` (the same orbits to round-off; ``ν1`` at ``X`` by the
+        NumPy branch rule; the residual check is not made and ``imag_max`` is zeros: the imaginary residue is not
+        computed).  A batch member equals its single run, and a split run the unsplit one, bit for bit (both
+        routes)."""
+        X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
+        if self.resolved_backend(steps, X) is not Backend.COMPILED or X.size == 0:
+            return step_loop(self, X, carry, steps, save_every)
         from . import _kernels
 
-        steps = _check_steps(steps)
-        if isinstance(save_every, bool) or not isinstance(save_every, (int, np.integer)) or save_every < 1:
-            raise InvalidParameterError(f"save_every must be an integer >= 1, got {save_every!r}")
-        X = self.model.check_state(X0)
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
-        nu = self.start(Xb) if carry is None else np.broadcast_to(np.asarray(carry, dtype=complex), shape[:-1])
-        nu = np.reshape(nu, -1)
+        nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
         consts = _kernels.orbit_constants(self.model, self.eta)
         b = float(self.model.b)
-        rows = np.empty((steps // save_every + 1,) + Xb.shape)
+        rows = np.empty((steps // save_every,) + Xb.shape)
+        final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
-            rows[:, n], last[n] = _kernels.run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
-                                                      *consts, steps, save_every)
-        if not np.all(np.isfinite(rows)):
+            out, final[n], last[n] = _kernels.run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
+                                                        *consts, steps, save_every)
+            rows[:, n] = out[1:]
+        if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")
-        orbit = rows.reshape((rows.shape[0],) + shape)
-        last = last.reshape(shape[:-1])
-        return (orbit, last) if return_carry else orbit
+        return Advance(rows=rows.reshape((rows.shape[0],) + shape), X=final.reshape(shape),
+                       carry=last.reshape(shape[:-1]), imag_max=np.zeros(shape[:-1]))
 
     def _setup(self, X, carry):
         """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X``."""
@@ -327,7 +345,7 @@ class ChainOnePointBacklund(_ChainMap):
 
     model: GaudinModel
     eta: complex
-    branch: str = "default"
+    branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
     kind = "chain_one_point"
     properties: MapProperties = field(
@@ -339,15 +357,15 @@ class ChainOnePointBacklund(_ChainMap):
         compare=False,
     )
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         _check_model(self.model)
         if self.model.b == 0.0:
             raise InvalidParameterError(
                 "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "
                 "without field (b = 0) has only the real two-point map; give b != 0"
             )
-        object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
-        _sheet(self.branch)
+        self._init_common()
+        object.__setattr__(self, "inverse_map", bool(self.inverse_map))
 
     def inverse(self) -> ChainOnePointBacklund:
         return ChainOnePointBacklund(self.model, self.eta, self.branch, not self.inverse_map)
@@ -405,3 +423,21 @@ class ChainOnePointBacklund(_ChainMap):
         if not np.all(np.isfinite(out)):
             raise SingularStepError("one-point Bäcklund step of the chain produced non-finite values; change eta")
         return out.reshape(shape), nu.reshape(shape[:-1]), np.zeros(shape[:-1])
+
+
+def _sites(d: dict) -> GaudinModel:
+    return GaudinModel(d["b"], [(float(p), int(N)) for p, N in d["sites"]])
+
+
+def _two_point_from(d: dict) -> ChainTwoPointBacklund:
+    return ChainTwoPointBacklund(_sites(d), complex(*d["eta"]), d.get("branch", "default"),
+                                 d.get("backend", "numpy"))
+
+
+def _one_point_from(d: dict) -> ChainOnePointBacklund:
+    return ChainOnePointBacklund(_sites(d), complex(*d["eta"]), d.get("branch", "default"),
+                                 bool(d.get("inverse_map", False)))
+
+
+register_map("chain_two_point", _two_point_from)
+register_map("chain_one_point", _one_point_from)

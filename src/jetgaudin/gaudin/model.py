@@ -352,12 +352,12 @@ class GaudinModel:
 
     # ---- maps ---------------------------------------------------------------------------------
 
-    def two_point_backlund(self, eta, branch: str = "default", compiled: bool = False) -> ChainTwoPointBacklund:
+    def two_point_backlund(self, eta, branch: str = "default", backend: str = "numpy") -> ChainTwoPointBacklund:
         """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
-        ``compiled=True``: ``iterate`` runs in the Numba kernel)."""
+        ``backend="compiled"``: ``advance`` / ``iterate`` run in the Numba kernel)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, branch, compiled)
+        return ChainTwoPointBacklund(self, eta, branch, backend)
 
     def one_point_backlund(
         self, eta, branch: str = "default", inverse_map: bool = False

@@ -29,7 +29,7 @@ from .files import (
     unhex,
 )
 from .health import Health
-from .spec import HealthLimits, Layout, RunSpec, RunStatus, integral_names
+from .spec import HealthLimits, Layout, RunSpec, RunStatus
 from .store import EnsembleStore, OrbitStore, Store, now, read_checkpoint_npz
 
 __all__ = ["RunResult", "start", "resume"]
@@ -159,8 +159,11 @@ def _new_record(spec: RunSpec, health: Health) -> dict:
                                "rows_sha256": RowDigest().hexdigest(), "csv_sha256": hashlib.sha256().hexdigest()})
     else:
         run.update(inputs=_ensemble_inputs(spec), status="running", last_safe_step=0,
-                   integral_names=integral_names(spec.n_state // 3),
+                   integral_names=health.names,
                    checkpoint={"step": 0, "rows": 0, "rows_sha256": RowDigest().hexdigest()})
+        d = spec.map.describe()
+        if d.get("kind") != "two_point_batch":  # another map (a chain): rebuilt from its description on resume
+            run["map"] = d
     run.update(_summary(spec)(health, 0.0))  # complete from the start: a failure at the first checkpoint resumes
     return run
 
@@ -174,8 +177,10 @@ def _version() -> str:
 def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool) -> Store:
     if spec.layout is Layout.ORBIT:
         dt = _time_step(spec.map)
+        labels = getattr(spec.map, "state_labels", None)  # a map may name the state's components (the chains)
         return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv,
-                          stem="orbit" if dt is None else "flow", time_step=dt)
+                          stem="orbit" if dt is None else "flow", time_step=dt,
+                          columns=list(labels()) if callable(labels) else None)
     b, eta, _ = _batch_params(spec.map, spec.B)
     extra = {"X0": spec.X0, "b": b, "eta": eta} if fresh else None
     store = EnsembleStore(out_dir, run, spec.X0.shape, fresh=fresh, extra=extra)
@@ -353,7 +358,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
             X0, b, eta = np.array(f["X0"]), np.array(f["b"]), np.array(f["eta"])
         if inputs_digest(X0, b, eta) != rec["inputs_sha256"]:
             raise ValueError("the stored X0, b, eta do not match their digest in run.json")
-        m = BatchBacklund(b, eta, rec["branch"], **map_options)
+        m = map_from_description(run["map"]) if "map" in run else BatchBacklund(b, eta, rec["branch"], **map_options)
         spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
         d = read_checkpoint_npz(out_dir, ck, X0.shape)
         n0, X = int(d["step"]), d["X"]

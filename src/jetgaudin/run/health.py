@@ -33,7 +33,9 @@ class Health:
         self.sphere = 0.0
         self.imag = 0.0
         k = self.I0.shape[-1]
-        self.names = integral_names(k // 2) if k % 2 == 0 else [f"I_{i + 1}" for i in range(k)]
+        named = getattr(map_, "integral_names", None)  # a map may name its integrals (the chains: h{i},{m})
+        self.names = list(named()) if callable(named) else (
+            integral_names(k // 2) if k % 2 == 0 else [f"I_{i + 1}" for i in range(k)])
 
     @property
     def relative(self) -> np.ndarray:

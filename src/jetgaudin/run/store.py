@@ -208,8 +208,9 @@ class OrbitStore(Store):
     ``float.hex``, row and CSV digests) lives in ``run.json``."""
 
     def __init__(self, out_dir: Path, run: dict, n_state: int, *, fresh: bool, csv: bool, stem: str = "orbit",
-                 time_step: float | None = None):
+                 time_step: float | None = None, columns: list[str] | None = None):
         self.csv = csv
+        self.columns = columns  # names of the n_state columns (default y{i}_{a}; the chains name them by site)
         self.h5_name, self.csv_name = f"{stem}.h5", f"{stem}.csv"
         self.time_step = time_step  # a flow: the CSV's index column is the time t = n dt
         self.h_csv: Any = None
@@ -233,7 +234,10 @@ class OrbitStore(Store):
         super()._attrs(f)
 
     def _header(self) -> str:
-        return csv_header(self.shape[0] // 3, "n" if self.time_step is None else "t")
+        index = "n" if self.time_step is None else "t"
+        if self.columns is not None:
+            return ",".join([index, *self.columns]) + "\n"
+        return csv_header(self.shape[0] // 3, index)
 
     def _open_csv(self, fresh: bool) -> None:
         import hashlib

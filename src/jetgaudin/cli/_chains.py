@@ -1,0 +1,138 @@
+"""``--sites``: the chain versions of ``orbit``, ``ensemble``, ``info``, ``flow`` (issue 12; private).
+
+Text to values only: the rules (distinct real sites, orders ``N_i >= 1``, ``Re η`` off the sites, ``Im η != 0``, the
+state length ``3M``) are the library's (:func:`jetgaudin.gaudin.parse_sites`, :class:`jetgaudin.gaudin.GaudinModel`,
+:class:`jetgaudin.ChainTwoPointBacklund`); this module names the option in the one-line error.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ._common import CliInputError, blame, one_line, parse_b
+
+SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer orders N_i >= 1), e.g. '
+              '"-1:2,0.5:3,2:1"; --init then takes 3M numbers, M = N1 + N2 + ... [default: one site 0:N, '
+              "N = len(--init)/3]")
+
+
+def parse_chain_b(text: Any, option: str = "--b") -> float:
+    """The field of a chain: real and finite; ``b = 0`` (the magnet without field) is allowed for the two-point map."""
+    try:
+        if float(text) == 0.0:
+            return 0.0
+    except (TypeError, ValueError):
+        pass
+    return parse_b(text, option)
+
+
+def chain_model(sites: str, b: float):
+    """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3``."""
+    import jetgaudin as jg
+    from jetgaudin.gaudin import GaudinModel, parse_sites
+
+    try:
+        return GaudinModel(b, parse_sites(sites))
+    except jg.JetGaudinError as exc:
+        msg = one_line(exc)
+        raise CliInputError("--sites: " + (msg[len("sites: "):] if msg.startswith("sites: ") else msg)) from None
+
+
+def check_chain_state(model, X: Any, option: str = "--init") -> np.ndarray:
+    """``X`` as a state of ``model`` (3M numbers); one line naming ``--sites`` otherwise."""
+    X = np.asarray(X, dtype=float)
+    if X.shape[-1] != model.n_state:
+        sites = ",".join(f"{p:g}:{N}" for p, N in model.sites)
+        raise CliInputError(f"--sites: the sites {sites} need 3M = {model.n_state} numbers in {option} (M = sum of the "
+                            f"orders = {model.M}: one 3-vector per site and order), got {X.shape[-1]}")
+    return X
+
+
+def chain_map(model, eta: complex, branch: str, kernel: str | None):
+    """The real two-point map of the chain (``kernel``: the ``--kernel`` value, ``None`` for auto)."""
+    import jetgaudin as jg
+
+    try:
+        return jg.ChainTwoPointBacklund(model, eta, branch, jg.Backend.parse(kernel or "auto"))
+    except jg.InvalidParameterError as exc:
+        option = "--sites" if "is a site" in str(exc) else "--eta"
+        raise CliInputError(f"{option}: {one_line(exc)}") from None
+
+
+FLOW_REFUSAL = ("--sites: `flow` of a chain is not available from the command line yet (the run layer's FlowMap "
+                "takes one-site Hamiltonians only); use the library: jetgaudin.integrate("
+                "model.interpolating_flow_hamiltonian(X0, eta), X0, T)")
+
+
+def sites_of(record: dict) -> str | None:
+    """The ``--sites`` text of a recorded chain run (its map description), else ``None``."""
+    m = record.get("map", {})
+    if not str(m.get("kind", "")).startswith("chain_"):
+        return None
+    return ",".join(f"{float(p)!r}:{int(N)}" for p, N in m["sites"])
+
+
+def multi_site(model) -> bool:
+    """Whether the chain figures replace the paper's (more than one site, or one site not of order 3)."""
+    return len(model.sites) > 1 or model.sites[0][1] != 3
+
+
+def info(sites: str, b: Any, eta: str, init: str, as_json: bool) -> None:
+    """``jetgaudin info --sites``: the chain's integrals ``h_{i,m}`` (Casimir / Hamiltonian), ``ν(η)`` on both roots,
+    ``G_η`` and the branch points of the state."""
+    import json
+    import math
+
+    import typer
+
+    import jetgaudin as jg
+
+    from ._common import console, parse_eta, parse_init
+
+    bb = parse_chain_b(b)
+    eta_c = parse_eta(eta, pole_at_zero=False)
+    model = chain_model(sites, bb)
+    X = check_chain_state(model, parse_init(init))
+    with blame("--init"):
+        h = model.integrals(X)
+    kinds = ["Casimir" if c else "Hamiltonian" for c in model.casimir_mask()]
+    d: dict[str, Any] = {"sites": [[p, N] for p, N in model.sites], "M": model.M, "b": bb, "eta": [eta_c.real,
+                         eta_c.imag], "state": dict(zip(model.labels(), X.tolist(), strict=True)),
+                         "integrals": [{"name": n, "kind": k, "value": float(v)}
+                                       for n, k, v in zip(model.integral_labels(), kinds, h, strict=True)]}
+    for key, fn in (("nu_default", lambda: model.nu(X, eta_c)), ("nu_opposite", lambda: model.nu(X, eta_c, sheet=-1)),
+                    ("G_eta", lambda: model.interpolating_hamiltonian(X, eta_c))):
+        try:
+            z = complex(np.asarray(fn()))
+            if not (math.isfinite(z.real) and math.isfinite(z.imag)):
+                raise jg.InvalidParameterError("not finite (the state or eta is too large)")
+            d[key] = z.real if key == "G_eta" else [z.real, z.imag]
+        except jg.JetGaudinError as exc:
+            d[key], d[key + "_note"] = None, one_line(exc)
+    try:
+        d["branch_points"] = [[z.real, z.imag] for z in np.ravel(model.branch_points(X)) if np.isfinite(z)]
+    except (jg.JetGaudinError, np.linalg.LinAlgError) as exc:
+        d["branch_points"], d["branch_points_note"] = [], one_line(exc)
+    if as_json:
+        typer.echo(json.dumps(d, indent=1))
+        return
+    from rich.table import Table
+
+    con = console()
+    sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
+    t = Table(title=f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals h_(i,m) of ν² = b² + "
+                    "Σ h_(i,m) (λ − λ_i)^(−m)", title_justify="left")
+    for col in ("integral", "kind", "value"):
+        t.add_column(col, justify="right" if col == "value" else "left")
+    for row in d["integrals"]:
+        t.add_row(row["name"], row["kind"], f"{row['value']:.17g}")
+    eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
+    for key, label in (("nu_default", f"ν({eta_s}), default root"), ("nu_opposite", f"ν({eta_s}), opposite root")):
+        t.add_row(label, "", f"{d[key][0]:.17g} {d[key][1]:+.17g} i" if d[key] is not None else
+                  f"undefined: {d[key + '_note']}")
+    t.add_row(f"G_η, η = {eta_s}", "", f"{d['G_eta']:.17g}" if d["G_eta"] is not None else
+              f"undefined: {d['G_eta_note']}")
+    con.print(t)
+    con.print("branch points (zeros of ν²): " + ", ".join(f"{x:.6g}{y:+.6g}i" for x, y in d["branch_points"]))
