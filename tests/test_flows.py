@@ -177,3 +177,14 @@ def test_integrate_bad_state_and_hamiltonian():
         jg.integrate(object(), APPENDIX2_X0, 1.0)
     with pytest.raises(jg.InvalidParameterError, match="one orbit"):
         jg.integrate(H, np.stack([APPENDIX2_X0] * 2), 1.0, method="heyoka")
+
+
+@pytest.mark.parametrize("T", [1e300, -1e300, 2e9])
+def test_huge_integration_time_is_refused_at_once(T):
+    """Issue 11, item 8: ``integrate(H, X0, 1e300)`` ran without end; now refused before integrating."""
+    from jetgaudin.flows import MAX_INTEGRATION_TIME
+
+    assert abs(T) > MAX_INTEGRATION_TIME
+    H = jg.physical_hamiltonian(3, 1.0)
+    with pytest.raises(jg.InvalidParameterError, match="too long for one call"):  # before it ran without end
+        jg.integrate(H, np.array(APPENDIX2_X0), T)

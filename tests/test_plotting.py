@@ -396,3 +396,21 @@ def test_hdf5_is_read_in_slices_not_loaded_whole(run_dir, monkeypatch):
     _files.drift_envelope(run, 4)
     plotting._runs.thinned_rows(run, 100)
     assert asked and all(isinstance(k, slice) and (k.stop - k.start) <= 128 or k.step >= 11 for k in asked)
+
+
+@pytest.mark.parametrize("planted", ["figure1.png", "figure1.png.tmp"])
+def test_figures_are_never_written_through_a_symlink(tmp_path, planted):
+    """Issue 11, item 5: a symlink named like a figure (or its temporary file) used to get its target overwritten.
+    Figures are rendered in memory and renamed into place: the link is replaced (or removed), the target kept."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    out = tmp_path / "figs"
+    out.mkdir()
+    (out / planted).symlink_to(victim)
+    X = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA).iterate(APPENDIX2_X0, 20)
+    files = plotting.save_orbit_figures(out, np.arange(21), X, APPENDIX2_B)
+    assert victim.read_text() == "precious"
+    assert (out / "figure1.png").is_file() and not (out / "figure1.png").is_symlink()
+    assert (out / "figure1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not (out / "figure1.png.tmp").exists() and not (out / "figure1.png.tmp").is_symlink()
+    assert {f.name for f in files} >= {"figure1.png", "figure2.png", "integrals.png"}

@@ -117,6 +117,10 @@ def _fast_rhs(H: IntegralHamiltonian, X0: np.ndarray):
     return rhs
 
 
+#: largest |T| of one :func:`integrate` call (issue 11, item 8: ``integrate(H, X0, 1e300)`` never ended)
+MAX_INTEGRATION_TIME = 1e9
+
+
 def _check_times(T, t_eval):
     try:
         T = float(T)
@@ -124,6 +128,12 @@ def _check_times(T, t_eval):
         raise InvalidParameterError(f"T must be a number, got {T!r}") from None
     if not np.isfinite(T):
         raise InvalidParameterError(f"T must be finite, got {T}")
+    if abs(T) > MAX_INTEGRATION_TIME:
+        raise InvalidParameterError(
+            f"T = {T:g} is too long for one call: an adaptive integrator takes at least one step per unit of the "
+            f"orbit's time scale (O(1) for states of size O(1)), so this would run for days or without end; give "
+            f"|T| <= {MAX_INTEGRATION_TIME:g} (split a longer integration into several calls)"
+        )
     if t_eval is None:
         t_eval = np.array([0.0, T]) if T != 0 else np.array([0.0])
     try:

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import matplotlib
 
+from .plotting import save_figure
+
 matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
@@ -92,8 +94,8 @@ def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "
     paths = []
     for name, fig in (("chain_y0.png", figure_chain_y0(model, X, title=title)),
                       ("chain_integrals.png", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
-        path = out_dir / name
-        fig.savefig(path, dpi=130, bbox_inches="tight")
-        plt.close(fig)
-        paths.append(path)
+        try:
+            paths.append(save_figure(fig, out_dir / name, 130))  # atomic, never through a symlink
+        finally:
+            plt.close(fig)
     return paths

@@ -8,7 +8,6 @@ computed block by block.
 
 from __future__ import annotations
 
-import os
 from enum import StrEnum
 from pathlib import Path
 
@@ -59,16 +58,18 @@ def run_title(run: RunRows) -> str:
 
 
 def save_figure(fig, path, dpi: int) -> Path:
-    """Write ``fig`` to ``path`` atomically (a temporary file renamed into place) and close it."""
+    """Write ``fig`` to ``path`` durably and atomically, never through a symlink (rendered in memory, then
+    :func:`jetgaudin._fs.atomic_write_bytes`: a ``.tmp`` created with ``O_EXCL|O_NOFOLLOW``, fsynced, renamed)."""
+    import io
+
+    from .. import _fs
+
     path = Path(path)
     if path.suffix.lower().lstrip(".") not in {f.value for f in FigureFormat}:
         raise InvalidParameterError(f"the figure file must end in .png, .pdf or .svg, got {path.name!r}")
-    tmp = path.with_name(path.name + ".tmp")
-    try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format=path.suffix.lower().lstrip("."))
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    buf = io.BytesIO()
+    fig.savefig(buf, dpi=dpi, bbox_inches="tight", format=path.suffix.lower().lstrip("."))
+    _fs.atomic_write_bytes(path.parent, path.name, buf.getvalue())
     return path
 
 
