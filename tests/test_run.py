@@ -375,3 +375,21 @@ def test_init_from_continues_from_the_last_state(tmp_path, capsys):
                            "--no-progress")
     assert code == 0, err
     assert np.array_equal(rl.load(tmp_path / "c").X0, ref[:11])
+
+
+def test_a_figure_that_cannot_be_drawn_is_one_line_and_the_run_is_kept(tmp_path, capsys, monkeypatch):
+    """An unexpected error while drawing (here injected into the figure writer) used to escape as a traceback after a
+    completed run; it is now one line naming the cause, exit 1, and the run's data stay complete."""
+    from jetgaudin import plotting
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("injected plotting failure")
+
+    monkeypatch.setattr(plotting, "save_run_figures", broken)
+    code, _, err = run_cli(capsys, "orbit", "--steps", "5", "--out", tmp_path / "r")
+    assert one_line_error(code, err, expected=1), err
+    assert "injected plotting failure" in err and "jetgaudin plot" in err
+    from jetgaudin.recording import load_orbit
+
+    n, X = load_orbit(tmp_path / "r")
+    assert X.shape == (6, 9)

@@ -382,6 +382,13 @@ def after_run(out_dir: Path, what: str, work):
         typer.echo(f"{prog()}: interrupted by {name} while writing {what}; the run's data in {out_dir} are complete "
                    f"but {what} are missing or partial", err=True)
         raise typer.Exit(128 + exc.signum) from None
+    except (typer.Exit, SystemExit, KeyboardInterrupt):
+        raise
+    except Exception as exc:  # a figure or table that cannot be drawn: the run itself is complete and kept
+        text = " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
+        typer.echo(f"{prog()}: error: could not write {what} ({text}); the run's data in {out_dir} are complete "
+                   f"(redraw the figures with: jetgaudin plot {out_dir})", err=True)
+        raise typer.Exit(EXIT_FAILED) from None
     finally:
         for s, h in old.items():
             signal.signal(s, h)

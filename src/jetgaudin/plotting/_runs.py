@@ -116,10 +116,16 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     program, inp = run.get("program", ""), run.get("inputs", {})
     status = str(run.get("status", "unknown"))
     safe = int(run.get("checkpoint", {}).get("rows", 0))
+    # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
+    described = run.get("map") if isinstance(run.get("map"), dict) else {}
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
-        eta = complex(*inp["eta"])
+        try:
+            b_run = float(described.get("b", inp.get("b")))
+            eta = complex(*described.get("eta", inp.get("eta")))
+        except (TypeError, ValueError):
+            raise RecordingError(f"{run_dir}/run.json names no field b and parameter eta; cannot draw it") from None
         return RunRows(
             run_dir,
             "orbit",
@@ -128,7 +134,7 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
             "n",
             safe,
             int(inp["N"]),
-            float(inp["b"]),
+            b_run,
             eta,
             None,
             status,
