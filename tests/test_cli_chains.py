@@ -163,3 +163,20 @@ def test_info_sites_marks_casimirs_and_hamiltonians(capsys):
 def test_flow_sites_is_refused_clearly(tmp_path, capsys):
     code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--out", tmp_path / "f")
     assert one_line_error(code, err, "--sites", "not available", "jetgaudin.integrate")
+
+
+def test_the_commands_of_docs_chains_run(tmp_path, capsys, monkeypatch):
+    """Every `$ jetgaudin ...` line of docs/chains.md runs with exit code 0 (in a fresh directory, in order)."""
+    import pathlib
+    import re
+    import shlex
+
+    text = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "chains.md").read_text()
+    blocks = re.findall(r"```console\n(.*?)```", text, flags=re.S)
+    lines = [ln[2:] for b in blocks for ln in b.splitlines() if ln.startswith("$ jetgaudin ")]
+    assert len(lines) >= 3
+    monkeypatch.chdir(tmp_path)
+    for ln in lines:
+        code, _, err = run_cli(capsys, *shlex.split(ln)[1:])
+        assert code == 0, (ln, err)
+    assert (tmp_path / "chain" / "chain_y0.png").exists()
