@@ -160,9 +160,25 @@ def test_info_sites_marks_casimirs_and_hamiltonians(capsys):
     assert code == 0 and "Casimir" in out and "Hamiltonian" in out and "h2,6" in out
 
 
-def test_flow_sites_is_refused_clearly(tmp_path, capsys):
-    code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--out", tmp_path / "f")
-    assert one_line_error(code, err, "--sites", "not available", "jetgaudin.integrate")
+def test_flow_sites_integrates_the_chains_G_eta(tmp_path, capsys):
+    """flow --sites --compare: the flow of the chain's G_eta sampled at t = n is the chain map's orbit (the map is the
+    time-1 flow, docs/chains.md section 4); DOP853 at rtol = atol = 1e-12 over 20 time units: <= 1e-8 relative to
+    1 + |X| (measured ~1e-11)."""
+    out = tmp_path / "f"
+    code, stdout, err = run_cli(capsys, "flow", "--sites", SITES, "--b", "0.8", "--eta", "0.9+0.05i", "--init", INIT,
+                                "--steps", "20", "--compare", "--out", out)
+    assert code == 0, err
+    d = rl.load(out)
+    ref = jg.ChainTwoPointBacklund(MODEL, ETA).iterate(X0, 20)
+    assert d.X.shape == ref.shape and np.abs(d.X - ref).max() <= 1e-8 * (1 + np.abs(ref).max())
+    assert (out / "flow.csv").read_text().startswith("t," + ",".join(MODEL.labels()))
+    run = json.loads((out / "run.json").read_text())
+    assert run["map"]["kind"] == "chain_flow" and run["integral_names"] == MODEL.integral_labels()
+    assert run["compare"]["max_distance"] <= 1e-8 * (1 + np.abs(ref).max())
+    assert {"chain_y0.png", "chain_integrals.png"} <= set(run["files"])
+    code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--init", INIT, "--hamiltonian", "physical",
+                           "--out", tmp_path / "g")
+    assert one_line_error(code, err, "--sites", "interpolating")
 
 
 def test_the_commands_of_docs_chains_run(tmp_path, capsys, monkeypatch):

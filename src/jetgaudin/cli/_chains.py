@@ -61,9 +61,11 @@ def chain_map(model, eta: complex, branch: str, kernel: str | None):
         raise CliInputError(f"{option}: {one_line(exc)}") from None
 
 
-FLOW_REFUSAL = ("--sites: `flow` of a chain is not available from the command line yet (the run layer's FlowMap "
-                "takes one-site Hamiltonians only); use the library: jetgaudin.integrate("
-                "model.interpolating_flow_hamiltonian(X0, eta), X0, T)")
+def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
+    """The flow map of the chain Hamiltonian ``H`` over ``dt`` (tolerance ``rtol`` relative and absolute)."""
+    from jetgaudin.gaudin import ChainFlowMap
+
+    return ChainFlowMap(H, dt, method, rtol, rtol)
 
 
 def sites_of(record: dict) -> str | None:
