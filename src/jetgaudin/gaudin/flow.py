@@ -71,7 +71,7 @@ class ChainFlowMap(FlowMap):
 
 
 def _chain_flow_from(d: dict) -> ChainFlowMap:
-    model = GaudinModel(d["b"], [(float(p), int(N)) for p, N in d["sites"]])
+    model = GaudinModel(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]))
     return ChainFlowMap(ChainHamiltonian(model, np.asarray(d["weights"], dtype=float)), float(d["dt"]),
                         Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
 
