@@ -14,21 +14,13 @@ import jetgaudin as jg
 from jetgaudin import run as rl
 from jetgaudin.cli import main
 from jetgaudin.gaudin import GaudinModel, parse_sites
+from test_run import run_cli
 
 SITES = "-1:2,0.5:3,2:1"
 MODEL = GaudinModel(0.8, parse_sites(SITES))
 ETA = 0.9 + 0.05j
 X0 = np.round(np.random.default_rng(3).normal(size=18), 3)
 INIT = ",".join(repr(float(v)) for v in X0)
-
-
-def run_cli(capsys, *args):
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:
-        code = exc.code
-    out = capsys.readouterr()
-    return (0 if code is None else code), out.out, out.err
 
 
 def one_line_error(code, err, *words):
