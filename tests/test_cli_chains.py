@@ -14,21 +14,13 @@ import jetgaudin as jg
 from jetgaudin import run as rl
 from jetgaudin.cli import main
 from jetgaudin.gaudin import GaudinModel, parse_sites
+from test_run import run_cli
 
 SITES = "-1:2,0.5:3,2:1"
 MODEL = GaudinModel(0.8, parse_sites(SITES))
 ETA = 0.9 + 0.05j
 X0 = np.round(np.random.default_rng(3).normal(size=18), 3)
 INIT = ",".join(repr(float(v)) for v in X0)
-
-
-def run_cli(capsys, *args):
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:
-        code = exc.code
-    out = capsys.readouterr()
-    return (0 if code is None else code), out.out, out.err
 
 
 def one_line_error(code, err, *words):
@@ -160,6 +152,39 @@ def test_info_sites_marks_casimirs_and_hamiltonians(capsys):
     assert code == 0 and "Casimir" in out and "Hamiltonian" in out and "h2,6" in out
 
 
-def test_flow_sites_is_refused_clearly(tmp_path, capsys):
-    code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--out", tmp_path / "f")
-    assert one_line_error(code, err, "--sites", "not available", "jetgaudin.integrate")
+def test_flow_sites_integrates_the_chains_G_eta(tmp_path, capsys):
+    """flow --sites --compare: the flow of the chain's G_eta sampled at t = n is the chain map's orbit (the map is the
+    time-1 flow, docs/chains.md section 4); DOP853 at rtol = atol = 1e-12 over 20 time units: <= 1e-8 relative to
+    1 + |X| (measured ~1e-11)."""
+    out = tmp_path / "f"
+    code, stdout, err = run_cli(capsys, "flow", "--sites", SITES, "--b", "0.8", "--eta", "0.9+0.05i", "--init", INIT,
+                                "--steps", "20", "--compare", "--out", out)
+    assert code == 0, err
+    d = rl.load(out)
+    ref = jg.ChainTwoPointBacklund(MODEL, ETA).iterate(X0, 20)
+    assert d.X.shape == ref.shape and np.abs(d.X - ref).max() <= 1e-8 * (1 + np.abs(ref).max())
+    assert (out / "flow.csv").read_text().startswith("t," + ",".join(MODEL.labels()))
+    run = json.loads((out / "run.json").read_text())
+    assert run["map"]["kind"] == "chain_flow" and run["integral_names"] == MODEL.integral_labels()
+    assert run["compare"]["max_distance"] <= 1e-8 * (1 + np.abs(ref).max())
+    assert {"chain_y0.png", "chain_integrals.png"} <= set(run["files"])
+    code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--init", INIT, "--hamiltonian", "physical",
+                           "--out", tmp_path / "g")
+    assert one_line_error(code, err, "--sites", "interpolating")
+
+
+def test_the_commands_of_docs_chains_run(tmp_path, capsys, monkeypatch):
+    """Every `$ jetgaudin ...` line of docs/chains.md runs with exit code 0 (in a fresh directory, in order)."""
+    import pathlib
+    import re
+    import shlex
+
+    text = (pathlib.Path(__file__).resolve().parents[1] / "docs" / "chains.md").read_text()
+    blocks = re.findall(r"```console\n(.*?)```", text, flags=re.S)
+    lines = [ln[2:] for b in blocks for ln in b.splitlines() if ln.startswith("$ jetgaudin ")]
+    assert len(lines) >= 3
+    monkeypatch.chdir(tmp_path)
+    for ln in lines:
+        code, _, err = run_cli(capsys, *shlex.split(ln)[1:])
+        assert code == 0, (ln, err)
+    assert (tmp_path / "chain" / "chain_y0.png").exists()

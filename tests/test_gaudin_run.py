@@ -91,3 +91,28 @@ def test_interrupted_chain_run_resumes_bit_for_bit(tmp_path, backend, B):
     ref = chain_map(backend).iterate(X0, 60, save_every=4)
     assert np.array_equal(d.X, ref)
 
+
+
+def test_chain_flow_map_is_a_map_rebuilt_from_its_description(tmp_path):
+    """ChainFlowMap (the run layer's flow of a chain Hamiltonian): validated by FlowMap's rules, described as JSON,
+    rebuilt by map_from_description, recorded as flow.h5 with the chain's integral names."""
+    import json
+
+    from jetgaudin.gaudin import ChainFlowMap
+    from jetgaudin.maps import map_from_description
+
+    X = states(1)[0]
+    H = MODEL.interpolating_flow_hamiltonian(X, ETA)
+    F = ChainFlowMap(H, 1.0)
+    R = map_from_description(json.loads(json.dumps(F.describe())))
+    assert isinstance(R, ChainFlowMap) and R.describe() == F.describe() and F.inverse().dt == -1.0
+    with pytest.raises(jg.InvalidParameterError, match="dt"):
+        ChainFlowMap(H, 0.0)
+    with pytest.raises(jg.InvalidParameterError, match="ChainHamiltonian"):
+        ChainFlowMap(jg.physical_hamiltonian(3, 1.0), 1.0)
+    res = rl.start(rl.RunSpec(F, X, 3, program="jetgaudin flow"), tmp_path / "f")
+    assert res.state is rl.RunStatus.COMPLETED and rl.read_run(tmp_path / "f")["integral_names"] == \
+        MODEL.integral_labels()
+    # one flow step is one map step (the time-1 flow of G_eta): DOP853 at 1e-12 over 3 units, <= 1e-9 relative
+    ref = chain_map("numpy").iterate(X, 3)
+    assert np.abs(rl.load(tmp_path / "f").X - ref).max() <= 1e-9 * (1 + np.abs(ref).max())

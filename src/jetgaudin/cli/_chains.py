@@ -34,7 +34,7 @@ def chain_model(sites: str, b: float):
     from jetgaudin.gaudin import GaudinModel, parse_sites
 
     try:
-        return GaudinModel(b, parse_sites(sites))
+        return GaudinModel(b, tuple(parse_sites(sites)))
     except jg.JetGaudinError as exc:
         msg = one_line(exc)
         raise CliInputError("--sites: " + (msg[len("sites: "):] if msg.startswith("sites: ") else msg)) from None
@@ -55,15 +55,18 @@ def chain_map(model, eta: complex, branch: str, kernel: str | None):
     import jetgaudin as jg
 
     try:
-        return jg.ChainTwoPointBacklund(model, eta, branch, jg.Backend.parse(kernel or "auto"))
+        return jg.ChainTwoPointBacklund(model, eta, jg.Branch.parse(branch), jg.Backend.parse(kernel or "auto"))
     except jg.InvalidParameterError as exc:
         option = "--sites" if "is a site" in str(exc) else "--eta"
         raise CliInputError(f"{option}: {one_line(exc)}") from None
 
 
-FLOW_REFUSAL = ("--sites: `flow` of a chain is not available from the command line yet (the run layer's FlowMap "
-                "takes one-site Hamiltonians only); use the library: jetgaudin.integrate("
-                "model.interpolating_flow_hamiltonian(X0, eta), X0, T)")
+def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
+    """The flow map of the chain Hamiltonian ``H`` over ``dt`` (tolerance ``rtol`` relative and absolute)."""
+    from jetgaudin.flows import Method
+    from jetgaudin.gaudin import ChainFlowMap
+
+    return ChainFlowMap(H, dt, Method.parse(method), rtol, rtol)
 
 
 def sites_of(record: dict) -> str | None:

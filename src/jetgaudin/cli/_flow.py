@@ -86,7 +86,7 @@ def flow(
         typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
     ] = None,
     no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
-    sites: Annotated[str | None, typer.Option("--sites", help="chain sites: not available for flow yet (refused)")
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η")
                      ] = None,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
@@ -97,10 +97,8 @@ def flow(
     """
     con = console()
     with reported_errors():
-        if sites is not None:
-            raise CliInputError(_chains.FLOW_REFUSAL)
-        bf = parse_b(b)
-        eta_c = parse_eta(eta)
+        bf = parse_b(b) if sites is None else _chains.parse_chain_b(b)
+        eta_c = parse_eta(eta, pole_at_zero=sites is None)
         n_steps = parse_steps(steps)
         if init_from_dir is not None:
             from ._orbit import init_from
@@ -109,22 +107,39 @@ def flow(
         else:
             X0 = np.array(parse_init(init))
         N = len(X0) // 3
-        check_state_scale(X0, bf)
+        model = None if sites is None else _chains.chain_model(sites, bf)
+        if model is not None:
+            X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
+            if hamiltonian is not Hamiltonian.interpolating:
+                raise CliInputError("--sites: --hamiltonian physical (H_2/2 of eq. (H)) is the one-site top's; a chain "
+                                    "flows under its G_η: use --hamiltonian interpolating")
+        else:
+            check_state_scale(X0, bf)
         if not (0 < rtol < 1):
             raise CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
             raise CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:
             raise CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
-        with blame("--eta"):
-            B = jg.TwoPointBacklund(bf, eta_c)  # the map's rules for eta (Im eta = 0: G_eta = 0, refused)
-        if hamiltonian is Hamiltonian.interpolating:
+        if model is not None:
+            B = _chains.chain_map(model, eta_c, "default", "numpy")  # the chain map's rules for eta
+            with blame("--eta"):
+                H = model.interpolating_flow_hamiltonian(X0, eta_c)
+            with blame("--dt"):
+                fm = _chains.chain_flow_map(H, dt, method.value, rtol)
+        else:
+            with blame("--eta"):
+                B = jg.TwoPointBacklund(bf, eta_c)  # the map's rules for eta (Im eta = 0: G_eta = 0, refused)
+        if model is not None:
+            pass
+        elif hamiltonian is Hamiltonian.interpolating:
             with blame("--eta"):
                 H = jg.interpolating_flow_hamiltonian(X0, bf, eta_c)
         else:
             H = jg.physical_hamiltonian(N, bf)
-        with blame("--dt"):
-            fm = FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
+        if model is None:
+            with blame("--dt"):
+                fm = FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
         with blame("--init"):
             spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
                                     program="jetgaudin flow")
@@ -132,7 +147,7 @@ def flow(
         res = run_with_progress("flow", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
                                                                              progress=bar))
         files = list(res.files)
-        names = runlayer.integral_names(N)
+        names = res.record.get("integral_names") or runlayer.integral_names(N)
 
         def extras():
             written, extra = [], {"inputs_cli": {"b": bf, "eta": [eta_c.real, eta_c.imag], "hamiltonian":
@@ -160,7 +175,12 @@ def flow(
                     f"flow of {'G_η' if hamiltonian is Hamiltonian.interpolating else 'H_2/2'}: b = {bf:g}, "
                     f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
                 )
-                if compare:
+                if model is not None:
+                    from .. import plotting_chains
+
+                    written += plotting_chains.save_chain_figures(out_dir, t, data.X, model, title=title,
+                                                                  xlabel="time t")
+                elif compare:
                     written += plotting.save_orbit_figures(out_dir, np.arange(n_steps + 1), orbit_X, bf,
                                                            title=title + " (points: map, lines: flow)",
                                                            overlay=data.X, overlay_label="flow of G_η")

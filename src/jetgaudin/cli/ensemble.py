@@ -307,13 +307,14 @@ def _report(res, show):
     B = res.drift.shape[0]
     N = res.drift.shape[1] // 2
     steps = res.spec.steps
-    con = console()
+    names = res.record.get("integral_names") or runlayer.integral_names(N)
+    con = console(**({"width": 12 * (len(names) + 1)} if len(names) > 7 else {}))  # chains: one column per h_(i,m)
     t = Table(
         title=f"relative drift max_n |I(X_n) - I(X_0)| / max(1, |I(X_0)|) (first {min(show, B)} of {B})",
         title_justify="left",
     )
     t.add_column("orbit", justify="right")
-    for name in res.record.get("integral_names") or runlayer.integral_names(N):
+    for name in names:
         t.add_column(name, justify="right")
     for i in range(min(show, B)):
         t.add_row(str(i), *[f"{d:.2e}" for d in res.drift[i]])

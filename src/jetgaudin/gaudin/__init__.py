@@ -4,6 +4,7 @@ See ``docs/chains.md``: the model, the state layout, the integrals (Casimirs and
 the field ``b = 0``, the checks and the matching with the literature.
 """
 
+from .flow import ChainFlowMap
 from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
 from .model import ChainHamiltonian, GaudinModel, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
 
@@ -12,6 +13,7 @@ __all__ = [
     "ChainHamiltonian",
     "ChainTwoPointBacklund",
     "ChainOnePointBacklund",
+    "ChainFlowMap",
     "parse_sites",
     "gaudin_magnet",
     "lagrange_chain",

@@ -278,12 +278,13 @@ class ChainTwoPointBacklund(_ChainMap):
         Xb = X.reshape(-1, shape[-1])
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
         consts = _kernels.orbit_constants(self.model, self.eta)
+        run_orbit: Any = _kernels.run_orbit  # a Numba dispatcher
         b = float(self.model.b)
         rows = np.empty((steps // save_every,) + Xb.shape)
         final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
-            out, final[n], last[n] = _kernels.run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
+            out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
                                                         *consts, steps, save_every)
             rows[:, n] = out[1:]
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
@@ -426,16 +427,16 @@ class ChainOnePointBacklund(_ChainMap):
 
 
 def _sites(d: dict) -> GaudinModel:
-    return GaudinModel(d["b"], [(float(p), int(N)) for p, N in d["sites"]])
+    return GaudinModel(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]))
 
 
 def _two_point_from(d: dict) -> ChainTwoPointBacklund:
-    return ChainTwoPointBacklund(_sites(d), complex(*d["eta"]), d.get("branch", "default"),
-                                 d.get("backend", "numpy"))
+    return ChainTwoPointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
+                                 Backend.parse(d.get("backend", "numpy")))
 
 
 def _one_point_from(d: dict) -> ChainOnePointBacklund:
-    return ChainOnePointBacklund(_sites(d), complex(*d["eta"]), d.get("branch", "default"),
+    return ChainOnePointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
                                  bool(d.get("inverse_map", False)))
 
 

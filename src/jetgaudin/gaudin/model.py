@@ -37,6 +37,7 @@ import numpy as np
 from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..algebra import structure_constants
+from ..maps import Backend, Branch
 
 if TYPE_CHECKING:  # pragma: no cover
     from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
@@ -352,20 +353,21 @@ class GaudinModel:
 
     # ---- maps ---------------------------------------------------------------------------------
 
-    def two_point_backlund(self, eta, branch: str = "default", backend: str = "numpy") -> ChainTwoPointBacklund:
+    def two_point_backlund(self, eta, branch: Branch | str = "default",
+                           backend: Backend | str = "numpy") -> ChainTwoPointBacklund:
         """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
         ``backend="compiled"``: ``advance`` / ``iterate`` run in the Numba kernel)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, branch, backend)
+        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend))
 
     def one_point_backlund(
-        self, eta, branch: str = "default", inverse_map: bool = False
+        self, eta, branch: Branch | str = "default", inverse_map: bool = False
     ) -> ChainOnePointBacklund:
         """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0``."""
         from .maps import ChainOnePointBacklund
 
-        return ChainOnePointBacklund(self, eta, branch, inverse_map)
+        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map)
 
 
 @dataclass(frozen=True)
