@@ -61,7 +61,7 @@ def test_orbit_sites_writes_the_chain_orbit(orbit_dir):
 
 def test_chain_y0_figure_plots_each_sites_y0(orbit_dir):
     """The 3D figure's point sets are the saved y_0 of each site (one set per site, in site order)."""
-    from jetgaudin import plotting_chains as pc
+    from jetgaudin import plotting as pc
 
     d = rl.load(orbit_dir)
     fig = pc.figure_chain_y0(MODEL, d.X)

@@ -176,9 +176,9 @@ def flow(
                     f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
                 )
                 if model is not None:
-                    from .. import plotting_chains
+                    from .. import plotting
 
-                    written += plotting_chains.save_chain_figures(out_dir, t, data.X, model, title=title,
+                    written += plotting.save_chain_figures(out_dir, t, data.X, model, title=title,
                                                                   xlabel="time t")
                 elif compare:
                     written += plotting.save_orbit_figures(out_dir, np.arange(n_steps + 1), orbit_X, bf,

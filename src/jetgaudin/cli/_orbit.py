@@ -263,14 +263,14 @@ def orbit(
 
                 model = getattr(res.spec.map, "model", None)
                 if model is not None and _chains.multi_site(model):
-                    from .. import plotting_chains
+                    from .. import plotting
 
                     data = runlayer.load(out_dir)
                     m = res.spec.map.describe()
                     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
                     title = (f"chain (λ:N) = {sites_text}; b = {m['b']:g}; η = {m['eta'][0]:g}{m['eta'][1]:+g}i; "
                              f"{res.spec.steps} steps")
-                    written = plotting_chains.save_chain_figures(out_dir, data.n, data.X, model, title=title)
+                    written = plotting.save_chain_figures(out_dir, data.n, data.X, model, title=title)
                 else:
                     written = plotting.save_run_figures(out_dir)  # streamed from orbit.h5: constant memory
             from ..recording import update_run

@@ -13,6 +13,7 @@ max_points)`` and the last row; the drift figure shows, per bin of ``k`` rows, t
 from __future__ import annotations
 
 from ._animate import AnimationFormat, animate_run
+from ._chains import figure_chain_integral_drift, figure_chain_y0, save_chain_figures, site_y0
 from ._compare import figure_compare_drift, figure_map_flow_distance, save_compare_figures
 from ._files import (
     DEFAULT_MAX_POINTS,
@@ -40,6 +41,8 @@ __all__ = [
     "RunRows",
     "animate_run",
     "default_region",
+    "figure_chain_integral_drift",
+    "figure_chain_y0",
     "figure_compare_drift",
     "figure_integral_drift",
     "figure_map_flow_distance",
@@ -51,10 +54,12 @@ __all__ = [
     "open_run",
     "point_sets",
     "run_title",
+    "save_chain_figures",
     "save_compare_figures",
     "save_figure",
     "save_orbit_figures",
     "save_run_figures",
+    "site_y0",
     "sphere_label",
     "thin_step",
 ]

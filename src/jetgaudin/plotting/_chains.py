@@ -10,14 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import colormaps
 
-from .plotting import save_figure
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from ._files import save_figure
+from ._orbit import AXIS_LABELS, new_figure
 
 __all__ = ["site_y0", "figure_chain_y0", "figure_chain_integral_drift", "save_chain_figures"]
 
@@ -49,17 +46,17 @@ def figure_chain_y0(model, X, *, title: str = ""):
     X = np.asarray(X, dtype=float)
     _, X = _thin(np.arange(len(X)), X)
     Y = site_y0(model, X)
-    fig = plt.figure(figsize=(7.5, 7))
+    fig = new_figure(figsize=(7.5, 7))
     ax = fig.add_subplot(projection="3d")
-    colors = plt.get_cmap("tab10")
+    colors = colormaps["tab10"]
     for i in range(Y.shape[1]):
         P = Y[:, i]
         c = colors(i % 10)
         ax.plot(P[:, 0], P[:, 1], P[:, 2], ".", markersize=2, color=c, label=f"y_0 of {_site_name(model, i)}")
         ax.scatter(*P[0], s=40, facecolors="none", edgecolors=[c], linewidths=1.2)
-    ax.set_xlabel("e₁ (dimensionless)")
-    ax.set_ylabel("e₂ (dimensionless)")
-    ax.set_zlabel("e₃ (dimensionless)")
+    ax.set_xlabel(AXIS_LABELS[0])
+    ax.set_ylabel(AXIS_LABELS[1])
+    ax.set_zlabel(AXIS_LABELS[2])
     ax.legend(loc="upper left", fontsize=8, markerscale=4)
     ax.set_title((title + "\n" if title else "") + "chain: y_0 of each site (ring: start)", fontsize=8)
     return fig
@@ -74,8 +71,9 @@ def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "
     d = np.abs(I - I[0])
     names = model.integral_labels()
     cas = model.casimir_mask()
-    fig, ax = plt.subplots(figsize=(8, 4.5))
-    colors = plt.get_cmap("tab20")
+    fig = new_figure(figsize=(8, 4.5))
+    ax = fig.add_subplot()
+    colors = colormaps["tab20"]
     for k, name in enumerate(names):
         mask = d[:, k] > 0
         ax.semilogy(n[mask], d[mask, k], "x" if cas[k] else ".", markersize=3 if cas[k] else 2, color=colors(k % 20),
@@ -94,8 +92,5 @@ def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "
     paths = []
     for name, fig in (("chain_y0.png", figure_chain_y0(model, X, title=title)),
                       ("chain_integrals.png", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
-        try:
-            paths.append(save_figure(fig, out_dir / name, 130))  # atomic, never through a symlink
-        finally:
-            plt.close(fig)
+        paths.append(save_figure(fig, out_dir / name, 130))  # atomic, never through a symlink
     return paths
