@@ -393,3 +393,12 @@ def test_a_figure_that_cannot_be_drawn_is_one_line_and_the_run_is_kept(tmp_path,
 
     n, X = load_orbit(tmp_path / "r")
     assert X.shape == (6, 9)
+
+
+def test_complex_maps_are_refused_by_the_spec():
+    """A complex map (the one-point map) used to start a run that ended as 'failed: I/O error' (HDF5 cannot store
+    complex rows as real); the spec, built before any directory is touched, now refuses it naming the reason."""
+    from jetgaudin import run as rl
+
+    with pytest.raises(jg.InvalidParameterError, match="complex"):
+        rl.RunSpec(jg.OnePointBacklund(1.0, 5 + 0.1j), np.array(APPENDIX2_X0), 5)

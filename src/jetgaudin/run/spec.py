@@ -116,6 +116,11 @@ class RunSpec:
     def __post_init__(self) -> None:
         if not isinstance(self.map, Map):
             raise InvalidParameterError(f"map must be a jetgaudin.maps.Map, got {type(self.map).__name__}")
+        if not self.map.properties.real:
+            raise InvalidParameterError(
+                f"{type(self.map).__name__} maps real states to complex ones; a run directory records real orbits "
+                "only (iterate a complex map in memory with its iterate() method)"
+            )
         X0, _ = as_state(self.X0, name="the initial state")
         if X0.ndim not in (1, 2):
             raise InvalidParameterError(f"X0 must be one state (n,) or a batch (B, n), got shape {X0.shape}")
