@@ -33,6 +33,7 @@ Hamiltonian ``H = H_2/2 = |y|²/2 + b x³`` (eq. (H)) and integrals ``I_1 = y³ 
 from __future__ import annotations
 
 from functools import cache
+from typing import Any
 
 import numpy as np
 import sympy as sp
@@ -144,7 +145,7 @@ def _check_realisation(X: tuple) -> tuple[bool, dict]:
     q, p, _ = symbolic_realisation()
     cst = structure_constants(3)
     names = [f"{v}{a}" for v in "yxz" for a in (1, 2, 3)]
-    res = {}
+    res: dict[Any, Any] = {}  # keys: (name, name) for brackets, "C1".. for the Casimirs
     for i in range(9):
         for j in range(i + 1, 9):
             expected = sum(int(cst[i, j, k]) * X[k] for k in range(9) if cst[i, j, k] != 0)

@@ -129,7 +129,8 @@ def one_point_closed_form(X: ArrayLike, b: float, eta: complex, p: ArrayLike, q:
     eta = spectral_parameter(eta)
     p = _param(p, "p")
     q = _param(q, "q")
-    ypt, ymt, y3t, xpt, xmt, x3t, zpt, zmt, z3t = _one_point_core(*_split(X), b, eta, p, q)
+    args = (*_split(X), b, eta, p, q)
+    ypt, ymt, y3t, xpt, xmt, x3t, zpt, zmt, z3t = _one_point_core(*args)
     out = [*_to_real_basis(ypt, ymt, y3t), *_to_real_basis(xpt, xmt, x3t), *_to_real_basis(zpt, zmt, z3t)]
     return np.stack(np.broadcast_arrays(*out), axis=-1).astype(complex)
 
@@ -231,7 +232,8 @@ def two_point_closed_form(
     eta = spectral_parameter(eta)
     s = _param(s, "s")
     t = _param(t, "t")
-    out = _two_point_core(*_split(X), b, eta.real, eta.imag, s, t)
+    args = (*_split(X), b, eta.real, eta.imag, s, t)
+    out = _two_point_core(*args)
     Xc = np.stack(np.broadcast_arrays(*out), axis=-1).astype(complex)
     Xr = Xc.real
     if not return_imag:

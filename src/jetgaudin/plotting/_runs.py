@@ -117,7 +117,7 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     status = str(run.get("status", "unknown"))
     safe = int(run.get("checkpoint", {}).get("rows", 0))
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
-    described = run.get("map") if isinstance(run.get("map"), dict) else {}
+    described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
