@@ -187,8 +187,8 @@ class TwoPointBacklund(Map):
         object.__setattr__(self, "backend", Backend.parse(self.backend))
         if self.eta.imag == 0:
             raise InvalidParameterError(
-                "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: Im eta is the time step "
-                "of the real two-point map); give e.g. eta = 5+0.1i"
+                "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: the real two-point map is "
+                "a step -2 Im eta of the flow of nu(Re eta)); give e.g. eta = 5+0.1i"
             )
 
     @property
