@@ -1,6 +1,6 @@
 """The documentation site builds strictly (every warning an error) and has what it promises: an index, an API page
 naming every public name, the CLI reference generated from the Typer app, and tutorials executed at build time with
-embedded PNG figures.  Slow (about 1-2 minutes: the six tutorials run); needs the `docs` extra."""
+embedded PNG figures.  Slow (about 1-2 minutes: the seven tutorials run); needs the `docs` extra."""
 
 import re
 import shutil
@@ -73,7 +73,7 @@ def test_cli_reference_is_generated_from_the_app(site):
 
 
 @pytest.mark.parametrize(
-    "tutorial", ["appendix2", "map-as-flow", "branch-rule", "ensembles", "long-runs", "euler-angles"]
+    "tutorial", ["appendix2", "map-as-flow", "branch-rule", "ensembles", "long-runs", "euler-angles", "chains"]
 )
 def test_tutorials_are_executed_with_figures(site, tutorial):
     html = (site / "tutorials" / f"{tutorial}.html").read_text(encoding="utf-8")
