@@ -70,7 +70,7 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
 
 
 def figure_map_flow_distance(n, distance, *, title: str = ""):
-    """The distance ``|X_map(n) − X_flow(n)|`` (Euclidean norm in ``R^{3N}``) over the steps, log scale.
+    """The distance ``|X_map(n) − X_flow(n)|`` (Euclidean norm of the states) over the steps, log scale.
 
     Parameters
     ----------
@@ -92,7 +92,7 @@ def figure_map_flow_distance(n, distance, *, title: str = ""):
     if m.any():
         ax.axhline(distance.max(), color="0.4", linestyle=":", linewidth=0.8, label=f"maximum {distance.max():.2e}")
     ax.set_xlabel("step n (dimensionless)")
-    ax.set_ylabel("Euclidean distance in R^3N (dimensionless)")
+    ax.set_ylabel("Euclidean distance of the states (dimensionless)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax.set_title((title + "\n" if title else "") + "distance between the map and the time-n flow of G_η", fontsize=8)
