@@ -12,7 +12,7 @@ import itertools
 
 import sympy as sp
 
-from ._registry import FAILS, HOLDS, Outcome, Verdict, register
+from ._registry import Outcome, Verdict, register
 from ._tools import SIGMA, eps, hat, is_zero, lp_bracket, sym_state
 
 lam, mu = sp.symbols("lambda mu")
@@ -70,7 +70,7 @@ def _chain_r(ctx):
     a1, a2 = sp.symbols("a1 a2", real=True)
     cases = [[(-1, 1), (sp.Rational(1, 2), 2)]] + ([[(a1, 1), (a2, 2)], [(-1, 2), (2, 3)]] if ctx.full else [])
     ok = all(_r_matrix_holds(s) for s in cases)
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _h_partial_fractions(sites, ys, b):
@@ -138,4 +138,4 @@ def _chain_integrals(ctx):
                     notes.append(f"{sites}: h_({p},{m}) is not a Casimir")
                 k += 1
     ok = not notes
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0, "; ".join(notes)))
+    return Outcome(Verdict.exact(ok, "; ".join(notes)))

@@ -15,7 +15,7 @@ from __future__ import annotations
 import mpmath as mp
 import sympy as sp
 
-from ._registry import FAILS, HOLDS, Outcome, Verdict, register
+from ._registry import Outcome, Verdict, register
 from ._tools import (
     ell_from_state,
     is_zero,
@@ -181,8 +181,7 @@ def _rem_complex(ctx):
             Y, _, _ = one_point(X, b, eta)
             smallest = min(smallest, max(abs(mp.im(y)) for y in Y))
     ok = smallest > 1e-3
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0,
-                           f"smallest max|Im B(X)| over the samples: {mp.nstr(smallest, 3)}"))
+    return Outcome(Verdict.exact(ok, f"smallest max|Im B(X)| over the samples: {mp.nstr(smallest, 3)}"))
 
 
 @register(
@@ -205,8 +204,7 @@ def _rem_nonlinear(ctx):
             BM, _, _ = two_point_real([(x + y) / 2 for x, y in zip(X, Y, strict=True)], b, eta, ref)
             smallest = min(smallest, max(abs(m - (p + q) / 2) for m, p, q in zip(BM, BX, BY, strict=True)))
     ok = smallest > 1e-6
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0,
-                           f"smallest midpoint defect: {mp.nstr(smallest, 3)}"))
+    return Outcome(Verdict.exact(ok, f"smallest midpoint defect: {mp.nstr(smallest, 3)}"))
 
 
 @register(
@@ -218,4 +216,4 @@ def _rem_nonlinear(ctx):
 def _ansatz(ctx):
     lam, eta, p, q = sp.symbols("lambda eta p q")
     ok = is_zero(sp.Matrix([[lam - eta + p * q, p], [q, 1]]).det() - (lam - eta))
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))

@@ -85,7 +85,7 @@ def _prop1(ctx):
         general = N <= 3 or ctx.full
         holds, _ = _r_matrix_residual(N, general)
         ok = ok and holds
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -141,9 +141,8 @@ def _uvw(ctx):
         printed_ok = printed_ok and not bad
         corrected_ok = corrected_ok and all(is_zero(e) for e in corrected)
     return Outcome(
-        Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0,
-                "printed items failing (1-based, in display order): " + str([n + 1 for n in bad])),
-        Verdict("holds" if corrected_ok else FAILS, 0.0 if corrected_ok else 1.0),
+        Verdict.exact(printed_ok, "printed items failing (1-based, in display order): " + str([n + 1 for n in bad])),
+        Verdict.exact(corrected_ok),
     )
 
 
@@ -173,7 +172,7 @@ def _uvw_general(ctx):
                  lp_bracket(ul, vm, ys) - sp.I / d * (vm - vl), lp_bracket(ul, wm, ys) - sp.I / d * (wl - wm),
                  lp_bracket(vl, wm, ys) - 2 * sp.I / d * (um - ul)]
         ok = ok and all(is_zero(e) for e in exprs)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -198,8 +197,8 @@ def _iso(ctx):
     comm = hat(xi) * hat(et) - hat(et) * hat(xi)
     printed = matrix_is_zero(comm - hat(cross(xi, et)))
     corrected = matrix_is_zero(comm + hat(cross(xi, et))) and same_as_hat
-    return Outcome(Verdict("holds" if printed else FAILS, 0.0 if printed else 1.0),
-                   Verdict("holds" if corrected else FAILS, 0.0 if corrected else 1.0))
+    return Outcome(Verdict.exact(printed),
+                   Verdict.exact(corrected))
 
 
 @register(
@@ -213,7 +212,7 @@ def _trace(ctx):
     et = sp.symbols("e1:4", real=True)
     A, B = hat(xi), hat(et)
     ok = is_zero(dot(xi, et) + 2 * (A * B).trace()) and is_zero(dot(xi, et) - 2 * (B * A.H).trace())
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _curve_parts(N, ys, bv):
@@ -246,8 +245,7 @@ def _lemma1(ctx):
         H = sum(_H_printed(N, ys, bv, i, 0) / lam**i for i in range(1, N + 1))
         C = sum(sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)) / lam**i for i in range(N + 1, 2 * N + 1))
         ok = ok and is_zero(det4 - (4 * m**2 + dot(bv, bv) + H + C))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0,
-                           "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)"))
+    return Outcome(Verdict.exact(ok, "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)"))
 
 
 @register(
@@ -272,8 +270,8 @@ def _hh(ctx):
         for i in range(1, N + 1):
             printed_ok = printed_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 1))
             corrected_ok = corrected_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 0))
-    return Outcome(Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0),
-                   Verdict("holds" if corrected_ok else FAILS, 0.0 if corrected_ok else 1.0))
+    return Outcome(Verdict.exact(printed_ok),
+                   Verdict.exact(corrected_ok))
 
 
 @register(
@@ -290,7 +288,7 @@ def _c(ctx):
         kap = _curve_parts(N, ys, bv)
         for i in range(N + 1, 2 * N + 1):
             ok = ok and is_zero(kap[i] - sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _HC_prop2(N, ys, bv):
@@ -319,7 +317,7 @@ def _prop2(ctx):
             ok = ok and is_zero(kap[k] - H[k - 1]) and is_zero(kap[N + k] - C[k - 1])
             ok = ok and is_zero(sp.residue(sp.expand(lam ** (k - 1) * Hl), lam, 0) - H[k - 1])
             ok = ok and is_zero(sp.residue(sp.expand(lam ** (N + k - 1) * Cl), lam, 0) - C[k - 1])
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -341,7 +339,7 @@ def _prop2_inv(ctx):
             for j in range(N):
                 for b in range(3):
                     ok = ok and is_zero(lp_bracket(c, ys[j][b], ys))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 _PROOF_P = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c y_{N+k-i-2+j}^a"
@@ -387,8 +385,8 @@ def _prop2_proof(ctx):
                     trunc = {ys[m][a]: 0 for m in range(N, 3 * N + 1) for a in range(3)}
                     trunc_ok = trunc_ok and sp.expand(co.subs(trunc)) == 0 and sp.expand(pr.subs(trunc)) == 0
     note = "both displays vanish under (LP): " + str(trunc_ok)
-    return Outcome(Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0, note),
-                   Verdict("holds" if corrected_ok and trunc_ok else FAILS, 0.0 if corrected_ok and trunc_ok else 1.0))
+    return Outcome(Verdict.exact(printed_ok, note),
+                   Verdict.exact(corrected_ok and trunc_ok))
 
 
 # ----------------------------------------------------------------------------- Section 3
@@ -409,7 +407,7 @@ def _algebra(ctx):
             for b in range(3):
                 expected = 0 if k is None else sum(eps(a, b, c) * ys[k][c] for c in range(3))
                 ok = ok and is_zero(lp_bracket(ys[i][a], ys[j][b], ys) - expected)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -431,7 +429,7 @@ def _bracket_fn(ctx):
                + dot(ys[2], [p + q for p, q in zip(cross(gf[0], gg[2]), cross(gf[2], gg[0]), strict=True)])
                + dot(ys[2], cross(gf[1], gg[1])))
     ok = sp.expand(lp_bracket(f, g, ys) - formula) == 0
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -444,7 +442,7 @@ def _cas3(ctx):
     ys = sym_state(3)
     cs = [dot(ys[0], ys[2]) + dot(ys[1], ys[1]) / 2, dot(ys[1], ys[2]), dot(ys[2], ys[2])]
     ok = all(is_zero(lp_bracket(c, ys[j][a], ys)) for c in cs for j in range(3) for a in range(3))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -457,7 +455,7 @@ def _kk(ctx):
     c1, c2 = sp.symbols("c1 c2")
     f1, f2 = _f_partition(1, (c1, c2)), _f_partition(2, (c1, c2))
     ok = is_zero(f1 + c1 / lam**2) and is_zero(f2 - (c1**2 / lam - c2) / lam**2)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -509,8 +507,7 @@ def _prop3(ctx):
     # the printed ones are the correct ones with c2 -> c1 c2:
     subs_ok = all(is_zero(p - cc.subs(c2, c1 * c2)) for p, cc in zip(printed, corrected, strict=True))
     return Outcome(
-        Verdict("holds" if not bad else FAILS, 0.0 if not bad else 1.0,
-                "printed fails for " + ", ".join(names[n] for n in bad) if bad else ""),
+        Verdict.exact(not bad, "printed fails for " + ", ".join(names[n] for n in bad) if bad else ""),
         Verdict("holds" if cok and subs_ok else FAILS, 0.0 if cok else 1.0,
                 "printed == corrected(c2 -> c1 c2): " + str(subs_ok)),
     )

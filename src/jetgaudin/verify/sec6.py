@@ -103,7 +103,7 @@ def _hh(ctx):
     sol = sp.solve([order0[0, 0], order0[0, 1], order0[1, 0]], [Y3, p, q], dict=True)[0]
     ok = (all(is_zero(e) for e in order1) and is_zero(sol[p] - ym / (2 * b)) and is_zero(sol[q] - Yp / (2 * b))
           and is_zero(sol[Y3] - y3) and is_zero(order0[1, 1].subs(sol)))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -171,8 +171,8 @@ def _ut(ctx):
     d = lam - eta
     printed = is_zero(R[0, 0] - ((d + 2 * p * q) * (u - q * v) + p * w))
     corr = is_zero(R[0, 0] - ((d + 2 * p * q) * u - q * (d + p * q) * v + p * w))
-    return Outcome(Verdict("holds" if printed else FAILS, 0.0 if printed else 1.0),
-                   Verdict("holds" if corr else FAILS, 0.0 if corr else 1.0))
+    return Outcome(Verdict.exact(printed),
+                   Verdict.exact(corr))
 
 
 @register(
@@ -188,8 +188,8 @@ def _vt(ctx):
     d = lam - eta
     printed = is_zero(R[0, 1] - ((d + 2 * p * q) ** 2 * v - 2 * p * (d + 2 * p * q) * u - p**2 * w))
     corr = is_zero(R[0, 1] - ((d + p * q) ** 2 * v - 2 * p * (d + p * q) * u - p**2 * w))
-    return Outcome(Verdict("holds" if printed else FAILS, 0.0 if printed else 1.0),
-                   Verdict("holds" if corr else FAILS, 0.0 if corr else 1.0))
+    return Outcome(Verdict.exact(printed),
+                   Verdict.exact(corr))
 
 
 @register(
@@ -201,7 +201,7 @@ def _vt(ctx):
 def _wt(ctx):
     (lam, eta, p, q, u, v, w), R = _uvw_tilde()
     ok = is_zero(R[1, 0] - (w + 2 * q * u - q**2 * v)) and is_zero(R[1, 1] + R[0, 0])
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 # ----------------------------------------------------------------------------- (mp)
@@ -525,7 +525,7 @@ def _mm(ctx):
     M = sp.Matrix([[lam - e1 + s * t, t], [-s**2 * t + (e1 - e2) * s, lam - e2 - s * t]])
     ok = is_zero(M.det() - (lam - e1) * (lam - e2))
     ok = ok and all(is_zero(e) for e in M.subs(lam, e1) * sp.Matrix([1, -s]))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _two_point_samples(ctx, real=False):
