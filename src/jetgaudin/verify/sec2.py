@@ -197,8 +197,7 @@ def _iso(ctx):
     comm = hat(xi) * hat(et) - hat(et) * hat(xi)
     printed = matrix_is_zero(comm - hat(cross(xi, et)))
     corrected = matrix_is_zero(comm + hat(cross(xi, et))) and same_as_hat
-    return Outcome(Verdict.exact(printed),
-                   Verdict.exact(corrected))
+    return Outcome(Verdict.exact(printed), Verdict.exact(corrected))
 
 
 @register(
@@ -270,8 +269,7 @@ def _hh(ctx):
         for i in range(1, N + 1):
             printed_ok = printed_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 1))
             corrected_ok = corrected_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 0))
-    return Outcome(Verdict.exact(printed_ok),
-                   Verdict.exact(corrected_ok))
+    return Outcome(Verdict.exact(printed_ok), Verdict.exact(corrected_ok))
 
 
 @register(
@@ -385,8 +383,7 @@ def _prop2_proof(ctx):
                     trunc = {ys[m][a]: 0 for m in range(N, 3 * N + 1) for a in range(3)}
                     trunc_ok = trunc_ok and sp.expand(co.subs(trunc)) == 0 and sp.expand(pr.subs(trunc)) == 0
     note = "both displays vanish under (LP): " + str(trunc_ok)
-    return Outcome(Verdict.exact(printed_ok, note),
-                   Verdict.exact(corrected_ok and trunc_ok))
+    return Outcome(Verdict.exact(printed_ok, note), Verdict.exact(corrected_ok and trunc_ok))
 
 
 # ----------------------------------------------------------------------------- Section 3
