@@ -13,7 +13,7 @@ import itertools
 import sympy as sp
 
 from ._registry import Outcome, Verdict, register
-from ._tools import SIGMA, eps, hat, is_zero, lp_bracket, sym_state
+from ._tools import BVEC, SIGMA, eps, hat, is_zero, lp_bracket, sym_state
 
 lam, mu = sp.symbols("lambda mu")
 
@@ -38,7 +38,6 @@ def _bracket(f, g, ys):
 
 def _r_matrix_holds(sites) -> bool:
     ys = _chain_state([N for _, N in sites])
-    bvec = sp.symbols("b1:4")
     lhs = sp.zeros(4, 4)
     for (p, N), y in zip(sites, ys, strict=True):
         for k, m in itertools.product(range(N), range(N)):
@@ -48,12 +47,12 @@ def _r_matrix_holds(sites) -> bool:
                 lhs += (sp.kronecker_product(SIGMA[a], SIGMA[b]) * eps(a, b, c) * y[k + m][c]
                         / ((lam - p) ** (k + 1) * (mu - p) ** (m + 1)))
     r = sum((sp.kronecker_product(SIGMA[a], SIGMA[a]) for a in range(3)), sp.zeros(4, 4)) / (lam - mu)
-    S = (sp.kronecker_product(hat(_xi(ys, sites, bvec, lam)), sp.eye(2))
-         + sp.kronecker_product(sp.eye(2), hat(_xi(ys, sites, bvec, mu))))
+    S = (sp.kronecker_product(hat(_xi(ys, sites, BVEC, lam)), sp.eye(2))
+         + sp.kronecker_product(sp.eye(2), hat(_xi(ys, sites, BVEC, mu))))
     # both sides are linear in the y's and b: the identity holds iff the coefficient of each of them (a matrix of
     # rational functions of lam, mu and the positions) vanishes, which is cheap to decide
     diff = lhs - (r * S - S * r)
-    syms = [x for site in ys for y in site for x in y] + list(bvec)
+    syms = [x for site in ys for y in site for x in y] + list(BVEC)
     return all(sp.cancel(sp.diff(e, x)) == 0 for x in syms for e in diff) and all(
         sp.cancel(e.subs({x: 0 for x in syms})) == 0 for e in diff)
 

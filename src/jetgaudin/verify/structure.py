@@ -14,8 +14,8 @@ from typing import Any
 import sympy as sp
 
 from ._registry import Outcome, Verdict, register
-from ._tools import SIGMA, dot, eps, is_zero, matrix_is_zero, sym_state
-from .sec2 import _f_partition, _HC_prop2, lam
+from ._tools import BVEC, dot, eps, is_zero, matrix_is_zero, sym_state
+from .sec2 import _f_partition, _HC_prop2, _lax, _uvw_at, lam
 
 
 def lp_constants(N: int, drop=()) -> dict[tuple[int, int], dict[int, int]]:
@@ -107,13 +107,12 @@ def _rank(ctx):
     for N in range(1, 6):
         ys = sym_state(N)
         coords = [x for y in ys for x in y]
-        bv = sp.symbols("b1:4")
         c = lp_constants(N)
-        H, C = _HC_prop2(N, ys, bv)
+        H, C = _HC_prop2(N, ys, BVEC)
         grads = [[sp.diff(f, x) for x in coords] for f in H + C]
         for _ in range(npts):
             pt = {x: _rand_rational(rng) for x in coords}
-            pt.update({bb: _rand_rational(rng) for bb in bv})
+            pt.update({bb: _rand_rational(rng) for bb in BVEC})
             Pi = sp.zeros(3 * N, 3 * N)
             for (i, j), ks in c.items():
                 Pi[i, j] = sum(v * pt[coords[k]] for k, v in ks.items())
@@ -139,11 +138,8 @@ def _yy(ctx):
         c = sp.symbols(f"c1:{N}") if N > 1 else ()
         fs = [_f_partition(i, c) for i in range(N)]
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        xi = [bv[a] + sum(fs[i] * ys[i][a] for i in range(N)) for a in range(3)]
-        L = sum((xi[a] * SIGMA[a] for a in range(3)), sp.zeros(2, 2))
-        u, v, w = xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
-        ok = ok and matrix_is_zero(L - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
+        u, v, w = _uvw_at(ys, BVEC, fs, lam)
+        ok = ok and matrix_is_zero(_lax(ys, BVEC, fs, lam) - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
     return Outcome(Verdict.exact(ok))
 
 
