@@ -59,14 +59,20 @@ def field_vector(b) -> np.ndarray:
     return arr
 
 
+def real_number(value, name: str) -> float:
+    """Validate a finite real number; the messages call it ``name``."""
+    try:
+        val = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(val):
+        raise InvalidParameterError(f"{name} must be finite, got {val}")
+    return val
+
+
 def nonzero_field(b) -> float:
     """Validate a scalar field strength b (b e_3), which must be finite and nonzero."""
-    try:
-        val = float(b)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"the field strength b must be a real number, got {b!r}") from None
-    if not np.isfinite(val):
-        raise InvalidParameterError(f"the field strength b must be finite, got {val}")
+    val = real_number(b, "the field strength b")
     if val == 0.0:
         raise InvalidParameterError(
             "the field strength b must be nonzero (the formulas divide by b and the "

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._errors import IntegrationError, InvalidParameterError
-from ._validate import as_state
+from ._validate import as_state, real_number
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Map, MapProperties, check_count, register_map
@@ -118,12 +118,7 @@ def _fast_rhs(H: IntegralHamiltonian, X0: np.ndarray):
 
 
 def _check_times(T, t_eval):
-    try:
-        T = float(T)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"T must be a number, got {T!r}") from None
-    if not np.isfinite(T):
-        raise InvalidParameterError(f"T must be finite, got {T}")
+    T = real_number(T, "T")
     if t_eval is None:
         t_eval = np.array([0.0, T]) if T != 0 else np.array([0.0])
     try:
@@ -149,11 +144,8 @@ def _check_times(T, t_eval):
 
 
 def _check_tol(name, val, positive):
-    try:
-        val = float(val)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {val!r}") from None
-    if not np.isfinite(val) or val < 0 or (positive and val == 0):
+    val = real_number(val, name)
+    if val < 0 or (positive and val == 0):
         raise InvalidParameterError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {val}")
     return val
 
