@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from enum import Enum
+from typing import TypeVar
+
 import numpy as np
 
 from ._errors import InvalidParameterError, InvalidStateError
+
+E = TypeVar("E", bound=Enum)
 
 
 def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.ndarray, int]:
@@ -68,6 +73,26 @@ def real_number(value, name: str) -> float:
     if not np.isfinite(val):
         raise InvalidParameterError(f"{name} must be finite, got {val}")
     return val
+
+
+def real_array(value, name: str) -> np.ndarray:
+    """Validate an array of real numbers (complex refused, not silently truncated); returns it as floats."""
+    if np.iscomplexobj(value):
+        raise InvalidParameterError(f"{name} must be real (complex given)")
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be real numbers, got {value!r}") from None
+
+
+def parse_choice(cls: type[E], value, name: str) -> E:
+    """``cls(value)`` for an enum ``cls`` of options; otherwise an error naming ``name`` and the choices."""
+    try:
+        return cls(value)
+    except ValueError:
+        choices = [repr(member.value) for member in cls]
+        listed = " or ".join([", ".join(choices[:-1]), choices[-1]] if len(choices) > 1 else choices)
+        raise InvalidParameterError(f"{name} must be {listed}, got {value!r}") from None
 
 
 def nonzero_field(b) -> float:

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._errors import IntegrationError, InvalidParameterError
-from ._validate import as_state, real_number
+from ._validate import as_state, parse_choice, real_number
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Map, MapProperties, check_count, register_map
@@ -33,10 +33,7 @@ class Method(StrEnum):
 
     @classmethod
     def parse(cls, value: Method | str) -> Method:
-        try:
-            return cls(value)
-        except ValueError:
-            raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {value!r}") from None
+        return parse_choice(cls, value, "method")
 
 
 @dataclass(frozen=True)
