@@ -117,14 +117,20 @@ def spectral_parameter(eta, *, name: str = "eta") -> complex:
     return val
 
 
-def spectral_points(lam, *, name: str = "lambda") -> np.ndarray:
-    """Validate an array of spectral parameters: finite and nonzero (λ = 0 is the pole of L)."""
+def complex_points(lam, *, name: str = "lambda") -> np.ndarray:
+    """Validate an array of finite complex numbers (e.g. points of the spectral plane)."""
     try:
         arr = np.asarray(lam, dtype=complex)
     except (TypeError, ValueError):
         raise InvalidParameterError(f"{name} must be a (complex) number or array, got {lam!r}") from None
     if not np.all(np.isfinite(arr)):
         raise InvalidParameterError(f"{name} must be finite (NaN or inf given)")
+    return arr
+
+
+def spectral_points(lam, *, name: str = "lambda") -> np.ndarray:
+    """Validate an array of spectral parameters: finite and nonzero (λ = 0 is the pole of L)."""
+    arr = complex_points(lam, name=name)
     if np.any(arr == 0):
         raise InvalidParameterError(f"{name} must be nonzero: lambda = 0 is the pole of the Lax matrix")
     return arr

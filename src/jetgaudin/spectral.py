@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError
-from ._validate import as_state, finite_result, spectral_points
+from ._validate import as_state, complex_points, finite_result, spectral_points
 from .lax import jet_coefficients, lax_coefficients
 
 __all__ = [
@@ -166,12 +166,7 @@ def N_of(kappa) -> int:
 
 
 def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
-    try:
-        lam = np.asarray(lam, dtype=complex)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"lambda must be a (complex) number or array, got {lam!r}") from None
-    if not np.all(np.isfinite(lam)):
-        raise InvalidParameterError("lambda must be finite (NaN or inf given)")
+    lam = complex_points(lam)
     kappa, lam = np.broadcast_arrays(kappa, lam[..., None])
     lam = lam[..., 0]
     a = lam.real
