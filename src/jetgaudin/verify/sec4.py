@@ -21,6 +21,13 @@ def _grad_field(H, ys):
     return [[lp_bracket(ys[i][a], H, ys) for a in range(3)] for i in range(3)]
 
 
+def _em_field():
+    """``(ys, y, x, z, F)``: the g^(3) state and the vector field ``F`` of ``H = H_2/2 = <y,y>/2 + b x^3``
+    (eq. (H)) by (LP), the right-hand side of (em)."""
+    ys, y, x, z = _yxz()
+    return ys, y, x, z, _grad_field(dot(y, y) / 2 + b * x[2], ys)
+
+
 @register(
     "we-cas",
     "4",
@@ -125,9 +132,8 @@ def _H(ctx):
     "exact SymPy: dX/dt = {X, H} with (LP)",
 )
 def _em(ctx):
-    ys, y, x, z = _yxz()
+    _, y, x, z, F = _em_field()
     bv = [0, 0, b]
-    F = _grad_field(dot(y, y) / 2 + b * x[2], ys)
     rhs = [cross(bv, x), [p + q for p, q in zip(cross(y, x), cross(bv, z), strict=True)], cross(y, z)]
     ok = all(is_zero(F[i][a] - rhs[i][a]) for i in range(3) for a in range(3))
     return Outcome(Verdict.exact(ok))
@@ -146,8 +152,7 @@ def _em(ctx):
     expect_printed=FAILS,
 )
 def _em_matrix(ctx):
-    ys, y, x, z = _yxz()
-    F = _grad_field(dot(y, y) / 2 + b * x[2], ys)
+    _, y, x, z, F = _em_field()
     Yd, Xd, Zd = (hat(F[i]) for i in range(3))
     B, Y, X, Z = hat([0, 0, b]), hat(y), hat(x), hat(z)
 
@@ -166,9 +171,8 @@ def _em_matrix(ctx):
     "exact SymPy",
 )
 def _material(ctx):
-    ys, y, x, z = _yxz()
+    _, y, x, z, F = _em_field()
     bv = [0, 0, b]
-    F = _grad_field(dot(y, y) / 2 + b * x[2], ys)
     d = [p - q for p, q in zip(x, z, strict=True)]
     rhs = [p + q for p, q in zip(cross(y, d), cross(bv, z), strict=True)]
     ok = all(is_zero(F[1][a] - F[2][a] - rhs[a]) for a in range(3))
@@ -204,8 +208,7 @@ def _lagrange(ctx):
     expect_printed=FAILS,
 )
 def _lax(ctx):
-    ys, y, x, z = _yxz()
-    F = _grad_field(dot(y, y) / 2 + b * x[2], ys)
+    _, y, x, z, F = _em_field()
     L = hat([0, 0, b]) + hat(y) / lam + hat(x) / lam**2 + hat(z) / lam**3
     Ld = hat(F[0]) / lam + hat(F[1]) / lam**2 + hat(F[2]) / lam**3
     M = hat(x) / lam + hat(z) / lam**2
