@@ -141,7 +141,7 @@ def test_generic_vector_field_object():
     ("kwargs", "exc", "match"),
     [
         ({"T": np.nan}, jg.InvalidParameterError, "T must be finite"),
-        ({"T": "x"}, jg.InvalidParameterError, "T must be a number"),
+        ({"T": "x"}, jg.InvalidParameterError, "T must be a real number"),
         ({"t_eval": [0.0, 2.0]}, jg.InvalidParameterError, "between 0 and T"),
         ({"t_eval": [-0.1, 0.5]}, jg.InvalidParameterError, "between 0 and T"),
         ({"t_eval": [0.0, 0.7, 0.3]}, jg.InvalidParameterError, "monotone"),
@@ -153,7 +153,7 @@ def test_generic_vector_field_object():
         ({"T": 0.0, "t_eval": [0.0, 1.0]}, jg.InvalidParameterError, "T = 0"),
         ({"method": "RK45"}, jg.InvalidParameterError, "method must be"),
         ({"rtol": 0.0}, jg.InvalidParameterError, "rtol"),
-        ({"rtol": "a"}, jg.InvalidParameterError, "rtol must be a number"),
+        ({"rtol": "a"}, jg.InvalidParameterError, "rtol must be a real number"),
         ({"atol": -1.0}, jg.InvalidParameterError, "atol"),
     ],
 )

@@ -1,19 +1,8 @@
 """jetgaudin: jet-extended su(2) Gaudin models, the generalised Lagrange top and its
 Bäcklund discretisation (Musso, Petrera, Ragnisco, Satta)."""
 
-from ._errors import (
-    BranchPointError,
-    IntegrationError,
-    InvalidParameterError,
-    InvalidStateError,
-    JetGaudinError,
-    OffLeafError,
-    RecordingError,
-    RunDirectoryError,
-    RunIOError,
-    RunLockedError,
-    SingularStepError,
-)
+from . import _errors, hamiltonians
+from ._errors import *  # noqa: F403  (the exception hierarchy: all of _errors.__all__ is public)
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
 from .flows import FlowMap, Trajectory, integrate
@@ -27,14 +16,7 @@ from .gaudin import (
     parse_sites,
     twisted_chain,
 )
-from .hamiltonians import (
-    IntegralHamiltonian,
-    interpolating_flow_hamiltonian,
-    interpolating_hamiltonian,
-    interpolating_vector_field,
-    interpolating_weights,
-    physical_hamiltonian,
-)
+from .hamiltonians import *  # noqa: F403  (all of hamiltonians.__all__ is public)
 from .lax import lax_matrix, r_matrix, uvw
 from .maps import Advance, Backend, Branch, Map, map_from_description
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
@@ -42,19 +24,21 @@ from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material
 
 __version__ = "0.1.0"
 
+# The canonical realisation builds its formulas with SymPy: import it on first use only, so that
+# `import jetgaudin` (and long runs) stay light.
+_LAZY = {
+    "euler_to_state": "canonical",
+    "state_to_euler": "canonical",
+    "on_canonical_leaf": "canonical",
+    "leaf_residuals": "canonical",
+    "canonical_hamiltonian": "canonical",
+    "canonical_integrals": "canonical",
+    "canonical_vector_field": "canonical",
+}
+
 __all__ = [
     "__version__",
-    "JetGaudinError",
-    "InvalidStateError",
-    "InvalidParameterError",
-    "SingularStepError",
-    "BranchPointError",
-    "OffLeafError",
-    "IntegrationError",
-    "RecordingError",
-    "RunDirectoryError",
-    "RunLockedError",
-    "RunIOError",
+    *_errors.__all__,
     "structure_constants",
     "poisson_tensor",
     "bracket",
@@ -79,12 +63,7 @@ __all__ = [
     "TwoPointBacklund",
     "Trajectory",
     "integrate",
-    "IntegralHamiltonian",
-    "physical_hamiltonian",
-    "interpolating_hamiltonian",
-    "interpolating_weights",
-    "interpolating_flow_hamiltonian",
-    "interpolating_vector_field",
+    *hamiltonians.__all__,
     "GaudinTop",
     "lagrange_top",
     "generalized_lagrange_top",
@@ -97,26 +76,8 @@ __all__ = [
     "lagrange_chain",
     "twisted_chain",
     "parse_sites",
-    "euler_to_state",
-    "state_to_euler",
-    "on_canonical_leaf",
-    "leaf_residuals",
-    "canonical_hamiltonian",
-    "canonical_integrals",
-    "canonical_vector_field",
+    *_LAZY,
 ]
-
-# The canonical realisation builds its formulas with SymPy: import it on first use only, so that
-# `import jetgaudin` (and long runs) stay light.
-_LAZY = {
-    "euler_to_state": "canonical",
-    "state_to_euler": "canonical",
-    "on_canonical_leaf": "canonical",
-    "leaf_residuals": "canonical",
-    "canonical_hamiltonian": "canonical",
-    "canonical_integrals": "canonical",
-    "canonical_vector_field": "canonical",
-}
 
 
 def __getattr__(name):

@@ -2,9 +2,14 @@
 
 from __future__ import annotations
 
+from enum import Enum
+from typing import TypeVar
+
 import numpy as np
 
 from ._errors import InvalidParameterError, InvalidStateError
+
+E = TypeVar("E", bound=Enum)
 
 
 def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.ndarray, int]:
@@ -59,14 +64,40 @@ def field_vector(b) -> np.ndarray:
     return arr
 
 
+def real_number(value, name: str) -> float:
+    """Validate a finite real number; the messages call it ``name``."""
+    try:
+        val = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(val):
+        raise InvalidParameterError(f"{name} must be finite, got {val}")
+    return val
+
+
+def real_array(value, name: str) -> np.ndarray:
+    """Validate an array of real numbers (complex refused, not silently truncated); returns it as floats."""
+    if np.iscomplexobj(value):
+        raise InvalidParameterError(f"{name} must be real (complex given)")
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be real numbers, got {value!r}") from None
+
+
+def parse_choice(cls: type[E], value, name: str) -> E:
+    """``cls(value)`` for an enum ``cls`` of options; otherwise an error naming ``name`` and the choices."""
+    try:
+        return cls(value)
+    except ValueError:
+        choices = [repr(member.value) for member in cls]
+        listed = " or ".join([", ".join(choices[:-1]), choices[-1]] if len(choices) > 1 else choices)
+        raise InvalidParameterError(f"{name} must be {listed}, got {value!r}") from None
+
+
 def nonzero_field(b) -> float:
     """Validate a scalar field strength b (b e_3), which must be finite and nonzero."""
-    try:
-        val = float(b)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"the field strength b must be a real number, got {b!r}") from None
-    if not np.isfinite(val):
-        raise InvalidParameterError(f"the field strength b must be finite, got {val}")
+    val = real_number(b, "the field strength b")
     if val == 0.0:
         raise InvalidParameterError(
             "the field strength b must be nonzero (the formulas divide by b and the "
@@ -86,14 +117,20 @@ def spectral_parameter(eta, *, name: str = "eta") -> complex:
     return val
 
 
-def spectral_points(lam, *, name: str = "lambda") -> np.ndarray:
-    """Validate an array of spectral parameters: finite and nonzero (λ = 0 is the pole of L)."""
+def complex_points(lam, *, name: str = "lambda") -> np.ndarray:
+    """Validate an array of finite complex numbers (e.g. points of the spectral plane)."""
     try:
         arr = np.asarray(lam, dtype=complex)
     except (TypeError, ValueError):
         raise InvalidParameterError(f"{name} must be a (complex) number or array, got {lam!r}") from None
     if not np.all(np.isfinite(arr)):
         raise InvalidParameterError(f"{name} must be finite (NaN or inf given)")
+    return arr
+
+
+def spectral_points(lam, *, name: str = "lambda") -> np.ndarray:
+    """Validate an array of spectral parameters: finite and nonzero (λ = 0 is the pole of L)."""
+    arr = complex_points(lam, name=name)
     if np.any(arr == 0):
         raise InvalidParameterError(f"{name} must be nonzero: lambda = 0 is the pole of the Lax matrix")
     return arr

@@ -40,7 +40,7 @@ import sympy as sp
 from numpy.typing import ArrayLike
 
 from ._errors import InvalidParameterError, InvalidStateError, OffLeafError
-from ._validate import as_state
+from ._validate import as_state, real_number
 
 __all__ = [
     "LEAF_TOL",
@@ -279,11 +279,8 @@ def leaf_residuals(X: ArrayLike) -> np.ndarray:
 
 
 def _check_tol(tol) -> float:
-    try:
-        tol = float(tol)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"tol must be a number, got {tol!r}") from None
-    if not (np.isfinite(tol) and tol > 0):
+    tol = real_number(tol, "tol")
+    if not tol > 0:
         raise InvalidParameterError(f"tol must be finite and > 0, got {tol}")
     return tol
 
@@ -366,15 +363,7 @@ def state_to_euler(X: ArrayLike, tol: float = LEAF_TOL) -> np.ndarray:
 def _scalar_b(b) -> float:
     if isinstance(b, bool):
         raise InvalidParameterError("the field strength b must be a real number, got a bool")
-    try:
-        val = float(b)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(
-            f"the field strength b (field b e_3) must be a real number, got {b!r}"
-        ) from None
-    if not np.isfinite(val):
-        raise InvalidParameterError(f"the field strength b must be finite, got {val}")
-    return val
+    return real_number(b, "the field strength b (field b e_3)")
 
 
 def canonical_hamiltonian(Q: ArrayLike, b: float) -> np.ndarray:

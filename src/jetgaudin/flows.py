@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._errors import IntegrationError, InvalidParameterError
-from ._validate import as_state
+from ._validate import as_state, parse_choice, real_number
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Map, MapProperties, check_count, register_map
@@ -33,10 +33,7 @@ class Method(StrEnum):
 
     @classmethod
     def parse(cls, value: Method | str) -> Method:
-        try:
-            return cls(value)
-        except ValueError:
-            raise InvalidParameterError(f"method must be 'DOP853' or 'heyoka', got {value!r}") from None
+        return parse_choice(cls, value, "method")
 
 
 @dataclass(frozen=True)
@@ -122,12 +119,7 @@ MAX_INTEGRATION_TIME = 1e9
 
 
 def _check_times(T, t_eval):
-    try:
-        T = float(T)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"T must be a number, got {T!r}") from None
-    if not np.isfinite(T):
-        raise InvalidParameterError(f"T must be finite, got {T}")
+    T = real_number(T, "T")
     if abs(T) > MAX_INTEGRATION_TIME:
         raise InvalidParameterError(
             f"T = {T:g} is too long for one call: an adaptive integrator takes at least one step per unit of the "
@@ -159,11 +151,8 @@ def _check_times(T, t_eval):
 
 
 def _check_tol(name, val, positive):
-    try:
-        val = float(val)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be a number, got {val!r}") from None
-    if not np.isfinite(val) or val < 0 or (positive and val == 0):
+    val = real_number(val, name)
+    if val < 0 or (positive and val == 0):
         raise InvalidParameterError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {val}")
     return val
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._errors import InvalidParameterError, InvalidStateError
-from ._validate import as_state, check_N, field_vector, spectral_parameter
+from ._validate import as_state, check_N, field_vector, real_array, spectral_parameter
 from .algebra import hamiltonian_vector_field
 from .spectral import _nu_from_kappa, _roots, curve_coefficients, integral_gradients, integrals
 
@@ -41,12 +41,7 @@ class IntegralHamiltonian:
     c: object = None
 
     def __post_init__(self):
-        if np.iscomplexobj(self.weights):
-            raise InvalidParameterError("weights must be real (complex given)")
-        try:
-            w = np.asarray(self.weights, dtype=float)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"weights must be real numbers, got {self.weights!r}") from None
+        w = real_array(self.weights, "weights")
         if w.ndim == 0 or w.shape[-1] % 2 or w.shape[-1] == 0:
             raise InvalidParameterError("weights must have a trailing axis of length 2N")
         if not np.all(np.isfinite(w)):

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError
-from ._validate import as_state, finite_result, spectral_points
+from ._validate import as_state, complex_points, finite_result, spectral_points
 from .lax import jet_coefficients, lax_coefficients
 
 __all__ = [
@@ -149,15 +149,22 @@ def _continued_sign_reference(kappa, a, lam, roots):
     m = np.arange(kappa.shape[-1])
     P_a = np.sum(kappa * a[..., None].astype(complex) ** (2 * N - m), axis=-1)
     sqrt_Pa = np.sqrt(P_a)
+    return sqrt_Pa * np.sign(a) ** N * _segment_factor(lam, a, roots, sqrt_Pa)
+
+
+def _segment_factor(lam, a, roots, root_at_a):
+    """``Π_k √((λ − r_k)/(a − r_k))``: continues a square root of ``Π_k (λ − r_k)`` from the real point ``a`` to
+    ``λ`` along the vertical segment; :class:`BranchPointError` when a root ``r_k`` lies on the segment or the
+    square root at ``a``, ``root_at_a``, vanishes."""
     ratio = (lam[..., None] - roots) / (a[..., None] - roots)
     # a root on the segment [a, lam] makes the ratio real and <= 0
     on_seg = (np.abs(ratio.imag) <= 1e-13 * np.abs(ratio)) & (ratio.real <= 0)
-    if np.any(on_seg) or np.any(sqrt_Pa == 0):
+    if np.any(on_seg) or np.any(root_at_a == 0):
         raise BranchPointError(
             "nu has a branch point on the vertical segment from Re(eta) to eta "
             "(nu(eta) = 0 or nu(Re eta) = 0); move eta or the state off the branch point"
         )
-    return sqrt_Pa * np.sign(a) ** N * np.prod(np.sqrt(ratio), axis=-1)
+    return np.prod(np.sqrt(ratio), axis=-1)
 
 
 def N_of(kappa) -> int:
@@ -166,12 +173,7 @@ def N_of(kappa) -> int:
 
 
 def _nu_from_kappa(kappa, lam, sheet=1, roots=None):
-    try:
-        lam = np.asarray(lam, dtype=complex)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"lambda must be a (complex) number or array, got {lam!r}") from None
-    if not np.all(np.isfinite(lam)):
-        raise InvalidParameterError("lambda must be finite (NaN or inf given)")
+    lam = complex_points(lam)
     kappa, lam = np.broadcast_arrays(kappa, lam[..., None])
     lam = lam[..., 0]
     a = lam.real

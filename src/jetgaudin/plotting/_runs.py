@@ -116,6 +116,7 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     program, inp = run.get("program", ""), run.get("inputs", {})
     status = str(run.get("status", "unknown"))
     safe = int(run.get("checkpoint", {}).get("rows", 0))
+    common = dict(run_dir=run_dir, status=status, inputs=inp)
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
     described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
     if program == "jetgaudin orbit":
@@ -126,20 +127,8 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
             eta = complex(*described.get("eta", inp.get("eta")))
         except (TypeError, ValueError):
             raise RecordingError(f"{run_dir}/run.json names no field b and parameter eta; cannot draw it") from None
-        return RunRows(
-            run_dir,
-            "orbit",
-            run_dir / rec.ORBIT_H5,
-            "X",
-            "n",
-            safe,
-            int(inp["N"]),
-            b_run,
-            eta,
-            None,
-            status,
-            inp,
-        )
+        return RunRows(kind="orbit", path=run_dir / rec.ORBIT_H5, dataset="X", index_name="n", rows=safe,
+                       N=int(inp["N"]), b=b_run, eta=eta, orbit=None, **common)
     if program == "jetgaudin ensemble":
         from ..ensemble_recording import ENSEMBLE_H5
 
@@ -154,9 +143,8 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
                 b, eta = float(f["b"][k]), complex(f["eta"][k])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {run_dir / ENSEMBLE_H5}: {exc}") from None
-        return RunRows(
-            run_dir, "ensemble", run_dir / ENSEMBLE_H5, "states", "n", safe, int(inp["N"]), b, eta, k, status, inp
-        )
+        return RunRows(kind="ensemble", path=run_dir / ENSEMBLE_H5, dataset="states", index_name="n", rows=safe,
+                       N=int(inp["N"]), b=b, eta=eta, orbit=k, **common)
     if program == "jetgaudin flow":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is a flow run: --orbit must be 0 or omitted, got {orbit}")
@@ -170,18 +158,6 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {path}: {exc}") from None
         eta_flow = complex(*inp["eta"]) if inp.get("hamiltonian") == "interpolating" else None
-        return RunRows(
-            run_dir,
-            "map" if map_of_flow else "flow",
-            path,
-            "X",
-            index_name,
-            rows,
-            int(inp["N"]),
-            float(inp["b"]),
-            eta_flow,
-            None,
-            status,
-            inp,
-        )
+        return RunRows(kind="map" if map_of_flow else "flow", path=path, dataset="X", index_name=index_name,
+                       rows=rows, N=int(inp["N"]), b=float(inp["b"]), eta=eta_flow, orbit=None, **common)
     raise RecordingError(f"{run_dir}/run.json was written by {program!r}, not by jetgaudin orbit, ensemble or flow")

@@ -63,6 +63,11 @@ class Verdict:
         r = float(residual)
         return Verdict(HOLDS if r <= tol else FAILS, r, note)
 
+    @staticmethod
+    def exact(flag: bool, note: str = "") -> Verdict:
+        """The verdict of an exact (SymPy) check: residual 0 when the identity holds, 1 when it does not."""
+        return Verdict(HOLDS if flag else FAILS, 0.0 if flag else 1.0, note)
+
 
 @dataclass(frozen=True)
 class Outcome:

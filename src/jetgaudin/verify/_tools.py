@@ -27,6 +27,10 @@ def eps(a, b, c):
     return sp.LeviCivita(a, b, c)
 
 
+#: the field ``b = (b^1, b^2, b^3)`` as general symbols
+BVEC = sp.symbols("b1:4")
+
+
 def sym_state(N, prefix="y"):
     """``[y_0, ..., y_{N-1}]``, each a list of three real symbols ``y_i^1..y_i^3``."""
     return [[sp.Symbol(f"{prefix}{i}_{a + 1}", real=True) for a in range(3)] for i in range(N)]

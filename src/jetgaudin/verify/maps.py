@@ -15,7 +15,7 @@ from __future__ import annotations
 import mpmath as mp
 import sympy as sp
 
-from ._registry import FAILS, HOLDS, Outcome, Verdict, register
+from ._registry import Outcome, Verdict, register
 from ._tools import (
     ell_from_state,
     is_zero,
@@ -162,6 +162,15 @@ def _bt_integrals(ctx):
     return Outcome(Verdict.from_residual(worst))
 
 
+def _bounded_below(ctx, n, value, bound, what):
+    """Holds when ``value(rng, k) > bound`` for every ``k < n`` (at ``ctx.dps`` digits, ``rng`` the check's seeded
+    source); the note gives the smallest value, called ``what``."""
+    rng = ctx.rng()
+    with mp.workdps(ctx.dps):
+        smallest = min(value(rng, k) for k in range(n))
+    return Outcome(Verdict.exact(smallest > bound, f"{what}: {mp.nstr(smallest, 3)}"))
+
+
 @register(
     "Rem-complex",
     "6.1",
@@ -171,18 +180,14 @@ def _bt_integrals(ctx):
     "eta, 5 with complex eta), N = 3",
 )
 def _rem_complex(ctx):
-    rng = ctx.rng()
-    smallest = mp.inf
-    with mp.workdps(ctx.dps):
-        for k in range(10):
-            X = _flat(rand_state(rng, 3))
-            b = rand_mpf(rng, 0.5, 2)
-            eta = rand_mpf(rng, 0.5, 3) if k < 5 else rand_mpc(rng)
-            Y, _, _ = one_point(X, b, eta)
-            smallest = min(smallest, max(abs(mp.im(y)) for y in Y))
-    ok = smallest > 1e-3
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0,
-                           f"smallest max|Im B(X)| over the samples: {mp.nstr(smallest, 3)}"))
+    def imaginary_part(rng, k):
+        X = _flat(rand_state(rng, 3))
+        b = rand_mpf(rng, 0.5, 2)
+        eta = rand_mpf(rng, 0.5, 3) if k < 5 else rand_mpc(rng)
+        Y, _, _ = one_point(X, b, eta)
+        return max(abs(mp.im(y)) for y in Y)
+
+    return _bounded_below(ctx, 10, imaginary_part, 1e-3, "smallest max|Im B(X)| over the samples")
 
 
 @register(
@@ -193,20 +198,16 @@ def _rem_complex(ctx):
     "mpmath (50 digits): B((X+Y)/2) - (B(X) + B(Y))/2 at 6 seeded random real pairs (an affine map gives 0)",
 )
 def _rem_nonlinear(ctx):
-    rng = ctx.rng()
-    smallest = mp.inf
-    with mp.workdps(ctx.dps):
-        for _ in range(6):
-            X = _flat(rand_state(rng, 3))
-            Y = [x + rand_mpf(rng, -0.3, 0.3) for x in X]
-            b, eta = rand_mpf(rng, 0.5, 2), rand_mpc(rng)
-            BX, ref, _ = two_point_real(X, b, eta)
-            BY, _, _ = two_point_real(Y, b, eta, ref)
-            BM, _, _ = two_point_real([(x + y) / 2 for x, y in zip(X, Y, strict=True)], b, eta, ref)
-            smallest = min(smallest, max(abs(m - (p + q) / 2) for m, p, q in zip(BM, BX, BY, strict=True)))
-    ok = smallest > 1e-6
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0,
-                           f"smallest midpoint defect: {mp.nstr(smallest, 3)}"))
+    def midpoint_defect(rng, _):
+        X = _flat(rand_state(rng, 3))
+        Y = [x + rand_mpf(rng, -0.3, 0.3) for x in X]
+        b, eta = rand_mpf(rng, 0.5, 2), rand_mpc(rng)
+        BX, ref, _ = two_point_real(X, b, eta)
+        BY, _, _ = two_point_real(Y, b, eta, ref)
+        BM, _, _ = two_point_real([(x + y) / 2 for x, y in zip(X, Y, strict=True)], b, eta, ref)
+        return max(abs(m - (p + q) / 2) for m, p, q in zip(BM, BX, BY, strict=True))
+
+    return _bounded_below(ctx, 6, midpoint_defect, 1e-6, "smallest midpoint defect")
 
 
 @register(
@@ -218,4 +219,4 @@ def _rem_nonlinear(ctx):
 def _ansatz(ctx):
     lam, eta, p, q = sp.symbols("lambda eta p q")
     ok = is_zero(sp.Matrix([[lam - eta + p * q, p], [q, 1]]).det() - (lam - eta))
-    return Outcome(Verdict(HOLDS if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))

@@ -7,7 +7,7 @@ import itertools
 import sympy as sp
 
 from ._registry import FAILS, Erratum, Outcome, Verdict, register
-from ._tools import SIGMA, cross, dot, eps, hat, is_zero, lp_bracket, matrix_is_zero, sym_state
+from ._tools import BVEC, SIGMA, cross, dot, eps, hat, is_zero, lp_bracket, matrix_is_zero, sym_state
 
 lam, mu = sp.symbols("lambda mu")
 
@@ -36,6 +36,12 @@ def _lax(ys, bvec, fs, at):
     return hat(_xi(ys, bvec, fs, at))
 
 
+def _uvw_at(ys, bvec, fs, at):
+    """``u, v, w`` of (yy) at ``lambda = at``: ``xi^3, xi^1 - i xi^2, xi^1 + i xi^2``."""
+    xi = _xi(ys, bvec, fs, at)
+    return xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
+
+
 def _xi_bracket(ys, fs):
     """{xi^a(lam), xi^b(mu)} from (LP), as a 3x3 matrix of expressions."""
     N = len(ys)
@@ -57,7 +63,6 @@ def _r_matrix_residual(N, general_c):
     c = sp.symbols(f"c1:{N}") if general_c else [-1] + [0] * (N - 2)
     fs = [_f_partition(i, c) for i in range(N)]
     ys = sym_state(N)
-    bvec = sp.symbols("b1:4")
     P = _xi_bracket(ys, fs)
     lhs = sp.zeros(4, 4)
     for a in range(3):
@@ -65,8 +70,8 @@ def _r_matrix_residual(N, general_c):
             if P[a, b] != 0:
                 lhs += sp.kronecker_product(SIGMA[a], SIGMA[b]) * P[a, b]
     r = sum((sp.kronecker_product(SIGMA[a], SIGMA[a]) for a in range(3)), sp.zeros(4, 4)) / (lam - mu)
-    L1 = sp.kronecker_product(_lax(ys, bvec, fs, lam), sp.eye(2))
-    L2 = sp.kronecker_product(sp.eye(2), _lax(ys, bvec, fs, mu))
+    L1 = sp.kronecker_product(_lax(ys, BVEC, fs, lam), sp.eye(2))
+    L2 = sp.kronecker_product(sp.eye(2), _lax(ys, BVEC, fs, mu))
     S = L1 + L2
     rhs = r * S - S * r
     return matrix_is_zero(lhs - rhs), matrix_is_zero(lhs + rhs)
@@ -85,7 +90,7 @@ def _prop1(ctx):
         general = N <= 3 or ctx.full
         holds, _ = _r_matrix_residual(N, general)
         ok = ok and holds
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -107,15 +112,9 @@ def _uvw(ctx):
     printed_ok = corrected_ok = True
     for N in range(1, 5):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
         fs = [lam ** -(i + 1) for i in range(N)]
-
-        def uvw(at, ys=ys, bv=bv, fs=fs):
-            xi = _xi(ys, bv, fs, at)
-            return xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
-
-        ul, vl, wl = uvw(lam)
-        um, vm, wm = uvw(mu)
+        ul, vl, wl = _uvw_at(ys, BVEC, fs, lam)
+        um, vm, wm = _uvw_at(ys, BVEC, fs, mu)
 
         def br(f, g, ys=ys):
             return lp_bracket(f, g, ys)
@@ -141,9 +140,8 @@ def _uvw(ctx):
         printed_ok = printed_ok and not bad
         corrected_ok = corrected_ok and all(is_zero(e) for e in corrected)
     return Outcome(
-        Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0,
-                "printed items failing (1-based, in display order): " + str([n + 1 for n in bad])),
-        Verdict("holds" if corrected_ok else FAILS, 0.0 if corrected_ok else 1.0),
+        Verdict.exact(printed_ok, "printed items failing (1-based, in display order): " + str([n + 1 for n in bad])),
+        Verdict.exact(corrected_ok),
     )
 
 
@@ -161,19 +159,13 @@ def _uvw_general(ctx):
         c = sp.symbols(f"c1:{N}")
         fs = [_f_partition(i, c) for i in range(N)]
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-
-        def uvw(at, ys=ys, bv=bv, fs=fs):
-            xi = _xi(ys, bv, fs, at)
-            return xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
-
-        (ul, vl, wl), (um, vm, wm) = uvw(lam), uvw(mu)
+        (ul, vl, wl), (um, vm, wm) = _uvw_at(ys, BVEC, fs, lam), _uvw_at(ys, BVEC, fs, mu)
         d = lam - mu
         exprs = [lp_bracket(ul, um, ys), lp_bracket(vl, vm, ys), lp_bracket(wl, wm, ys),
                  lp_bracket(ul, vm, ys) - sp.I / d * (vm - vl), lp_bracket(ul, wm, ys) - sp.I / d * (wl - wm),
                  lp_bracket(vl, wm, ys) - 2 * sp.I / d * (um - ul)]
         ok = ok and all(is_zero(e) for e in exprs)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -198,8 +190,7 @@ def _iso(ctx):
     comm = hat(xi) * hat(et) - hat(et) * hat(xi)
     printed = matrix_is_zero(comm - hat(cross(xi, et)))
     corrected = matrix_is_zero(comm + hat(cross(xi, et))) and same_as_hat
-    return Outcome(Verdict("holds" if printed else FAILS, 0.0 if printed else 1.0),
-                   Verdict("holds" if corrected else FAILS, 0.0 if corrected else 1.0))
+    return Outcome(Verdict.exact(printed), Verdict.exact(corrected))
 
 
 @register(
@@ -213,7 +204,7 @@ def _trace(ctx):
     et = sp.symbols("e1:4", real=True)
     A, B = hat(xi), hat(et)
     ok = is_zero(dot(xi, et) + 2 * (A * B).trace()) and is_zero(dot(xi, et) - 2 * (B * A.H).trace())
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _curve_parts(N, ys, bv):
@@ -239,15 +230,13 @@ def _lemma1(ctx):
     m = sp.Symbol("m")
     for N in range(1, 6):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
         fs = [lam ** -(i + 1) for i in range(N)]
-        L = _lax(ys, bv, fs, lam)
+        L = _lax(ys, BVEC, fs, lam)
         det4 = sp.expand(4 * (L - m * sp.eye(2)).det())
-        H = sum(_H_printed(N, ys, bv, i, 0) / lam**i for i in range(1, N + 1))
+        H = sum(_H_printed(N, ys, BVEC, i, 0) / lam**i for i in range(1, N + 1))
         C = sum(sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)) / lam**i for i in range(N + 1, 2 * N + 1))
-        ok = ok and is_zero(det4 - (4 * m**2 + dot(bv, bv) + H + C))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0,
-                           "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)"))
+        ok = ok and is_zero(det4 - (4 * m**2 + dot(BVEC, BVEC) + H + C))
+    return Outcome(Verdict.exact(ok, "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)"))
 
 
 @register(
@@ -267,13 +256,11 @@ def _hh(ctx):
     printed_ok = corrected_ok = True
     for N in range(1, 6):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        kap = _curve_parts(N, ys, bv)
+        kap = _curve_parts(N, ys, BVEC)
         for i in range(1, N + 1):
-            printed_ok = printed_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 1))
-            corrected_ok = corrected_ok and is_zero(kap[i] - _H_printed(N, ys, bv, i, 0))
-    return Outcome(Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0),
-                   Verdict("holds" if corrected_ok else FAILS, 0.0 if corrected_ok else 1.0))
+            printed_ok = printed_ok and is_zero(kap[i] - _H_printed(N, ys, BVEC, i, 1))
+            corrected_ok = corrected_ok and is_zero(kap[i] - _H_printed(N, ys, BVEC, i, 0))
+    return Outcome(Verdict.exact(printed_ok), Verdict.exact(corrected_ok))
 
 
 @register(
@@ -286,11 +273,10 @@ def _c(ctx):
     ok = True
     for N in range(1, 6):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        kap = _curve_parts(N, ys, bv)
+        kap = _curve_parts(N, ys, BVEC)
         for i in range(N + 1, 2 * N + 1):
             ok = ok and is_zero(kap[i] - sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _HC_prop2(N, ys, bv):
@@ -310,16 +296,15 @@ def _prop2(ctx):
     ok = True
     for N in range(1, 6):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        kap = _curve_parts(N, ys, bv)
-        H, C = _HC_prop2(N, ys, bv)
+        kap = _curve_parts(N, ys, BVEC)
+        H, C = _HC_prop2(N, ys, BVEC)
         Hl = sum(kap[i] / lam**i for i in range(1, N + 1))
         Cl = sum(kap[i] / lam**i for i in range(N + 1, 2 * N + 1))
         for k in range(1, N + 1):
             ok = ok and is_zero(kap[k] - H[k - 1]) and is_zero(kap[N + k] - C[k - 1])
             ok = ok and is_zero(sp.residue(sp.expand(lam ** (k - 1) * Hl), lam, 0) - H[k - 1])
             ok = ok and is_zero(sp.residue(sp.expand(lam ** (N + k - 1) * Cl), lam, 0) - C[k - 1])
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -332,8 +317,7 @@ def _prop2_inv(ctx):
     ok = True
     for N in range(1, 6):
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        H, C = _HC_prop2(N, ys, bv)
+        H, C = _HC_prop2(N, ys, BVEC)
         F = H + C
         for f, g in itertools.combinations(F, 2):
             ok = ok and is_zero(lp_bracket(f, g, ys))
@@ -341,7 +325,7 @@ def _prop2_inv(ctx):
             for j in range(N):
                 for b in range(3):
                     ok = ok and is_zero(lp_bracket(c, ys[j][b], ys))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 _PROOF_P = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c y_{N+k-i-2+j}^a"
@@ -387,8 +371,7 @@ def _prop2_proof(ctx):
                     trunc = {ys[m][a]: 0 for m in range(N, 3 * N + 1) for a in range(3)}
                     trunc_ok = trunc_ok and sp.expand(co.subs(trunc)) == 0 and sp.expand(pr.subs(trunc)) == 0
     note = "both displays vanish under (LP): " + str(trunc_ok)
-    return Outcome(Verdict("holds" if printed_ok else FAILS, 0.0 if printed_ok else 1.0, note),
-                   Verdict("holds" if corrected_ok and trunc_ok else FAILS, 0.0 if corrected_ok and trunc_ok else 1.0))
+    return Outcome(Verdict.exact(printed_ok, note), Verdict.exact(corrected_ok and trunc_ok))
 
 
 # ----------------------------------------------------------------------------- Section 3
@@ -409,7 +392,7 @@ def _algebra(ctx):
             for b in range(3):
                 expected = 0 if k is None else sum(eps(a, b, c) * ys[k][c] for c in range(3))
                 ok = ok and is_zero(lp_bracket(ys[i][a], ys[j][b], ys) - expected)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -431,7 +414,7 @@ def _bracket_fn(ctx):
                + dot(ys[2], [p + q for p, q in zip(cross(gf[0], gg[2]), cross(gf[2], gg[0]), strict=True)])
                + dot(ys[2], cross(gf[1], gg[1])))
     ok = sp.expand(lp_bracket(f, g, ys) - formula) == 0
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -444,7 +427,7 @@ def _cas3(ctx):
     ys = sym_state(3)
     cs = [dot(ys[0], ys[2]) + dot(ys[1], ys[1]) / 2, dot(ys[1], ys[2]), dot(ys[2], ys[2])]
     ok = all(is_zero(lp_bracket(c, ys[j][a], ys)) for c in cs for j in range(3) for a in range(3))
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -457,7 +440,7 @@ def _kk(ctx):
     c1, c2 = sp.symbols("c1 c2")
     f1, f2 = _f_partition(1, (c1, c2)), _f_partition(2, (c1, c2))
     ok = is_zero(f1 + c1 / lam**2) and is_zero(f2 - (c1**2 / lam - c2) / lam**2)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -479,38 +462,36 @@ def _kk(ctx):
 def _prop3(ctx):
     c1, c2 = sp.symbols("c1 c2")
     ys = sym_state(3)
-    bv = sp.symbols("b1:4")
     y0, y1, y2 = ys
     z = sp.Symbol("zeta")
-    xi = [bv[a] + y0[a] * z - c1 * y1[a] * z**2 + y2[a] * (c1**2 * z - c2) * z**2 for a in range(3)]
+    xi = [BVEC[a] + y0[a] * z - c1 * y1[a] * z**2 + y2[a] * (c1**2 * z - c2) * z**2 for a in range(3)]
     P = sp.Poly(sp.expand(dot(xi, xi)), z)
     kap = [P.coeff_monomial(z**m) for m in range(7)]
     C1, C2, C3 = dot(y0, y2) + dot(y1, y1) / 2, dot(y1, y2), dot(y2, y2)
     lin = [y1[a] + c2 * y2[a] for a in range(3)]
     printed = [
-        2 * dot(bv, y0),
-        dot(y0, y0) - 2 * c1 * dot(bv, lin),
-        2 * c1 * (c1 * dot(bv, y2) - dot(y0, lin)),
+        2 * dot(BVEC, y0),
+        dot(y0, y0) - 2 * c1 * dot(BVEC, lin),
+        2 * c1 * (c1 * dot(BVEC, y2) - dot(y0, lin)),
         c1**2 * (c2**2 * C3 + 2 * c2 * C2 + 2 * C1),
         -2 * c1**3 * (c2 * C3 + C2),
         c1**4 * C3,
     ]
     corrected = [
-        2 * dot(bv, y0),
-        dot(y0, y0) - 2 * c1 * dot(bv, y1) - 2 * c2 * dot(bv, y2),
-        2 * c1**2 * dot(bv, y2) - 2 * c1 * dot(y0, y1) - 2 * c2 * dot(y0, y2),
+        2 * dot(BVEC, y0),
+        dot(y0, y0) - 2 * c1 * dot(BVEC, y1) - 2 * c2 * dot(BVEC, y2),
+        2 * c1**2 * dot(BVEC, y2) - 2 * c1 * dot(y0, y1) - 2 * c2 * dot(y0, y2),
         c2**2 * C3 + 2 * c1 * c2 * C2 + 2 * c1**2 * C1,
         -2 * c1**2 * (c1 * C2 + c2 * C3),
         c1**4 * C3,
     ]
     bad = [n for n, (k, p) in enumerate(zip(kap[1:], printed, strict=True)) if not is_zero(k - p)]
     names = ["H_1", "H_2", "H_3", "C_1", "C_2", "C_3"]
-    cok = all(is_zero(k - p) for k, p in zip(kap[1:], corrected, strict=True)) and is_zero(kap[0] - dot(bv, bv))
+    cok = all(is_zero(k - p) for k, p in zip(kap[1:], corrected, strict=True)) and is_zero(kap[0] - dot(BVEC, BVEC))
     # the printed ones are the correct ones with c2 -> c1 c2:
     subs_ok = all(is_zero(p - cc.subs(c2, c1 * c2)) for p, cc in zip(printed, corrected, strict=True))
     return Outcome(
-        Verdict("holds" if not bad else FAILS, 0.0 if not bad else 1.0,
-                "printed fails for " + ", ".join(names[n] for n in bad) if bad else ""),
+        Verdict.exact(not bad, "printed fails for " + ", ".join(names[n] for n in bad) if bad else ""),
         Verdict("holds" if cok and subs_ok else FAILS, 0.0 if cok else 1.0,
                 "printed == corrected(c2 -> c1 c2): " + str(subs_ok)),
     )

@@ -191,7 +191,7 @@ def _xnorm(ctx):
     ok = True
     for X in (printed_realisation(), corrected_realisation()):
         ok = ok and sp.simplify(sp.trigsimp(sum(c**2 for c in X[3:6]) - 2 * pps)) == 0
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))
 
 
 def _chart_points(rng, n, theta_lo, theta_hi, psi_hi):
@@ -264,8 +264,7 @@ def _momenta(ctx):
              for qi, pi in zip(Q, P, strict=True))
     ok = sp.simplify(br - z[2]) == 0 and z[2] != 0
     ok = ok and all(sp.diff(c, pth) == 0 and sp.diff(c, pph) == 0 for c in x) and any(sp.diff(c, pps) != 0 for c in x)
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0,
-                           "the mathematical content only; 'non-holonomic' is an interpretation"))
+    return Outcome(Verdict.exact(ok, "the mathematical content only; 'non-holonomic' is an interpretation"))
 
 
 @register(
@@ -279,4 +278,4 @@ def _cyclic(ctx):
     for H in (H_CORRECTED, H_PRINTED):
         ok = ok and sp.diff(H, ph) == 0
         ok = ok and sp.simplify(sp.diff(H, ps) - bsym * sp.sqrt(2 * pps) * S(th) * S(ps)) == 0
-    return Outcome(Verdict("holds" if ok else FAILS, 0.0 if ok else 1.0))
+    return Outcome(Verdict.exact(ok))

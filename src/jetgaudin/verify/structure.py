@@ -13,14 +13,9 @@ from typing import Any
 
 import sympy as sp
 
-from ._registry import FAILS, HOLDS, Outcome, Verdict, register
-from ._tools import SIGMA, dot, eps, is_zero, matrix_is_zero, sym_state
-from .sec2 import _f_partition, _HC_prop2, lam
-
-
-def _ok(flag: bool, note: str = "") -> Verdict:
-    """Verdict of an exact check: residual 0 (an identity / the claim holds) or 1."""
-    return Verdict(HOLDS if flag else FAILS, 0.0 if flag else 1.0, note)
+from ._registry import Outcome, Verdict, register
+from ._tools import BVEC, dot, eps, is_zero, matrix_is_zero, sym_state
+from .sec2 import _f_partition, _HC_prop2, _lax, _uvw_at, lam
 
 
 def lp_constants(N: int, drop=()) -> dict[tuple[int, int], dict[int, int]]:
@@ -90,7 +85,7 @@ def _jacobi(ctx):
         c = lp_constants(N)
         anti = all(c.get((j, i), {}).get(k) == -v for (i, j), ks in c.items() for k, v in ks.items())
         bad += _jacobi_defect(c, 3 * N) + (not anti)
-    return Outcome(_ok(bad == 0, f"{bad} violating triples"))
+    return Outcome(Verdict.exact(bad == 0, f"{bad} violating triples"))
 
 
 def _rand_rational(rng):
@@ -112,13 +107,12 @@ def _rank(ctx):
     for N in range(1, 6):
         ys = sym_state(N)
         coords = [x for y in ys for x in y]
-        bv = sp.symbols("b1:4")
         c = lp_constants(N)
-        H, C = _HC_prop2(N, ys, bv)
+        H, C = _HC_prop2(N, ys, BVEC)
         grads = [[sp.diff(f, x) for x in coords] for f in H + C]
         for _ in range(npts):
             pt = {x: _rand_rational(rng) for x in coords}
-            pt.update({bb: _rand_rational(rng) for bb in bv})
+            pt.update({bb: _rand_rational(rng) for bb in BVEC})
             Pi = sp.zeros(3 * N, 3 * N)
             for (i, j), ks in c.items():
                 Pi[i, j] = sum(v * pt[coords[k]] for k, v in ks.items())
@@ -127,7 +121,7 @@ def _rank(ctx):
             ranks = (Pi.rank(), G.rank(), G[N:, :].rank(), fields.rank())
             if ranks != (2 * N, 2 * N, N, N):
                 bad.append((N, ranks))
-    return Outcome(_ok(not bad, f"(rank Pi, rank grad(H,C), rank grad C, rank Pi grad H) off at {bad}" if bad
+    return Outcome(Verdict.exact(not bad, f"(rank Pi, rank grad(H,C), rank grad C, rank Pi grad H) off at {bad}" if bad
                        else "rank Pi = 2N, rank grad(H, C) = 2N, rank grad C = N, rank Pi grad H = N"))
 
 
@@ -144,12 +138,9 @@ def _yy(ctx):
         c = sp.symbols(f"c1:{N}") if N > 1 else ()
         fs = [_f_partition(i, c) for i in range(N)]
         ys = sym_state(N)
-        bv = sp.symbols("b1:4")
-        xi = [bv[a] + sum(fs[i] * ys[i][a] for i in range(N)) for a in range(3)]
-        L = sum((xi[a] * SIGMA[a] for a in range(3)), sp.zeros(2, 2))
-        u, v, w = xi[2], xi[0] - sp.I * xi[1], xi[0] + sp.I * xi[1]
-        ok = ok and matrix_is_zero(L - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
-    return Outcome(_ok(ok))
+        u, v, w = _uvw_at(ys, BVEC, fs, lam)
+        ok = ok and matrix_is_zero(_lax(ys, BVEC, fs, lam) - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
+    return Outcome(Verdict.exact(ok))
 
 
 @register(
@@ -164,7 +155,7 @@ def _lax2(ctx):
     for N in range(1, 8):
         c = [-1] + [0] * (N - 2)
         ok = ok and all(is_zero(_f_partition(i, c) - lam ** -(i + 1)) for i in range(N))
-    return Outcome(_ok(ok))
+    return Outcome(Verdict.exact(ok))
 
 
 def _is_sub(c, basis_idx, target_idx) -> bool:
@@ -191,7 +182,7 @@ def _intro(ctx):
     e3 = (_is_sub(c2, y0, y0) and _maps_into(c2, y0, y1, y1) and _is_sub(c2, y1, ())  # R^3 abelian ideal
           and all(c2[(a, 3 + b)] == {3 + k: int(eps(a, b, k)) for k in range(3) if eps(a, b, k)}
                   for a in range(3) for b in range(3) if a != b))
-    return Outcome(_ok(su2 and e3))
+    return Outcome(Verdict.exact(su2 and e3))
 
 
 @register(
@@ -219,7 +210,7 @@ def _structure(ctx):
     I5 = [4, 5] + y2
     literal = _maps_into(c, [3], I5, I5) and _is_sub(c, I5, I5)
     ok = ok_su2 and ok_ideal and ok_r3 and nonabelian and no_complement and len(G) == 6
-    return Outcome(_ok(ok, "G is not R^3 (+)_s R^3; literally it is a semidirect sum span(y1^1) (+)_s "
+    return Outcome(Verdict.exact(ok, "G is not R^3 (+)_s R^3; literally it is a semidirect sum span(y1^1) (+)_s "
                            f"span(y1^2, y1^3, y2): {literal}"))
 
 
@@ -261,4 +252,4 @@ def _cocycle(ctx):
     rad_e_abelian = all(not _br(ce, {i: 1}, {j: 1}) for i in G for j in G)
     rad_g_abelian = all(not _br(cg, {i: 1}, {j: 1}) for i in G for j in G)
     ok = ok_omega and ok_e and cocycle_bad == 0 and ok_cas and differ and rad_e_abelian and not rad_g_abelian
-    return Outcome(_ok(ok, f"cocycle-condition violations: {cocycle_bad}"))
+    return Outcome(Verdict.exact(ok, f"cocycle-condition violations: {cocycle_bad}"))

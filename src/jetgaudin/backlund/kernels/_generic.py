@@ -39,6 +39,7 @@ from ._scalar import (
     _cdiv,
     _continue_nu,
     _cr,
+    _division_constants,
     _drift_pass,
     _eigvec,
     _horner_step_u,
@@ -211,10 +212,7 @@ def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_
     for k in range(2 * N):
         drift[k] = 0.0
     z = _cdiv(complex(1.0, 0.0), eta)
-    d1 = -(eta.real + eta.real)
-    d2 = eta.real * eta.real + eta.imag * eta.imag
-    inv_d2 = 1.0 / d2
-    bottom_up = d2 >= 1.0
+    d1, d2, inv_d2, bottom_up = _division_constants(eta)
     nu = nu0
     status = STATUS_OK
     n = 0

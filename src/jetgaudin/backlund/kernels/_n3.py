@@ -20,6 +20,7 @@ from ._scalar import (
     _cdiv,
     _continue_nu,
     _cr,
+    _division_constants,
     _drift_pass,
     _eigvec,
     _integrals,
@@ -191,10 +192,7 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
     z1 = _cdiv(complex(1.0, 0.0), eta)
     z2 = z1 * z1
     z3 = z2 * z1
-    d1 = -(eta.real + eta.real)
-    d2 = eta.real * eta.real + eta.imag * eta.imag
-    inv_d2 = 1.0 / d2
-    bottom_up = d2 >= 1.0
+    d1, d2, inv_d2, bottom_up = _division_constants(eta)
     nu = nu0
     status = STATUS_OK
     n = 0
