@@ -41,10 +41,7 @@ from ._dressing import (
 )
 from .kernels import auto_kernel  # the kernel choice of kernel="auto" lives with the kernels
 
-__all__ = [
-    "Backend",
-    "Branch",
-    "MapProperties",
+__all__ = [  # what this module defines (Backend, Branch, MapProperties are jetgaudin.maps' own)
     "OnePointBacklund",
     "TwoPointBacklund",
     "two_point_parameters",

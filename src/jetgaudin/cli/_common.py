@@ -11,7 +11,7 @@ import sys
 import time
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import typer
 
@@ -35,6 +35,20 @@ class Branch(StrEnum):
     default = "default"
     opposite = "opposite"
 
+
+# Options shared by every command that writes a run directory: one definition, one help text.
+OverwriteOption = Annotated[
+    bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing (never a run in "
+                       "progress)")
+]
+ProgressOption = Annotated[
+    bool | None,
+    typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
+]
+NoPlotsOption = Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")]
+CheckpointOption = Annotated[
+    float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
+]
 
 class CliInputError(Exception):
     """Bad command-line input: reported as one line on stderr, exit code 2."""

@@ -22,6 +22,9 @@ from ._common import (
     APPENDIX2_STEPS,
     EXIT_FAILED,
     CliInputError,
+    NoPlotsOption,
+    OverwriteOption,
+    ProgressOption,
     after_run,
     blame,
     check_state_scale,
@@ -78,14 +81,9 @@ def flow(
     init_from_dir: Annotated[
         str | None, typer.Option("--init-from", help="start from the last saved state of this run directory")
     ] = None,
-    overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing")
-    ] = False,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
-    ] = None,
-    no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
+    overwrite: OverwriteOption = False,
+    progress: ProgressOption = None,
+    no_plots: NoPlotsOption = False,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η")
                      ] = None,
 ) -> None:

@@ -18,7 +18,11 @@ from ._common import (
     APPENDIX2_STEPS,
     EXIT_FAILED,
     Branch,
+    CheckpointOption,
     CliInputError,
+    NoPlotsOption,
+    OverwriteOption,
+    ProgressOption,
     after_run,
     blame,
     check_state_scale,
@@ -129,14 +133,11 @@ def orbit(
                      "branch unless given)"),
     ] = None,
     no_csv: Annotated[bool, typer.Option("--no-csv", help="do not write orbit.csv (orbit.h5 only)")] = False,
-    no_plots: Annotated[bool, typer.Option("--no-plots", help="do not draw the figures")] = False,
+    no_plots: NoPlotsOption = False,
     resume: Annotated[
         str | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
     ] = None,
-    overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing (never a "
-                           "run in progress)")
-    ] = False,
+    overwrite: OverwriteOption = False,
     max_drift: Annotated[
         float | None,
         typer.Option(
@@ -153,9 +154,7 @@ def orbit(
             f"exceeds this [default: {runlayer.DEFAULT_MAX_IMAG:g}]",
         ),
     ] = None,
-    checkpoint_seconds: Annotated[
-        float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
-    ] = 1.0,
+    checkpoint_seconds: CheckpointOption = 1.0,
     kernel: Annotated[
         Kernel | None,
         typer.Option(
@@ -164,10 +163,7 @@ def orbit(
             "step) or 'auto' (NumPy for short runs, compiled where it pays off) [default: auto]",
         ),
     ] = None,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
-    ] = None,
+    progress: ProgressOption = None,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map; with no options, reproduce Appendix 2 of the paper.

@@ -26,7 +26,10 @@ from . import _chains, app
 from ._common import (
     EXIT_FAILED,
     Branch,
+    CheckpointOption,
     CliInputError,
+    OverwriteOption,
+    ProgressOption,
     blame,
     console,
     fail,
@@ -136,18 +139,13 @@ def ensemble_command(
     resume: Annotated[
         str | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
     ] = None,
-    overwrite: Annotated[
-        bool, typer.Option("--overwrite", help="replace the run (or files) in --out instead of refusing (never a "
-                           "run in progress)")
-    ] = False,
+    overwrite: OverwriteOption = False,
     max_drift: Annotated[
         float | None,
         typer.Option("--max-drift", help="stop as failed when an orbit's relative integral drift exceeds this "
                      f"[default: {runlayer.DEFAULT_MAX_DRIFT:g}]"),
     ] = None,
-    checkpoint_seconds: Annotated[
-        float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
-    ] = 2.0,
+    checkpoint_seconds: CheckpointOption = 2.0,
     scheduler: Annotated[
         str | None,
         typer.Option("--scheduler", help="Dask scheduler address tcp://host:port (needs jetgaudin[distributed])"),
@@ -159,10 +157,7 @@ def ensemble_command(
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; needs --input or "
                                               "--init-from")] = None,
-    progress: Annotated[
-        bool | None,
-        typer.Option("--progress/--no-progress", help="progress bar [default: on a terminal, for runs over 1 s]"),
-    ] = None,
+    progress: ProgressOption = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens

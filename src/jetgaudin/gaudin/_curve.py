@@ -26,7 +26,7 @@ import numpy as np
 
 from .._errors import BranchPointError, InvalidParameterError
 from .._validate import spectral_parameter
-from ..spectral import _roots
+from ..spectral import _roots, _segment_factor
 
 __all__ = ["lax_vector", "curve_polynomial", "branch_points", "nu", "nu_with_roots", "interpolating_hamiltonian",
            "interpolating_weights"]
@@ -126,14 +126,8 @@ def nu_with_roots(model, X, lam, roots, sheet: int = 1):
     direct = np.sqrt(nu2)
     sqrt_Qa = np.sqrt(nu2_a) * np.abs(_D_real(model, a))  # √(D(a)² ν²(a)), D(a) real
     roots = np.broadcast_to(roots, lam.shape + (roots.shape[-1],))
-    ratio = (lam[..., None] - roots) / (a[..., None] - roots)
-    on_seg = (np.abs(ratio.imag) <= 1e-13 * np.abs(ratio)) & (ratio.real <= 0)
-    if np.any(on_seg) or np.any(sqrt_Qa == 0):
-        raise BranchPointError(
-            "nu has a branch point on the vertical segment from Re(eta) to eta (nu(eta) = 0 or nu(Re eta) = 0); "
-            "move eta or the state off the branch point"
-        )
-    ref = np.sign(_D_real(model, a)) * np.conj(_D_phase(model, lam)) * np.prod(np.sqrt(ratio), axis=-1)
+    # the continuation along the vertical segment, with its branch-point test, is the one-site rule's own
+    ref = np.sign(_D_real(model, a)) * np.conj(_D_phase(model, lam)) * _segment_factor(lam, a, roots, sqrt_Qa)
     ref = ref * sqrt_Qa / np.abs(sqrt_Qa)
     with np.errstate(invalid="ignore", divide="ignore"):
         test = (np.conj(direct / np.abs(direct)) * ref / np.abs(ref)).real
