@@ -402,3 +402,22 @@ def test_complex_maps_are_refused_by_the_spec():
 
     with pytest.raises(jg.InvalidParameterError, match="complex"):
         rl.RunSpec(jg.OnePointBacklund(1.0, 5 + 0.1j), np.array(APPENDIX2_X0), 5)
+
+
+def test_scheduler_that_cannot_be_used_is_refused_before_the_directory_exists(tmp_path, capsys, monkeypatch):
+    """Issue 11, item 9: ``--scheduler`` without Dask used to leave an 'interrupted' run behind.  Dask's absence is
+    simulated (the client factory raises what it raises when ``distributed`` is missing): exit 2, one line, and the
+    --out directory is never created."""
+    from jetgaudin import ensemble as ens
+
+    def no_dask(*args, **kwargs):
+        raise jg.InvalidParameterError("a Dask scheduler was given but the 'distributed' package is missing: "
+                                       "pip install 'jetgaudin[distributed]'")
+
+    monkeypatch.setattr(ens, "dask_client", no_dask)
+    out = tmp_path / "ens"
+    code, _, err = run_cli(capsys, "ensemble", "--orbits", "4", "--steps", "3", "--scheduler", "tcp://127.0.0.1:9",
+                           "--out", out)
+    assert one_line_error(code, err), err
+    assert "distributed" in err
+    assert not out.exists()
