@@ -31,6 +31,12 @@ def _abs2(z):
     return z.real * z.real + z.imag * z.imag
 
 
+@njit(cache=True, inline="always")
+def _add_scaled(s00, s01, s10, s11, gd, w, j):
+    """``(s00, s01, s10, s11) + gd * w[j, :]``: one term of the dressing sum added to the 2x2 accumulator."""
+    return s00 + gd * w[j, 0], s01 + gd * w[j, 1], s10 + gd * w[j, 2], s11 + gd * w[j, 3]
+
+
 @njit(cache=True)
 def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
@@ -103,24 +109,13 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
             s11 = 0j
             s10 = 0j
             for j in range(k, N):
+                # the three terms g_d K'ℓ_jA' + g_{d−1}(K'ℓ_j + ℓ_jA') + g_{d−2} ℓ_j, added in this order
                 d = j - k
-                gd = g[i, d]
-                s00 += gd * w0[j, 0]
-                s01 += gd * w0[j, 1]
-                s10 += gd * w0[j, 2]
-                s11 += gd * w0[j, 3]
+                s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d], w0, j)
                 if d >= 1:
-                    g1 = g[i, d - 1]
-                    s00 += g1 * w1[j, 0]
-                    s01 += g1 * w1[j, 1]
-                    s10 += g1 * w1[j, 2]
-                    s11 += g1 * w1[j, 3]
+                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 1], w1, j)
                 if d >= 2:
-                    g2 = g[i, d - 2]
-                    s00 += g2 * wp[j, 0]
-                    s01 += g2 * wp[j, 1]
-                    s10 += g2 * wp[j, 2]
-                    s11 += g2 * wp[j, 3]
+                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 2], wp, j)
             c = o + k
             out[3 * c] = 0.5 * (s01.real + s10.real)
             out[3 * c + 1] = 0.5 * (s10.imag - s01.imag)
