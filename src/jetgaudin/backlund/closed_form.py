@@ -141,7 +141,19 @@ def one_point_closed_form(X: ArrayLike, b: float, eta: complex, p: ArrayLike, q:
 
 
 def _two_point_coefficients(b, er, ei, s, t):
-    """Entries of ``A``, ``B`` and ``X0`` (scalar arithmetic only; see :func:`two_point_matrices`)."""
+    """Entries ``(A12, A13, A23, B11, B12, B13, B21, B22, B23, B31, B32, B33, X0[6], X0[7], X0[8])`` of ``A``, ``B``
+    and ``X0`` (see :func:`two_point_matrices`): the last 15 values of :func:`_two_point_core`, which do not depend
+    on the state (read here at ``X = 0``; scalar arithmetic only, so ``b, s, t`` may be arrays or mpmath numbers)."""
+    return _two_point_core(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, b, er, ei, s, t)[9:]
+
+
+def _two_point_core(y1, y2, y3, x1, x2, x3, z1, z2, z3, b, er, ei, s, t):
+    """Scalar core of :func:`two_point_closed_form` and :func:`two_point_matrices`: ``X̆ = Φ X + X0``.
+
+    Returns the 9 complex components of ``X̆``, then the 15 entries of ``A``, ``B`` and ``X0[6:9]`` it used (as
+    :func:`_two_point_coefficients`).  One self-contained function, so that ``numba.njit`` compiles it alone
+    (:mod:`jetgaudin.backlund.kernels._closed`); the unused entries cost nothing there once inlined.
+    """
     st = s * t
     a1 = 2j * ei - st  # α1 = η1 − η2 − st  (printed without the i)
     a2 = a1 - st  # α2 = α1 − st
@@ -163,36 +175,9 @@ def _two_point_coefficients(b, er, ei, s, t):
     B32 = 0.5j * (t * (a2 + 2.0 * R) - sa * (a2 - 2.0 * R))
     B33 = 2.0 * st * a1
     # X0 = b (A e3, B e3, C e3): the field b e3 enters as a level "y_{-1}"
-    C13 = re2 * (sa - t) + R * a2 * (sa + t)
-    C23 = -1j * (re2 * (sa + t) + R * a2 * (sa - t))
-    C33 = 4.0 * R * st * a1
-    return (A12, A13, A23, B11, B12, B13, B21, B22, B23, B31, B32, B33, b * C13, b * C23, b * C33)
-
-
-def _two_point_core(y1, y2, y3, x1, x2, x3, z1, z2, z3, b, er, ei, s, t):
-    """Scalar core of :func:`two_point_closed_form`: ``X̆ = Φ X + X0``; returns 9 complex components."""
-    # the coefficients of _two_point_coefficients, inlined so that numba.njit compiles this function alone
-    st = s * t
-    a1 = 2j * ei - st
-    a2 = a1 - st
-    sa = s * a1
-    R = er
-    re2 = er * er - ei * ei
-    A12 = 1j * a2
-    A13 = sa - t
-    A23 = -1j * (sa + t)
-    B11 = 0.5 * (1.0 - s * s) * (a1 * a1 - t * t)
-    B12 = 0.5j * (2.0 * R * a2 + s * s * a1 * a1 - t * t)
-    B13 = 0.5 * (sa * (a2 + 2.0 * R) + t * (a2 - 2.0 * R))
-    B21 = -0.5j * (t * t - s * s * a1 * a1 + 2.0 * R * a2)
-    B22 = 0.5 * (1.0 + s * s) * (a1 * a1 + t * t)
-    B23 = -0.5j * (sa * (a2 + 2.0 * R) - t * (a2 - 2.0 * R))
-    B31 = 0.5 * (sa * (a2 - 2.0 * R) + t * (a2 + 2.0 * R))
-    B32 = 0.5j * (t * (a2 + 2.0 * R) - sa * (a2 - 2.0 * R))
-    B33 = 2.0 * st * a1
-    c1 = b * (re2 * (sa - t) + R * a2 * (sa + t))
-    c2 = b * (-1j * (re2 * (sa + t) + R * a2 * (sa - t)))
-    c3 = b * (4.0 * R * st * a1)
+    c1 = b * (re2 * (sa - t) + R * a2 * (sa + t))  # b C13
+    c2 = b * (-1j * (re2 * (sa + t) + R * a2 * (sa - t)))  # b C23
+    c3 = b * (4.0 * R * st * a1)  # b C33
     # A is skew: A21 = −A12, A31 = −A13, A32 = −A23
     Ay1 = A12 * y2 + A13 * y3
     Ay2 = -A12 * y1 + A23 * y3
@@ -209,7 +194,8 @@ def _two_point_core(y1, y2, y3, x1, x2, x3, z1, z2, z3, b, er, ei, s, t):
     n7 = z1 + Ax1 + B11 * y1 + B12 * y2 + B13 * y3 + c1
     n8 = z2 + Ax2 + B21 * y1 + B22 * y2 + B23 * y3 + c2
     n9 = z3 + Ax3 + B31 * y1 + B32 * y2 + B33 * y3 + c3
-    return n1, n2, n3, n4, n5, n6, n7, n8, n9
+    return (n1, n2, n3, n4, n5, n6, n7, n8, n9,
+            A12, A13, A23, B11, B12, B13, B21, B22, B23, B31, B32, B33, c1, c2, c3)
 
 
 def two_point_closed_form(
@@ -233,7 +219,7 @@ def two_point_closed_form(
     s = _param(s, "s")
     t = _param(t, "t")
     args = (*_split(X), b, eta.real, eta.imag, s, t)
-    out = _two_point_core(*args)
+    out = _two_point_core(*args)[:9]
     Xc = np.stack(np.broadcast_arrays(*out), axis=-1).astype(complex)
     Xr = Xc.real
     if not return_imag:
