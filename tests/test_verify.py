@@ -17,6 +17,7 @@ from jetgaudin.verify import (
     REGISTRY,
     UNDECIDED,
     CheckResult,
+    Erratum,
     Outcome,
     Verdict,
     errata_markdown,
@@ -69,8 +70,20 @@ def test_errata_entries_have_their_check(results):
         if chk.erratum is not None:
             assert r.printed == FAILS and r.corrected == HOLDS, (label, r.printed, r.corrected)
             assert r.printed_residual is not None and r.printed_residual > 1e-6, label  # a real discrepancy
-        if chk.expect_printed == FAILS:
-            assert chk.erratum is not None, f"{label}: a declared misprint needs an errata entry"
+
+
+def test_a_misprint_is_declared_by_its_erratum(monkeypatch):
+    # register() derives the expected printed verdict from the erratum: with one, the printed formula must fail
+    monkeypatch.setattr("jetgaudin.verify._registry.REGISTRY", {})
+    from jetgaudin.verify import _registry
+
+    def noop(ctx):
+        return Outcome(Verdict(HOLDS, 0.0))
+
+    register("zz-misprint", "test", "s", "m", erratum=Erratum("printed", "corrected"))(noop)
+    register("zz-holds", "test", "s", "m")(noop)
+    assert _registry.REGISTRY["zz-misprint"].expect_printed == FAILS
+    assert _registry.REGISTRY["zz-holds"].expect_printed == HOLDS
 
 
 def test_residuals_of_holding_checks_are_small(results):

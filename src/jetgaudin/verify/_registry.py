@@ -16,6 +16,7 @@ import time
 import traceback
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 __all__ = [
     "HOLDS",
@@ -35,6 +36,8 @@ __all__ = [
     "MODULES",
     "load_all",
     "errata_entries",
+    "exact_for_each",
+    "exact_pair_for_each",
 ]
 
 #: the modules holding the checks, in the paper's order (the order of docs/errata.md)
@@ -73,6 +76,19 @@ class Verdict:
 class Outcome:
     printed: Verdict
     corrected: Verdict | None = None
+
+
+def exact_for_each(cases, holds: Callable[[Any], bool], note: str = "") -> Outcome:
+    """The outcome of an exact identity decided case by case (e.g. for ``N = 1..5``): it holds iff
+    ``holds(case)`` is true for every case (the cases after a failing one are not computed)."""
+    return Outcome(Verdict.exact(all(holds(c) for c in cases), note))
+
+
+def exact_pair_for_each(cases, holds: Callable[[Any], tuple[bool, bool]]) -> Outcome:
+    """The outcome of a printed formula and its correction decided case by case: ``holds(case) -> (printed
+    holds, corrected holds)``; each verdict holds iff it holds in every case."""
+    verdicts = [holds(c) for c in cases]
+    return Outcome(Verdict.exact(all(p for p, _ in verdicts)), Verdict.exact(all(c for _, c in verdicts)))
 
 
 @dataclass(frozen=True)
@@ -188,9 +204,12 @@ def register(
     *,
     erratum: Erratum | None = None,
     full_only: bool = False,
-    expect_printed: str = HOLDS,
 ):
-    """Decorator adding a check to :data:`REGISTRY` (labels are unique)."""
+    """Decorator adding a check to :data:`REGISTRY` (labels are unique).
+
+    A check with an ``erratum`` declares a misprint: the formula as printed is expected to fail
+    (``expect_printed = fails``), every other check's formula to hold as printed."""
+    expect_printed = HOLDS if erratum is None else FAILS
 
     def deco(func):
         if label in REGISTRY:

@@ -190,7 +190,6 @@ _APP1_NOTE = ("Corrected entries are those of jetgaudin.backlund.closed_form.two
         "alpha_1 = eta_1 - eta_2 - s t = 2i Im(eta) - s t  (A itself is then right as printed)",
         _APP1_NOTE,
     ),
-    expect_printed=FAILS,
 )
 def _app1_A(ctx):
     return _app1_check(ctx, "A")
@@ -210,7 +209,6 @@ def _app1_A(ctx):
         "(B_11, B_12, B_21, B_31 right as printed)",
         _APP1_NOTE,
     ),
-    expect_printed=FAILS,
 )
 def _app1_B(ctx):
     return _app1_check(ctx, "B")
@@ -231,7 +229,6 @@ def _app1_B(ctx):
         "(s a1 + t) + R a2 (s a1 - t)]; [X0]_1, [X0]_3, [X0]_6, [X0]_9 right as printed; a1 = 2i Im(eta) - s t",
         _APP1_NOTE,
     ),
-    expect_printed=FAILS,
 )
 def _app1_X0(ctx):
     return _app1_check(ctx, "X0")
@@ -298,7 +295,6 @@ def _app2(ctx):
         "The large-|eta| form is a consequence (nu = |b| + H_1/(2|b|l) + (H_2/(2|b|) - H_1^2/(8|b|^3))/l^2 + ...): "
         "tests/test_backlund.py::test_large_eta_limit_is_physical_flow_times_rotation and docs/backlund.md section 6.",
     ),
-    expect_printed=FAILS,
 )
 def _app2_timestep(ctx):
     from ._tools import rand_state

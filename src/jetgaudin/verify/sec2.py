@@ -6,7 +6,7 @@ import itertools
 
 import sympy as sp
 
-from ._registry import FAILS, Erratum, Outcome, Verdict, register
+from ._registry import FAILS, Erratum, Outcome, Verdict, exact_for_each, exact_pair_for_each, register
 from ._tools import BVEC, SIGMA, cross, dot, eps, hat, is_zero, lp_bracket, matrix_is_zero, sym_state
 
 lam, mu = sp.symbols("lambda mu")
@@ -85,12 +85,25 @@ def _r_matrix_residual(N, general_c):
     "exact SymPy simplification of the 4x4 rational matrices",
 )
 def _prop1(ctx):
-    ok = True
-    for N in range(1, 5):
-        general = N <= 3 or ctx.full
-        holds, _ = _r_matrix_residual(N, general)
-        ok = ok and holds
-    return Outcome(Verdict.exact(ok))
+    return exact_for_each(range(1, 5), lambda N: _r_matrix_residual(N, general_c=N <= 3 or ctx.full)[0])
+
+
+def _uvw_displays(ys, fs):
+    """The six brackets displayed after (yy), each as ``{f, g} - rhs`` (zero iff it holds), from (LP) with the
+    weights ``fs``: ``(printed, corrected)``.  The correction reads ``{v(l),v(m)}`` for the printed
+    ``{v(l),u(m)}`` and flips the sign of the right-hand sides of ``{u,v}`` and ``{v,w}``."""
+    (ul, vl, wl), (um, vm, wm) = _uvw_at(ys, BVEC, fs, lam), _uvw_at(ys, BVEC, fs, mu)
+
+    def br(f, g):
+        return lp_bracket(f, g, ys)
+
+    d = lam - mu
+    uv, uw, vw = br(ul, vm), br(ul, wm), br(vl, wm)
+    printed = [br(ul, um), br(vl, um), br(wl, wm),
+               uv - sp.I / d * (vl - vm), uw - sp.I / d * (wl - wm), vw - 2 * sp.I / d * (ul - um)]
+    corrected = [printed[0], br(vl, vm), printed[2],
+                 uv - sp.I / d * (vm - vl), printed[4], vw - 2 * sp.I / d * (um - ul)]
+    return printed, corrected
 
 
 @register(
@@ -106,41 +119,16 @@ def _prop1(ctx):
         "{v(l),u(m)} is not zero (it is -{u(m),v(l)}), so the first line must read {v(l),v(m)}; the brackets "
         "{u,v} and {v,w} have the opposite sign; computed from (LP) with the paper's sigma's.",
     ),
-    expect_printed=FAILS,
 )
 def _uvw(ctx):
     printed_ok = corrected_ok = True
     for N in range(1, 5):
-        ys = sym_state(N)
-        fs = [lam ** -(i + 1) for i in range(N)]
-        ul, vl, wl = _uvw_at(ys, BVEC, fs, lam)
-        um, vm, wm = _uvw_at(ys, BVEC, fs, mu)
-
-        def br(f, g, ys=ys):
-            return lp_bracket(f, g, ys)
-
-        d = lam - mu
-        printed = [
-            br(ul, um),
-            br(vl, um),
-            br(wl, wm),
-            br(ul, vm) - sp.I / d * (vl - vm),
-            br(ul, wm) - sp.I / d * (wl - wm),
-            br(vl, wm) - 2 * sp.I / d * (ul - um),
-        ]
-        corrected = [
-            br(ul, um),
-            br(vl, vm),
-            br(wl, wm),
-            br(ul, vm) - sp.I / d * (vm - vl),
-            br(ul, wm) - sp.I / d * (wl - wm),
-            br(vl, wm) - 2 * sp.I / d * (um - ul),
-        ]
-        bad = [n for n, e in enumerate(printed) if not is_zero(e)]
+        printed, corrected = _uvw_displays(sym_state(N), [lam ** -(i + 1) for i in range(N)])
+        bad = [n + 1 for n, e in enumerate(printed) if not is_zero(e)]
         printed_ok = printed_ok and not bad
         corrected_ok = corrected_ok and all(is_zero(e) for e in corrected)
     return Outcome(
-        Verdict.exact(printed_ok, "printed items failing (1-based, in display order): " + str([n + 1 for n in bad])),
+        Verdict.exact(printed_ok, "printed items failing (1-based, in display order): " + str(bad)),
         Verdict.exact(corrected_ok),
     )
 
@@ -154,18 +142,12 @@ def _uvw(ctx):
     "exact SymPy with (LP) and the partition formula for f_1, f_2 (symbols c_1, c_2)",
 )
 def _uvw_general(ctx):
-    ok = True
-    for N in ((2, 3) if ctx.full else (3,)):
+    def holds(N):
         c = sp.symbols(f"c1:{N}")
-        fs = [_f_partition(i, c) for i in range(N)]
-        ys = sym_state(N)
-        (ul, vl, wl), (um, vm, wm) = _uvw_at(ys, BVEC, fs, lam), _uvw_at(ys, BVEC, fs, mu)
-        d = lam - mu
-        exprs = [lp_bracket(ul, um, ys), lp_bracket(vl, vm, ys), lp_bracket(wl, wm, ys),
-                 lp_bracket(ul, vm, ys) - sp.I / d * (vm - vl), lp_bracket(ul, wm, ys) - sp.I / d * (wl - wm),
-                 lp_bracket(vl, wm, ys) - 2 * sp.I / d * (um - ul)]
-        ok = ok and all(is_zero(e) for e in exprs)
-    return Outcome(Verdict.exact(ok))
+        _, corrected = _uvw_displays(sym_state(N), [_f_partition(i, c) for i in range(N)])
+        return all(is_zero(e) for e in corrected)
+
+    return exact_for_each((2, 3) if ctx.full else (3,), holds)
 
 
 @register(
@@ -180,7 +162,6 @@ def _uvw_general(ctx):
         "-eps^{abc} sigma^c); xi -> -hat(xi) is an isomorphism",
         "This sign is the origin of the sign errors of the Lax equation and of the matrix form of (em).",
     ),
-    expect_printed=FAILS,
 )
 def _iso(ctx):
     xi = sp.symbols("a1:4", real=True)
@@ -207,12 +188,14 @@ def _trace(ctx):
     return Outcome(Verdict.exact(ok))
 
 
-def _curve_parts(N, ys, bv):
-    """Laurent coefficients of <xi, xi> for the reduction (lax2): kappa_0..kappa_2N (exact)."""
+def _curve_parts(N):
+    """The symbolic state ``ys`` (N levels) and the Laurent coefficients kappa_0..kappa_2N of <xi, xi> for the
+    reduction (lax2), general b (exact)."""
+    ys = sym_state(N)
     z = sp.Symbol("zeta")  # zeta = 1/lambda
-    xi = [bv[a] + sum(ys[i][a] * z ** (i + 1) for i in range(N)) for a in range(3)]
+    xi = [BVEC[a] + sum(ys[i][a] * z ** (i + 1) for i in range(N)) for a in range(3)]
     P = sp.Poly(sp.expand(dot(xi, xi)), z)
-    return [P.coeff_monomial(z**m) for m in range(2 * N + 1)]
+    return ys, [P.coeff_monomial(z**m) for m in range(2 * N + 1)]
 
 
 def _H_printed(N, ys, bv, i, k_start):
@@ -226,17 +209,17 @@ def _H_printed(N, ys, bv, i, k_start):
     "exact SymPy: 4 det(L - mu) expanded in 1/l",
 )
 def _lemma1(ctx):
-    ok = True
     m = sp.Symbol("m")
-    for N in range(1, 6):
+
+    def holds(N):
         ys = sym_state(N)
-        fs = [lam ** -(i + 1) for i in range(N)]
-        L = _lax(ys, BVEC, fs, lam)
+        L = _lax(ys, BVEC, [lam ** -(i + 1) for i in range(N)], lam)
         det4 = sp.expand(4 * (L - m * sp.eye(2)).det())
         H = sum(_H_printed(N, ys, BVEC, i, 0) / lam**i for i in range(1, N + 1))
         C = sum(sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)) / lam**i for i in range(N + 1, 2 * N + 1))
-        ok = ok and is_zero(det4 - (4 * m**2 + dot(BVEC, BVEC) + H + C))
-    return Outcome(Verdict.exact(ok, "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)"))
+        return is_zero(det4 - (4 * m**2 + dot(BVEC, BVEC) + H + C))
+
+    return exact_for_each(range(1, 6), holds, "mu here is an eigenvalue of L; H(l) taken with the corrected (Hh)")
 
 
 @register(
@@ -250,17 +233,15 @@ def _lemma1(ctx):
         "The inner sum starts at k = 0 (as in H_k of Prop. 2); with k = 1 it drops <y_0, y_{i-2}>, "
         "e.g. <y,y> from H_2.",
     ),
-    expect_printed=FAILS,
 )
 def _hh(ctx):
-    printed_ok = corrected_ok = True
-    for N in range(1, 6):
-        ys = sym_state(N)
-        kap = _curve_parts(N, ys, BVEC)
-        for i in range(1, N + 1):
-            printed_ok = printed_ok and is_zero(kap[i] - _H_printed(N, ys, BVEC, i, 1))
-            corrected_ok = corrected_ok and is_zero(kap[i] - _H_printed(N, ys, BVEC, i, 0))
-    return Outcome(Verdict.exact(printed_ok), Verdict.exact(corrected_ok))
+    def holds(N):
+        ys, kap = _curve_parts(N)
+        # the inner sum from k = 1 (as printed), from k = 0 (corrected)
+        return tuple(all(is_zero(kap[i] - _H_printed(N, ys, BVEC, i, k_start)) for i in range(1, N + 1))
+                     for k_start in (1, 0))
+
+    return exact_pair_for_each(range(1, 6), holds)
 
 
 @register(
@@ -270,13 +251,12 @@ def _hh(ctx):
     "exact SymPy",
 )
 def _c(ctx):
-    ok = True
-    for N in range(1, 6):
-        ys = sym_state(N)
-        kap = _curve_parts(N, ys, BVEC)
-        for i in range(N + 1, 2 * N + 1):
-            ok = ok and is_zero(kap[i] - sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)))
-    return Outcome(Verdict.exact(ok))
+    def holds(N):
+        ys, kap = _curve_parts(N)
+        return all(is_zero(kap[i] - sum(dot(ys[k], ys[i - k - 2]) for k in range(i - N - 1, N)))
+                   for i in range(N + 1, 2 * N + 1))
+
+    return exact_for_each(range(1, 6), holds)
 
 
 def _HC_prop2(N, ys, bv):
@@ -293,18 +273,17 @@ def _HC_prop2(N, ys, bv):
     "exact SymPy",
 )
 def _prop2(ctx):
-    ok = True
-    for N in range(1, 6):
-        ys = sym_state(N)
-        kap = _curve_parts(N, ys, BVEC)
+    def holds(N):
+        ys, kap = _curve_parts(N)
         H, C = _HC_prop2(N, ys, BVEC)
         Hl = sum(kap[i] / lam**i for i in range(1, N + 1))
         Cl = sum(kap[i] / lam**i for i in range(N + 1, 2 * N + 1))
-        for k in range(1, N + 1):
-            ok = ok and is_zero(kap[k] - H[k - 1]) and is_zero(kap[N + k] - C[k - 1])
-            ok = ok and is_zero(sp.residue(sp.expand(lam ** (k - 1) * Hl), lam, 0) - H[k - 1])
-            ok = ok and is_zero(sp.residue(sp.expand(lam ** (N + k - 1) * Cl), lam, 0) - C[k - 1])
-    return Outcome(Verdict.exact(ok))
+        return all(is_zero(kap[k] - H[k - 1]) and is_zero(kap[N + k] - C[k - 1])
+                   and is_zero(sp.residue(sp.expand(lam ** (k - 1) * Hl), lam, 0) - H[k - 1])
+                   and is_zero(sp.residue(sp.expand(lam ** (N + k - 1) * Cl), lam, 0) - C[k - 1])
+                   for k in range(1, N + 1))
+
+    return exact_for_each(range(1, 6), holds)
 
 
 @register(
@@ -314,18 +293,13 @@ def _prop2(ctx):
     "exact SymPy with the brackets (LP)",
 )
 def _prop2_inv(ctx):
-    ok = True
-    for N in range(1, 6):
+    def holds(N):
         ys = sym_state(N)
         H, C = _HC_prop2(N, ys, BVEC)
-        F = H + C
-        for f, g in itertools.combinations(F, 2):
-            ok = ok and is_zero(lp_bracket(f, g, ys))
-        for c in C:
-            for j in range(N):
-                for b in range(3):
-                    ok = ok and is_zero(lp_bracket(c, ys[j][b], ys))
-    return Outcome(Verdict.exact(ok))
+        return (all(is_zero(lp_bracket(f, g, ys)) for f, g in itertools.combinations(H + C, 2))
+                and all(is_zero(lp_bracket(c, ys[j][b], ys)) for c in C for j in range(N) for b in range(3)))
+
+    return exact_for_each(range(1, 6), holds)
 
 
 _PROOF_P = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c y_{N+k-i-2+j}^a"
@@ -346,7 +320,6 @@ _PROOF_C = "{C_k, y_j^b} = ... = 2 sum_a sum_{i=k-1}^{N-1} eps^{ab}_c y_{i+j}^c 
         "stands; but the step itself is wrong for j >= 1 (y_{N+k-i-2}^a multiplies {y_i^a, y_j^b} = eps y_{i+j}; "
         "no bracket adds j to its index).",
     ),
-    expect_printed=FAILS,
 )
 def _prop2_proof(ctx):
     printed_ok = corrected_ok = trunc_ok = True
@@ -457,7 +430,6 @@ def _kk(ctx):
         "f_2 = c1^2/l^3 - c1 c2/l^2, not to the partition formula / (kk) (f_2 = c1^2/l^3 - c2/l^2). "
         "H_1 and C_3 are right.",
     ),
-    expect_printed=FAILS,
 )
 def _prop3(ctx):
     c1, c2 = sp.symbols("c1 c2")

@@ -90,7 +90,6 @@ def _bracket_residual(X, ctx, npts=10):
         "As printed, {x^1,x^2}, {y^1,z^2}, ... fail and the image is off the leaf (C^(1) = 2 p_phi cos(th), "
         "C^(2) != 0).  Corrected realisation taken from jetgaudin.canonical and verified here.",
     ),
-    expect_printed=FAILS,
 )
 def _canonical(ctx):
     br, leaf = _bracket_residual(printed_realisation(), ctx)
@@ -145,7 +144,6 @@ I2_CORRECTED = bsym * C(th) - sp.sqrt(2 * pps) * (pth * S(ps) + (pph + pps * C(t
         "The printed H is H_2/2 of the printed (non-canonical) realisation; with the corrected realisation "
         "the cross term changes sign.",
     ),
-    expect_printed=FAILS,
 )
 def _sec5_H(ctx):
     Xc = corrected_realisation()
@@ -171,7 +169,6 @@ def _sec5_H(ctx):
         "+ (p_phi + p_psi cos(th)) cos(psi)/sin(th)]",
         "H_2/2 is the Hamiltonian, not p_phi; I_2 recomputed as <b,z> + <y,x> on the corrected realisation.",
     ),
-    expect_printed=FAILS,
 )
 def _sec5_I(ctx):
     Xc = corrected_realisation()
@@ -228,7 +225,6 @@ def _inverse_chart(X):
         "-p_th) leaves the state unchanged, so the printed ranges are another fundamental domain of the same "
         "parametrisation.",
     ),
-    expect_printed=FAILS,
 )
 def _ranges(ctx):
     V = Q + P

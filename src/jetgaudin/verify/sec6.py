@@ -139,7 +139,6 @@ def _hh(ctx):
         "With mu = +-i nu/2 (an eigenvalue of L, as in (curve)) the two expressions of q differ and M(eta) does "
         "not annihilate an eigenvector of L(eta); the dressing then leaves a pole at l = eta.",
     ),
-    expect_printed=FAILS,
 )
 def _hhh(ctx):
     def residuals(draw):
@@ -186,7 +185,6 @@ _VT_C = "v~ = [(l-eta+pq)^2 v - 2p(l-eta+pq) u - p^2 w]/(l-eta)"
     "Section 6.1: " + _UT_P + " is the (1,1) entry of M ell M^-1",
     "exact SymPy (identity in l, u, v, w, p, q)",
     erratum=Erratum(_UT_P, _UT_C, "Printed minus true = -p q^2 v/(l-eta)."),
-    expect_printed=FAILS,
 )
 def _ut(ctx):
     return _tilde_check((0, 0), lambda d, p, q, u, v, w: (d + 2 * p * q) * (u - q * v) + p * w,
@@ -199,7 +197,6 @@ def _ut(ctx):
     "Section 6.1: " + _VT_P + " is the (1,2) entry of M ell M^-1",
     "exact SymPy (identity in l, u, v, w, p, q)",
     erratum=Erratum(_VT_P, _VT_C, "The factor (l-eta+2pq) must be (l-eta+pq), i.e. the (1,1) entry of M."),
-    expect_printed=FAILS,
 )
 def _vt(ctx):
     return _tilde_check((0, 1),
@@ -271,7 +268,6 @@ def _mp_symbolic_ok():
         "the coefficients of the "
         "exact division of M ell adj(M) by (l - eta); the other six components are right as printed.",
     ),
-    expect_printed=FAILS,
 )
 def _mp(ctx):
     S = _samples(ctx)
@@ -329,7 +325,6 @@ def _casimirs_preserved(ctx):
         "its (correct) formula   (and y~^- likewise)",
         "C^(1) = <y,z> + <x,x>/2 contains <x,x>, not the constant 1/2.",
     ),
-    expect_printed=FAILS,
 )
 def _leaf(ctx):
     def residuals(s):
@@ -401,7 +396,6 @@ _PSI_C = ("y^3 = y^- y~^+/(2b) - (1/(2k^3)){ (1/4)[eta(z^- x~^+ - x^- z~^+)]^2 "
         _PSI_C,
         "Derived by eliminating y^+, x^+, z^+ with the Casimirs from the (corrected) map (mp); 'w' in z^3, z~^3 is b.",
     ),
-    expect_printed=FAILS,
 )
 def _psi(ctx):
     S = _samples(ctx, leaf=True)
@@ -491,7 +485,6 @@ _F_C = ("F = y^- y~^+/(2b) + k(y^-/z^- + y~^+/z~^+) - [(1 + 2 eta g2)^2 + k^2]/(
         "by C^(1) = gamma_1, C^(2) = gamma_2, and the term -k/(4 eta^2) is missing; b eta (independent of chi) makes "
         "the spectrality exact (check Rem-spectrality).",
     ),
-    expect_printed=FAILS,
 )
 def _fu(ctx):
     wp, _ = _gen_residuals(ctx, corrected=False, factor=1)
@@ -511,7 +504,6 @@ def _fu(ctx):
         "ell = -2i L)",
         "The first equality holds (q = y~^+/(2b) and (hhh)); with the printed F, -dF/deta is not nu.",
     ),
-    expect_printed=FAILS,
 )
 def _spectrality(ctx):
     S = _samples(ctx, leaf=True)
@@ -581,7 +573,6 @@ _MU_ERR = Erratum(
     "mu_j related to the curve by -(2 mu_j)^2 = u^2 + v w as printed",
     "mpmath (50 digits): exact two-point dressing at 20 (50 with --full) seeded random complex states, eta1, eta2",
     erratum=_MU_ERR,
-    expect_printed=FAILS,
 )
 def _x(ctx):
     def residuals(d):
@@ -603,7 +594,6 @@ def _x(ctx):
     "the updated variables (second form), mu_j with -(2 mu_j)^2 = u^2 + v w as printed",
     "mpmath (50 digits): exact two-point dressing at 20 (50 with --full) seeded random complex states, eta1, eta2",
     erratum=_MU_ERR,
-    expect_printed=FAILS,
 )
 def _X(ctx):
     def residuals(d):
@@ -650,7 +640,6 @@ def _identity(ctx):
         "forward map with -nu); with this B_Q the composition is the identity",
         "The forward map with -nu gives a different state (check 2p-inverse, printed reading).",
     ),
-    expect_printed=FAILS,
 )
 def _inverse(ctx):
     def residuals(draw):
@@ -678,7 +667,6 @@ def _inverse(ctx):
         "opposite to conj of P1)",
         "With eta1 = conj(eta2) but mu2 = -conj(mu1) (the other point above eta2) the image is complex.",
     ),
-    expect_printed=FAILS,
 )
 def _real(ctx):
     def residuals(draw):
@@ -710,7 +698,6 @@ __all__ = ["ell_at", "m_mul"]  # re-exported helpers (keeps linters quiet about 
         "p2 = (u~(eta2) - nu2)/w~(eta2) (nu2 = mu2 of (x), (X))",
         "The forward one-point map with -nu2 does not reproduce the two-point map (printed reading, residual O(1)).",
     ),
-    expect_printed=FAILS,
 )
 def _composite(ctx):
     def residuals(draw):

@@ -13,7 +13,7 @@ from typing import Any
 
 import sympy as sp
 
-from ._registry import Outcome, Verdict, register
+from ._registry import Outcome, Verdict, exact_for_each, register
 from ._tools import BVEC, dot, eps, is_zero, matrix_is_zero, sym_state
 from .sec2 import _f_partition, _HC_prop2, _lax, _uvw_at, lam
 
@@ -133,14 +133,14 @@ def _rank(ctx):
     "exact SymPy",
 )
 def _yy(ctx):
-    ok = True
-    for N in range(1, 5):
+    def holds(N):
         c = sp.symbols(f"c1:{N}") if N > 1 else ()
         fs = [_f_partition(i, c) for i in range(N)]
         ys = sym_state(N)
         u, v, w = _uvw_at(ys, BVEC, fs, lam)
-        ok = ok and matrix_is_zero(_lax(ys, BVEC, fs, lam) - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
-    return Outcome(Verdict.exact(ok))
+        return matrix_is_zero(_lax(ys, BVEC, fs, lam) - sp.I / 2 * sp.Matrix([[u, v], [w, -u]]))
+
+    return exact_for_each(range(1, 5), holds)
 
 
 @register(
@@ -151,11 +151,11 @@ def _yy(ctx):
     "exact SymPy (partition formula of Section 2)",
 )
 def _lax2(ctx):
-    ok = True
-    for N in range(1, 8):
-        c = [-1] + [0] * (N - 2)
-        ok = ok and all(is_zero(_f_partition(i, c) - lam ** -(i + 1)) for i in range(N))
-    return Outcome(Verdict.exact(ok))
+    def holds(N):
+        c = [-1] + [0] * (N - 2)  # c_1 = -1, c_k = 0 (2 <= k <= N - 1)
+        return all(is_zero(_f_partition(i, c) - lam ** -(i + 1)) for i in range(N))
+
+    return exact_for_each(range(1, 8), holds)
 
 
 def _is_sub(c, basis_idx, target_idx) -> bool:
