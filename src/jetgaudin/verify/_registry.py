@@ -10,6 +10,7 @@ records; ``docs/errata.md`` is generated from the checks that declare an :class:
 from __future__ import annotations
 
 import importlib
+import inspect
 import random
 import re
 import time
@@ -160,8 +161,9 @@ def load_all() -> None:
 def paper_order(chk: Check) -> tuple[int, int]:
     """Stable order (module order of :data:`MODULES`, then position in the module), independent of the
     order in which other code happened to import the check modules."""
-    mod = chk.func.__module__.rsplit(".", 1)[-1]
-    return (MODULES.index(mod) if mod in MODULES else len(MODULES), chk.func.__code__.co_firstlineno)
+    func = inspect.unwrap(chk.func)  # the declared function, not a wrapper that a helper registered for it
+    mod = func.__module__.rsplit(".", 1)[-1]
+    return (MODULES.index(mod) if mod in MODULES else len(MODULES), func.__code__.co_firstlineno)
 
 
 def erratum_heading(n: int, chk: Check) -> str:
