@@ -104,6 +104,17 @@ def _worst_outcome(ctx, samples, residuals, note=""):
     return Outcome(Verdict.from_residual(wp, note=note), Verdict.from_residual(wc))
 
 
+def _worst_over_draws(ctx, residuals, note="", **draws):
+    """:func:`_worst_outcome` over :func:`_draws` (``draws``: its keywords) with
+    ``residuals(ell, b, eta_1, .., eta_n, nu_1, .., nu_n)``, ``nu_j = nu_at(ell, eta_j)`` (the default branch)."""
+
+    def of_draw(draw):
+        ell, _, *etas = draw
+        return residuals(*draw, *(nu_at(ell, e) for e in etas))
+
+    return _worst_outcome(ctx, _draws(ctx, **draws), of_draw, note)
+
+
 @register(
     "hh",
     "6.1",
@@ -141,17 +152,15 @@ def _hh(ctx):
     ),
 )
 def _hhh(ctx):
-    def residuals(draw):
-        ell, b, eta = draw
+    def residuals(ell, b, eta, nu):
         u, v, w = uvw_at(ell, eta)
-        nu = nu_at(ell, eta)
         out = []
         for mu in (1j * nu / 2, nu):  # printed: mu an eigenvalue of L; corrected: mu = nu
             _, res, _, _ = one_point_map(ell, b, eta, mu)
             out.append(max(rel((u - mu) / v, -w / (u + mu)), res / (1 + max(m_norm(E) for E in ell))))
         return out
 
-    return _worst_outcome(ctx, _draws(ctx), residuals)
+    return _worst_over_draws(ctx, residuals)
 
 
 # ----------------------------------------------------------------------------- u~, v~, w~
@@ -642,9 +651,7 @@ def _identity(ctx):
     ),
 )
 def _inverse(ctx):
-    def residuals(draw):
-        ell, b, e = draw
-        n = nu_at(ell, e)
+    def residuals(ell, b, e, n):
         new, res, _, _ = one_point_map(ell, b, e, n)
         # printed reading: forward map at (eta, -nu) of the image
         n_new = nu_at(new, e)
@@ -653,7 +660,7 @@ def _inverse(ctx):
         back, res_c = _one_point_inverse(new, b, e, n_new)
         return _distance(back_p, ell), max(res, res_c, _distance(back, ell))
 
-    return _worst_outcome(ctx, _draws(ctx), residuals)
+    return _worst_over_draws(ctx, residuals)
 
 
 @register(
@@ -669,9 +676,7 @@ def _inverse(ctx):
     ),
 )
 def _real(ctx):
-    def residuals(draw):
-        ell, _, e = draw
-        n1 = nu_at(ell, e)
+    def residuals(ell, _, e, n1):
         out = []
         for n2 in (-mp.conj(n1), mp.conj(n1)):  # printed (the other point above conj(eta)), corrected
             new, res, _, _ = two_point_map(ell, e, mp.conj(e), n1, n2)
@@ -679,8 +684,7 @@ def _real(ctx):
         (im_p, _), (im_c, res_c) = out
         return im_p, max(im_c, res_c)
 
-    return _worst_outcome(ctx, _draws(ctx, complex_=False), residuals,
-                          note="printed condition: counterexample mu2 = -conj(mu1)")
+    return _worst_over_draws(ctx, residuals, note="printed condition: counterexample mu2 = -conj(mu1)", complex_=False)
 
 
 __all__ = ["ell_at", "m_mul"]  # re-exported helpers (keeps linters quiet about unused imports)
@@ -700,9 +704,7 @@ __all__ = ["ell_at", "m_mul"]  # re-exported helpers (keeps linters quiet about 
     ),
 )
 def _composite(ctx):
-    def residuals(draw):
-        ell, b, e1, e2 = draw
-        n1, n2 = nu_at(ell, e1), nu_at(ell, e2)
+    def residuals(ell, b, e1, e2, n1, n2):
         two, res, _, _ = two_point_map(ell, e1, e2, n1, n2)
         mid, res1, _, _ = one_point_map(ell, b, e1, n1)
         # printed reading: forward map at (eta2, -nu2)
@@ -710,4 +712,4 @@ def _composite(ctx):
         back, res2 = _one_point_inverse(mid, b, e2, n2)
         return _distance(fwd, two), max(res, res1, res2, _distance(back, two))
 
-    return _worst_outcome(ctx, _draws(ctx, n_eta=2), residuals)
+    return _worst_over_draws(ctx, residuals, n_eta=2)
