@@ -223,6 +223,20 @@ def test_coverage_map(results):
     assert set(results) <= {c for s in STATEMENTS for c in s.checks}
 
 
+def test_coverage_map_text_is_read_as_written():
+    from jetgaudin.verify.coverage import _CITED, Coverage, Statement, _parse
+
+    text = ("== 6.2\n- P x, X | a statement on\n  two lines\n  reason: a reason\n  continued\n"
+            "- NC | another\n  reason: $CITED\n\n== Appendix 1\n- C 2p | third\n")
+    assert _parse(text) == (
+        Statement("a statement on two lines", "6.2", Coverage.PARTLY, ("x", "X"), "a reason continued"),
+        Statement("another", "6.2", Coverage.NOT_CHECKABLE, (), _CITED),
+        Statement("third", "Appendix 1", Coverage.CHECKED, ("2p",), ""),
+    )
+    with pytest.raises(ValueError, match="cannot read"):
+        _parse("== 1\nno entry marker\n")
+
+
 def test_cli_coverage_json_and_table():
     r = CliRunner().invoke(_local_app(), ["verify", "--coverage", "--json"])
     assert r.exit_code == 0, r.output
