@@ -265,7 +265,8 @@ class TwoPointBacklund(Map):
         with the expected time (``notify(message)``; default: stderr) and when done; nothing is said when they are
         loaded already, found in Numba's cache (loaded in a fraction of a second, timed) or the NumPy route is used.
         Returns a :class:`~jetgaudin.backlund.kernels.CompileReport` (``None`` on the NumPy route).  The run layer
-        calls it before a run, so that compile time is visible and apart from the stepping rate; :meth:`iterate` and :meth:`advance` compile silently on first use."""
+        calls it before a run, so that compile time is visible and apart from the stepping rate; :meth:`iterate`
+        and :meth:`advance` compile silently on first use."""
         X, _ = as_state(X)
         if X.size == 0 or self.resolved_backend(steps, X) is not Backend.COMPILED:
             return None
