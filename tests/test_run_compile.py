@@ -148,3 +148,32 @@ def test_a_signal_during_the_compile_ends_with_one_line(tmp_path, signum):
     assert "while compiling the kernels; nothing was written" in lines[0]
     assert took < 5.0  # honoured at once (0.5 s on an idle machine; a loaded one delays the process start-up)
     assert not out.exists()  # nothing was created
+
+
+def test_the_chain_kernel_is_prepared_visibly_once():
+    from jetgaudin.gaudin import GaudinModel
+
+    model = GaudinModel(0.8, [(-1.0, 2), (0.5, 3), (2.0, 1)])
+    X = np.random.default_rng(7).normal(size=(2, model.n_state))
+    m = jg.ChainTwoPointBacklund(model, 0.9 + 0.05j, backend="compiled")
+    said = []
+    first = m.prepare_kernels(X, 10, said.append)
+    # either compiled/loaded here (two messages, the first with the expected time) or loaded before (silent)
+    assert (first.state, len(said)) in (("compiled", 2), ("loaded", 0))
+    if said:
+        assert "about" in said[0] and "ready" in said[1]
+    said.clear()
+    again = m.prepare_kernels(X, 10, said.append)
+    assert again.state == "loaded" and again.seconds == 0.0 and said == []
+    assert jg.ChainTwoPointBacklund(model, 0.9 + 0.05j, backend="numpy").prepare_kernels(X, 10, said.append) is None
+
+
+def test_a_dask_run_says_that_the_workers_compile():
+    from jetgaudin.ensemble import BatchBacklund
+
+    X = np.array([APPENDIX2_X0, APPENDIX2_X0])
+    said = []
+    report = BatchBacklund([1.0, 1.0], [5 + 0.1j, 5 + 0.1j], scheduler="tcp://127.0.0.1:1").prepare_kernels(
+        X, 10, said.append)
+    assert "Dask workers" in said[0] and "run_lanes3" in said[0] and "warmup" in said[0]
+    assert report.kernels == ("nu_default_kernel",)  # here only the branch rule (ν1 is computed locally)
