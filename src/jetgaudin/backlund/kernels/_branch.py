@@ -14,9 +14,11 @@ from numba import njit
 from ._scalar import _abs2, _cdiv, _integrals
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _nu2_and_derivative(kappa, lam):
-    r"""``P = ν²(λ) = Σ κ_m λ^{-m}``, ``dP/dλ`` and ``Σ |κ_m| |λ|^{-m}`` (Horner in ``z = 1/λ``)."""
+    r"""``P = ν²(λ) = Σ κ_m λ^{-m}``, ``dP/dλ`` and ``Σ |κ_m| |λ|^{-m}`` (Horner in ``z = 1/λ``).  Only the
+    stepping (the rare case) calls it: left to LLVM rather than inlined by Numba at its two call sites, which
+    compiles faster (A/B in fresh processes: 9.5 s against 11.6 s over three rounds, load ≈ 3)."""
     z = _cdiv(complex(1.0, 0.0), lam)
     az = math.sqrt(_abs2(z))
     p = complex(0.0, 0.0)
