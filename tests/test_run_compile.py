@@ -177,3 +177,16 @@ def test_a_dask_run_says_that_the_workers_compile():
         X, 10, said.append)
     assert "Dask workers" in said[0] and "run_lanes3" in said[0] and "warmup" in said[0]
     assert report.kernels == ("nu_default_kernel",)  # here only the branch rule (ν1 is computed locally)
+
+
+def test_a_cache_of_other_kernel_sources_counts_as_cold(tmp_path, monkeypatch):
+    # a cache directory whose stamp records other sources is dropped at the first use (a compile follows), so the
+    # run must announce a compile, not a quiet load
+    from jetgaudin.backlund.kernels import _select, _target
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    (tmp_path / "_branch.nu_default_kernel-99.py311.nbi").write_bytes(b"")
+    (tmp_path / _target.STAMP_NAME).write_text("0" * 64 + "\n")
+    assert not _select._cached("nu_default_kernel")
+    (tmp_path / _target.STAMP_NAME).write_text(_target.sources_digest() + "\n")
+    assert _select._cached("nu_default_kernel")

@@ -86,9 +86,23 @@ def _loaded(name: str) -> bool:
 
 
 def _cached(name: str) -> bool:
+    """Numba's cache holds ``name`` compiled from the present kernel sources: an index file, next to a stamp that
+    records the sources' digest (:func:`._target.refresh_stale_cache` drops the files of a stale directory at the
+    first use, so a cache without the right stamp means a compile)."""
+    from ._target import STAMP_NAME, _state, sources_digest
+
+    digest = _state.get("digest") or sources_digest()
+    _state["digest"] = digest
     pattern = f"{KERNEL_MODULES[name]}.{name}-*.nbi"
-    return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
-               for d in _cache_dirs())
+    for d in _cache_dirs():
+        for f in glob.glob(os.path.join(d, pattern)) + glob.glob(os.path.join(d, "**", pattern), recursive=True):
+            try:
+                with open(os.path.join(os.path.dirname(f), STAMP_NAME)) as stamp:
+                    if stamp.read().strip() == digest:
+                        return True
+            except OSError:
+                continue
+    return False
 
 
 def kernels_state(names: Sequence[str]) -> str:
