@@ -24,6 +24,8 @@ the two-point map, ``p = S^-/(2b)`` with ``S = Σ_i y^{(i)}_0`` for the one-poin
 
 from __future__ import annotations
 
+import glob
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -268,7 +270,8 @@ class ChainTwoPointBacklund(_ChainMap):
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
         """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
         :meth:`jetgaudin.TwoPointBacklund.prepare_kernels`: a message with the expected time first, one when done;
-        nothing when it is loaded already or the NumPy route is used).  Returns a ``CompileReport`` or ``None``."""
+        nothing when it is loaded already, in Numba's cache (loaded quietly, timed) or the NumPy route is used).
+        Returns a ``CompileReport`` or ``None``."""
         if self.resolved_backend(steps, X) is not Backend.COMPILED or np.size(X) == 0:
             return None
         from ..backlund._compiled import kernels
@@ -276,9 +279,11 @@ class ChainTwoPointBacklund(_ChainMap):
 
         x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[:1]
         loaded = bool(getattr(_kernels.run_orbit, "signatures", None))
+        where = getattr(getattr(_kernels.run_orbit, "_cache", None), "_cache_path", None)  # Numba's cache directory
+        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, "_kernels.run_orbit-*.nbi")))
         compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
         return kernels().prepare_call(("gaudin.run_orbit",), loaded, _CHAIN_COMPILE_S,
-                                      lambda: compiled.advance(x0, None, 0), notify)
+                                      lambda: compiled.advance(x0, None, 0), notify, cached)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """As :meth:`_ChainMap.advance`; on the compiled route (``backend``, :meth:`resolved_backend`) the steps run

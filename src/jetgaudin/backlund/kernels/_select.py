@@ -194,13 +194,17 @@ def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], N
 
 
 def prepare_call(kernels: tuple[str, ...], loaded: bool, expected: float, call: Callable[[], None],
-                 notify: Callable[[str], None] | None = None) -> CompileReport:
+                 notify: Callable[[str], None] | None = None, cached: bool = False) -> CompileReport:
     """Make one compile visible for kernels outside this package (the chains' kernel): unless ``loaded``, say
     that ``kernels`` are being compiled or loaded with the ``expected`` seconds, run ``call()`` (which compiles
-    them), and say when they are ready.  Returns a :class:`CompileReport` (state ``"loaded"`` or ``"compiled"``:
-    compiled or loaded from Numba's cache, not told apart)."""
+    them), and say when they are ready; ``cached`` (Numba's cache holds them): load them without a message.
+    Returns a :class:`CompileReport` (state ``"loaded"``, ``"cached"`` or ``"compiled"``)."""
     if loaded:
         return CompileReport(tuple(kernels), "loaded", 0.0)
+    if cached:
+        t0 = time.perf_counter()
+        call()
+        return CompileReport(tuple(kernels), "cached", time.perf_counter() - t0)
     say = _stderr if notify is None else notify
     say(f"jetgaudin: compiling (or loading from Numba's cache) the kernels {', '.join(kernels)} (about "
         f"{expected:.2g} s the first time, once per installation) ...")
