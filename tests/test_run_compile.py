@@ -190,3 +190,19 @@ def test_a_cache_of_other_kernel_sources_counts_as_cold(tmp_path, monkeypatch):
     assert not _select._cached("nu_default_kernel")
     (tmp_path / _target.STAMP_NAME).write_text(_target.sources_digest() + "\n")
     assert _select._cached("nu_default_kernel")
+
+
+def test_a_directory_filled_during_the_compile_is_refused(tmp_path, monkeypatch):
+    # the directory is checked before the compile (a fast refusal) and again after it: another writer may have
+    # used it meanwhile, and its files must not be taken over
+    out = tmp_path / "run"
+
+    def prepare_kernels(self, X, steps, notify=None):
+        out.mkdir()
+        (out / "other.txt").write_text("written by someone else during the compile\n")
+        return CompileReport(("run_orbit3",), "cold", 0.1)
+
+    monkeypatch.setattr(jg.TwoPointBacklund, "prepare_kernels", prepare_kernels)
+    with pytest.raises(jg.RunDirectoryError, match="not empty"):
+        runlayer.start(_spec(100), out, notify=lambda m: None)
+    assert sorted(p.name for p in out.iterdir()) == ["other.txt"]

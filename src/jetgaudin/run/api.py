@@ -246,6 +246,8 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
     spec = _resolved(spec)
     compile_s = _prepare(spec, spec.X0, out_dir, notify, options.get("handle_signals", True),
                          f"while compiling the kernels; nothing was written to {out_dir}")
+    if compile_s:  # the directory may have changed during the compile: checked again, as just before it
+        _fs.check_new_run_dir(out_dir, overwrite=overwrite)
     _fs.make_run_dir(out_dir)
     with _fs.RunDirLock(out_dir):
         if overwrite:
