@@ -29,7 +29,7 @@ def _harness():
 
 
 def _parts(text: str) -> str:
-    letters = "abcdefghij"
+    letters = _harness().PARTS
     if not text or set(text) - set(letters):
         raise argparse.ArgumentTypeError(f"use letters of '{letters}', got {text!r}")
     return text
@@ -38,7 +38,7 @@ def _parts(text: str) -> str:
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
-    p.add_argument("--parts", type=_parts, default="abcdefghij", help="letters of 'abcdefghij' (default: all)")
+    p.add_argument("--parts", type=_parts, default="abcdefghijkl", help="letters of 'abcdefghijkl' (default: all)")
     p.add_argument("--markdown", type=Path, help="write the table as Markdown to this file")
     return p
 

@@ -9,7 +9,8 @@ timings use wall time.  No mathematics here: everything numerical comes from the
 
 Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads and
 the flop rate; (e) N = 1..5; (f) the main job in a fresh process; (g) memory of a long run; (h) the fixed cost of
-short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads.
+short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts
+of a call's per-orbit set-up and (l) cold compile kernel by kernel (``setup_parts.py``).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import numpy as np
 __all__ = ["PARTS", "Row", "run_benchmarks", "machine_info", "rows_to_markdown", "rows_to_text"]
 
 #: the letters of the parts, in order
-PARTS = "abcdefghij"
+PARTS = "abcdefghijkl"
 
 X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
 B_APPENDIX2 = 1.0
@@ -389,6 +390,7 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
     package are skipped with a note (echoed).  Returns ``(rows, info)``."""
     extra = _sibling("speed_parts")
     bench_fixed_cost, bench_compile, bench_dask = extra.bench_fixed_cost, extra.bench_compile, extra.bench_dask
+    setup = _sibling("setup_parts")
     info = machine_info()
     rows: list[Row] = []
     plan = [
@@ -404,6 +406,8 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
         ("i", lambda: bench_compile(rows, Row), None),
         ("j", lambda: bench_dask(rows, Row, orbits=10**4 if quick else 10**5, steps=100 if quick else 1000),
          _dask_missing),
+        ("k", lambda: setup.bench_setup(rows, Row, orbits=10**4 if quick else 10**5, repeat=3 if quick else 15), None),
+        ("l", lambda: setup.bench_compile_parts(rows, Row), None),
     ]
     for letters, run, missing in plan:
         if not set(letters) & set(parts):

@@ -57,4 +57,4 @@ def test_bench_markdown_rows():
     h = bench.harness()
     md = h.rows_to_markdown([h.Row("i", "compile", 9.5, "s", "note")], {"Model name": "AMD EPYC"})
     assert "| i | compile | 9.5 | s | note |" in md and "AMD EPYC" in md
-    assert set(h.PARTS) == set("abcdefghij")
+    assert set(h.PARTS) == set("abcdefghijkl")

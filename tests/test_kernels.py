@@ -163,9 +163,9 @@ def test_prepare_says_what_it_compiles():
     said.clear()
     report = kernels.prepare(9, None, notify=said.append)  # already loaded: nothing to say, no time
     assert report.state == "loaded" and report.seconds == 0.0 and said == []
-    assert report.kernels == ("run_orbit3", "_nu_default_serial")
-    assert kernels.kernel_names(9, True, 10_000) == ("run_lanes3", "_nu_default_batch")
-    assert kernels.kernel_names(12, True, 10) == ("run_batch_generic", "_nu_default_serial")
+    assert report.kernels == ("run_orbit3", "nu_default_kernel")
+    assert kernels.kernel_names(9, True, 10_000) == ("run_lanes3", "nu_default_kernel")
+    assert kernels.kernel_names(12, True, 10) == ("run_batch_generic", "nu_default_kernel")
 
 
 @pytest.mark.parametrize(("steps", "save_every", "match"), [
@@ -281,7 +281,7 @@ def test_warmup_command_says_how_long_it_took():
     from jetgaudin.cli import app
 
     r = CliRunner().invoke(app, ["warmup"])
-    assert r.exit_code == 0 and "warmup: 6 kernels" in r.output and " s" in r.output
+    assert r.exit_code == 0 and "warmup: 5 kernels" in r.output and " s" in r.output
 
 
 def test_a_changed_kernel_source_invalidates_every_cached_kernel(tmp_path):

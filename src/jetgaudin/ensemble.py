@@ -157,6 +157,21 @@ class BatchBacklund(Map):
         other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
         return BatchBacklund(self.b, self.eta, other, self.scheduler, self.chunk_size)
 
+    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+        """Compile (or load) the kernels of :meth:`advance` on ``X`` (B, 3N) visibly, as
+        :meth:`jetgaudin.TwoPointBacklund.prepare_kernels`; on a Dask cluster only the branch rule runs here, and
+        what the workers compile is announced (:func:`jetgaudin.backlund.kernels.remote_notice`)."""
+        import sys
+
+        from .backlund._compiled import kernels
+
+        K = kernels()
+        n, B = X.shape[-1], max(1, len(X))
+        if self.scheduler is not None:
+            msg = K.remote_notice(n, B)
+            notify(msg) if notify is not None else print(msg, file=sys.stderr, flush=True)
+        return K.prepare(n, B, notify=notify, step=self.scheduler is None, announce_load=False)
+
     def describe(self) -> dict:
         return {"kind": "two_point_batch", "b": self.b.tolist(), "eta": [[e.real, e.imag] for e in self.eta],
                 "branch": self.branch.value}

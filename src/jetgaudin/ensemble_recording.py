@@ -115,14 +115,14 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
                  max_chunk_bytes: int = 64 << 20, max_chunk_steps: int | None = None, scheduler: Any = None,
                  chunk_size: int | None = None, expect: dict | None = None,
                  progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
-                 overwrite: bool = False) -> _api.RunResult:
+                 overwrite: bool = False, notify: Callable[[str], None] | None = None) -> _api.RunResult:
     """Iterate an ensemble and stream it into ``out_dir`` (see the module doc).
 
     ``resume=True`` continues the run recorded in ``out_dir`` (``expect``: names of ``run.json["inputs"]`` mapped
     to the values the user gave; a difference is refused).  ``scheduler``: a Dask scheduler address or
     ``distributed.Client`` (each kernel call is split over the cluster by orbits; same bits).  A kernel call holds
     at most ``max_chunk_bytes`` of saved states and at most ``max_chunk_steps`` steps; how the run is cut never
-    changes the result.
+    changes the result.  ``notify(message)``: where the compile messages go (:func:`jetgaudin.run.start`).
 
     >>> import tempfile, numpy as np
     >>> from jetgaudin.ensemble import sample_on_leaf
@@ -140,7 +140,7 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
     if isinstance(checkpoint_seconds, bool) or not (0 <= checkpoint_seconds < float("inf")):
         raise InvalidParameterError("checkpoint_seconds must be a finite number >= 0")
     opts: dict[str, Any] = dict(progress=progress, handle_signals=handle_signals, max_chunk_steps=max_chunk_steps,
-                max_chunk_bytes=max_chunk_bytes)
+                max_chunk_bytes=max_chunk_bytes, notify=notify)
     if not resume and spec is None:
         raise InvalidParameterError("spec is required for a new run")
     rs = None if resume or spec is None else spec.run_spec(max_drift=max_drift,

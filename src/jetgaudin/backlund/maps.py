@@ -260,6 +260,20 @@ class TwoPointBacklund(Map):
             return self.backend
         return Backend(auto_kernel(steps, X.shape[-1], X.shape[:-1]))
 
+    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+        """Compile (or load) the kernels that :meth:`advance` of ``steps`` steps from ``X`` will call, saying so first
+        with the expected time (``notify(message)``; default: stderr) and when done; nothing is said when they are
+        loaded already, found in Numba's cache (loaded in a fraction of a second, timed) or the NumPy route is used.
+        Returns a :class:`~jetgaudin.backlund.kernels.CompileReport` (``None`` on the NumPy route).  The run layer
+        calls it before a run, so that compile time is visible and apart from the stepping rate; :meth:`iterate`
+        and :meth:`advance` compile silently on first use."""
+        X, _ = as_state(X)
+        if X.size == 0 or self.resolved_backend(steps, X) is not Backend.COMPILED:
+            return None
+        K = _compiled.kernels()
+        return K.prepare(X.shape[-1], None if X.ndim == 1 else int(np.prod(X.shape[:-1])), notify=notify,
+                         announce_load=False)
+
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` steps from ``X`` ``(..., 3N)`` continuing from ``carry = ν1`` (``None``: the branch rule at
         ``X``); rows every ``save_every`` steps.  NumPy route: a loop over :meth:`step` (imaginary residue of
@@ -290,7 +304,7 @@ class TwoPointBacklund(Map):
             out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
                                                  want_drift=False)
             return out, final, np.complex128(nu)
-        out, final, _, nu = K.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every)
+        out, final, _, nu = K.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every, want_drift=False)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
         return orbit, final.reshape(X.shape), nu.reshape(lead)
 
@@ -311,7 +325,8 @@ class TwoPointBacklund(Map):
         loaded in the process, or from 2000 orbit-steps on when Numba's on-disk cache holds them (loading costs
         about 1000 NumPy steps), or from 20000 on when they must first be compiled (about 6 s); NumPy
         otherwise).  A batch ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both
-        routes).
+        routes).  The compiled route compiles its kernels silently at first use (a library call prints nothing);
+        call :meth:`prepare_kernels` first to see it and time it apart (the run layer and the CLI do).
         """
         backend = self.backend if kernel is None else Backend.parse(kernel)
         X, _ = as_state(X0)

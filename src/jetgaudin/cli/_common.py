@@ -49,6 +49,17 @@ NoPlotsOption = Annotated[bool, typer.Option("--no-plots", help="do not draw the
 CheckpointOption = Annotated[
     float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
 ]
+SaveEveryOption = Annotated[
+    str | None, typer.Option("--save-every", help="save every k-th step (and the last) [default: 1]")
+]
+InitFromOption = Annotated[
+    str | None,
+    typer.Option("--init-from", help="start from the last saved state(s) of this run directory (an orbit run: also "
+                 "its b, eta and branch unless given)"),
+]
+ResumeOption = Annotated[
+    str | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
+]
 
 class CliInputError(Exception):
     """Bad command-line input: reported as one line on stderr, exit code 2."""
@@ -348,6 +359,23 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
                 EXIT_FAILED,
             )
         return False
+
+
+def compile_message(msg: str) -> None:
+    """Where a run's compile messages go (``notify`` of :func:`jetgaudin.run.start`): one line on stderr, before
+    the progress bar appears (the library decides what to say and when)."""
+    typer.echo(msg, err=True)
+
+
+def timing_text(res) -> str:
+    """``<s> s stepping (<rate> steps/s)[; kernels compiled or loaded in <s> s, not in the rate]`` of a
+    :class:`jetgaudin.run.RunResult` (the rate of this session: compile/load time excluded)."""
+    unit = "steps/s" if res.spec.B == 1 and res.spec.X0.ndim == 1 else "orbit-steps/s"
+    rate = res.step_rate
+    text = f"{res.elapsed:.3g} s stepping" + (f" ({rate:.3g} {unit})" if math.isfinite(rate) else "")
+    if res.compile_seconds > 0:
+        text += f"; kernels compiled or loaded in {res.compile_seconds:.1f} s, not in the rate"
+    return text
 
 
 def run_with_progress(description: str, progress: bool | None, run):

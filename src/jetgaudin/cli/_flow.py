@@ -15,30 +15,7 @@ from .. import run as runlayer
 from ..flows import FlowMap
 from ..flows import Method as FlowMethod
 from . import _chains, app
-from ._common import (
-    APPENDIX2_B,
-    APPENDIX2_ETA,
-    APPENDIX2_INIT,
-    APPENDIX2_STEPS,
-    EXIT_FAILED,
-    CliInputError,
-    NoPlotsOption,
-    OverwriteOption,
-    ProgressOption,
-    after_run,
-    blame,
-    check_state_scale,
-    console,
-    fail,
-    integrals_table,
-    out_path,
-    parse_b,
-    parse_eta,
-    parse_init,
-    parse_steps,
-    reported_errors,
-    run_with_progress,
-)
+from . import _common as cm
 
 
 class Hamiltonian(StrEnum):
@@ -53,10 +30,10 @@ class Method(StrEnum):
 
 @app.command()
 def flow(
-    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = str(APPENDIX2_B),
-    eta: Annotated[str, typer.Option("--eta", help="η of G_η (and of the map for --compare)")] = APPENDIX2_ETA,
-    steps: Annotated[str, typer.Option("--steps", help="number of samples after t = 0")] = str(APPENDIX2_STEPS),
-    init: Annotated[str, typer.Option("--init", help="3N comma-separated numbers y_0, y_1, ...")] = APPENDIX2_INIT,
+    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = str(cm.APPENDIX2_B),
+    eta: Annotated[str, typer.Option("--eta", help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
+    steps: Annotated[str, typer.Option("--steps", help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
+    init: Annotated[str, typer.Option("--init", help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
     hamiltonian: Annotated[
         Hamiltonian,
         typer.Option(
@@ -81,9 +58,9 @@ def flow(
     init_from_dir: Annotated[
         str | None, typer.Option("--init-from", help="start from the last saved state of this run directory")
     ] = None,
-    overwrite: OverwriteOption = False,
-    progress: ProgressOption = None,
-    no_plots: NoPlotsOption = False,
+    overwrite: cm.OverwriteOption = False,
+    progress: cm.ProgressOption = None,
+    no_plots: cm.NoPlotsOption = False,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η")
                      ] = None,
 ) -> None:
@@ -93,57 +70,57 @@ def flow(
     integrals.png, run.json; with --compare also orbit.csv / orbit.h5 (the map) and compare.csv
     (n, |X_map(n) − X_flow(n)|), the orbit drawn as points over the flow drawn as lines.
     """
-    con = console()
-    with reported_errors():
-        bf = parse_b(b) if sites is None else _chains.parse_chain_b(b)
-        eta_c = parse_eta(eta, pole_at_zero=sites is None)
-        n_steps = parse_steps(steps)
+    con = cm.console()
+    with cm.reported_errors():
+        bf = cm.parse_b(b) if sites is None else _chains.parse_chain_b(b)
+        eta_c = cm.parse_eta(eta, pole_at_zero=sites is None)
+        n_steps = cm.parse_steps(steps)
         if init_from_dir is not None:
             from ._orbit import init_from
 
             X0 = init_from(init_from_dir)[0]
         else:
-            X0 = np.array(parse_init(init))
+            X0 = np.array(cm.parse_init(init))
         N = len(X0) // 3
         model = None if sites is None else _chains.chain_model(sites, bf)
         if model is not None:
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
             if hamiltonian is not Hamiltonian.interpolating:
-                raise CliInputError("--sites: --hamiltonian physical (H_2/2 of eq. (H)) is the one-site top's; a chain "
-                                    "flows under its G_η: use --hamiltonian interpolating")
+                raise cm.CliInputError("--sites: --hamiltonian physical (H_2/2 of eq. (H)) is the one-site top's; a "
+                                       "chain flows under its G_η: use --hamiltonian interpolating")
         else:
-            check_state_scale(X0, bf)
+            cm.check_state_scale(X0, bf)
         if not (0 < rtol < 1):
-            raise CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
+            raise cm.CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
-            raise CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
+            raise cm.CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:
-            raise CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
+            raise cm.CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
         if model is not None:
             B = _chains.chain_map(model, eta_c, "default", "numpy")  # the chain map's rules for eta
-            with blame("--eta"):
+            with cm.blame("--eta"):
                 H = model.interpolating_flow_hamiltonian(X0, eta_c)
-            with blame("--dt"):
+            with cm.blame("--dt"):
                 fm = _chains.chain_flow_map(H, dt, method.value, rtol)
         else:
-            with blame("--eta"):
+            with cm.blame("--eta"):
                 B = jg.TwoPointBacklund(bf, eta_c)  # the map's rules for eta (Im eta = 0: G_eta = 0, refused)
         if model is not None:
             pass
         elif hamiltonian is Hamiltonian.interpolating:
-            with blame("--eta"):
+            with cm.blame("--eta"):
                 H = jg.interpolating_flow_hamiltonian(X0, bf, eta_c)
         else:
             H = jg.physical_hamiltonian(N, bf)
         if model is None:
-            with blame("--dt"):
+            with cm.blame("--dt"):
                 fm = FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
-        with blame("--init"):
+        with cm.blame("--init"):
             spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
                                     program="jetgaudin flow")
-        out_dir = out_path(out, "jetgaudin-flow")
-        res = run_with_progress("flow", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
-                                                                             progress=bar))
+        out_dir = cm.out_path(out, "jetgaudin-flow")
+        res = cm.run_with_progress("flow", progress, lambda bar: runlayer.start(
+            spec, out_dir, overwrite=overwrite, progress=bar, notify=cm.compile_message))
         files = list(res.files)
         names = res.record.get("integral_names") or runlayer.integral_names(N)
 
@@ -193,9 +170,9 @@ def flow(
             update_run(out_dir, files=[Path(f).name for f in files + written], plots=not no_plots, **extra)
             return written, extra
 
-        written, extra = after_run(out_dir, "the figures and tables", extras)
+        written, extra = cm.after_run(out_dir, "the figures and tables", extras)
         files += written
-        con.print(integrals_table(names, res.integrals0, res.max_drift_abs, res.max_drift_rel,
+        con.print(cm.integrals_table(names, res.integrals0, res.max_drift_abs, res.max_drift_rel,
                                   title=f"integrals along the flow ({hamiltonian.value}, t = 0 .. {n_steps * dt:g}, "
                                         f"{method.value})"))
         if compare:
@@ -203,7 +180,7 @@ def flow(
                 f"distance map - flow of G_η: max {extra['compare']['max_distance']:.3e}, "
                 f"at n = {n_steps}: {extra['compare']['final_distance']:.3e}"
             )
-        con.print(f"status: {res.status}; {res.rows} rows; {res.elapsed:.2f} s")
+        con.print(f"status: {res.status}; {res.rows} rows; {cm.timing_text(res)}")
         con.print("wrote: " + ", ".join(str(f) for f in files))
         if res.failed:
-            fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
+            cm.fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", cm.EXIT_FAILED)

@@ -20,12 +20,16 @@ from ._common import (
     Branch,
     CheckpointOption,
     CliInputError,
+    InitFromOption,
     NoPlotsOption,
     OverwriteOption,
     ProgressOption,
+    ResumeOption,
+    SaveEveryOption,
     after_run,
     blame,
     check_state_scale,
+    compile_message,
     console,
     fail,
     integrals_table,
@@ -38,6 +42,7 @@ from ._common import (
     reported_errors,
     resume_dir,
     run_with_progress,
+    timing_text,
 )
 
 
@@ -73,7 +78,7 @@ def print_summary(con, res: runlayer.RunResult, files) -> None:
         f"{res.sphere_max_deviation:.3e}"
     )
     con.print(f"max imaginary residue of the real map: {res.max_imag_residue:.3e}")
-    con.print(f"status: {res.status}; {res.rows} rows; kernel {res.kernel}; {res.elapsed:.2f} s")
+    con.print(f"status: {res.status}; {res.rows} rows; kernel {res.kernel}; {timing_text(res)}")
     con.print("wrote: " + ", ".join(str(f) for f in files))
 
 
@@ -124,19 +129,11 @@ def orbit(
         ),
     ] = None,
     out: Annotated[str | None, typer.Option("--out", help="output directory [default: ./jetgaudin-orbit]")] = None,
-    save_every: Annotated[
-        str | None, typer.Option("--save-every", help="save every K-th step (and the last) [default: 1]")
-    ] = None,
-    init_from_dir: Annotated[
-        str | None,
-        typer.Option("--init-from", help="start from the last saved state of this run directory (its b, eta and "
-                     "branch unless given)"),
-    ] = None,
+    save_every: SaveEveryOption = None,
+    init_from_dir: InitFromOption = None,
     no_csv: Annotated[bool, typer.Option("--no-csv", help="do not write orbit.csv (orbit.h5 only)")] = False,
     no_plots: NoPlotsOption = False,
-    resume: Annotated[
-        str | None, typer.Option("--resume", help="continue the interrupted or killed run in this directory")
-    ] = None,
+    resume: ResumeOption = None,
     overwrite: OverwriteOption = False,
     max_drift: Annotated[
         float | None,
@@ -218,7 +215,7 @@ def orbit(
             with blame("--checkpoint-seconds"):
                 runlayer.RunSpec.check_checkpoint_seconds(checkpoint_seconds)
             res = run_with_progress("orbit", progress, lambda bar: runlayer.resume(
-                out_dir, expect=expect, program="jetgaudin orbit", progress=bar, **opts))
+                out_dir, expect=expect, program="jetgaudin orbit", progress=bar, notify=compile_message, **opts))
             plots = not no_plots and res.record.get("plots", True)
         else:
             out_dir = out_path(out, "jetgaudin-orbit")
@@ -248,7 +245,8 @@ def orbit(
                                         expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
                                         **opts)
             res = run_with_progress("orbit", progress, lambda bar: runlayer.start(
-                spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar))
+                spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar,
+                notify=compile_message))
             plots = not no_plots
         files = list(res.files)
 

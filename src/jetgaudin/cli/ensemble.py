@@ -28,9 +28,13 @@ from ._common import (
     Branch,
     CheckpointOption,
     CliInputError,
+    InitFromOption,
     OverwriteOption,
     ProgressOption,
+    ResumeOption,
+    SaveEveryOption,
     blame,
+    compile_message,
     console,
     fail,
     one_line,
@@ -42,6 +46,7 @@ from ._common import (
     reported_errors,
     resume_dir,
     run_with_progress,
+    timing_text,
 )
 
 #: largest --input file read (a CSV of 10^6 states of N = 3 is ~0.2 GB)
@@ -125,20 +130,13 @@ def ensemble_command(
     b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = "1.0",
     eta: Annotated[str, typer.Option("--eta", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
     steps: Annotated[str | None, typer.Option("--steps", help="number of steps [default: 100]")] = None,
-    save_every: Annotated[
-        str | None, typer.Option("--save-every", help="keep every k-th state (and the last) [default: 1]")
-    ] = None,
-    init_from_dir: Annotated[
-        str | None,
-        typer.Option("--init-from", help="start from the last saved states of this run directory (orbit or ensemble)"),
-    ] = None,
+    save_every: SaveEveryOption = None,
+    init_from_dir: InitFromOption = None,
     out: Annotated[
         str | None,
         typer.Option("--out", help="output directory (ensemble.h5, run.json) [default: ./jetgaudin-ensemble]"),
     ] = None,
-    resume: Annotated[
-        str | None, typer.Option("--resume", help="continue the interrupted or killed ensemble run in this directory")
-    ] = None,
+    resume: ResumeOption = None,
     overwrite: OverwriteOption = False,
     max_drift: Annotated[
         float | None,
@@ -190,7 +188,7 @@ def ensemble_command(
             if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
             res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
-                None, out_dir, resume=True, expect=expect, progress=bar, **common))
+                None, out_dir, resume=True, expect=expect, progress=bar, notify=compile_message, **common))
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
@@ -233,7 +231,7 @@ def ensemble_command(
                                        expect.get("branch", "default"))
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
-                spec, out_dir, overwrite=overwrite, progress=bar, **common))
+                spec, out_dir, overwrite=overwrite, progress=bar, notify=compile_message, **common))
         _report(res, show)
         if res.failed:
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
@@ -267,7 +265,7 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
     return run_with_progress("ensemble", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
-                                                                              progress=bar))
+                                                                              progress=bar, notify=compile_message))
 
 
 def _check_memory(orbits: int, n_state: int) -> None:
@@ -315,9 +313,8 @@ def _report(res, show):
         t.add_row(str(i), *[f"{d:.2e}" for d in res.drift[i]])
     con.print(t)
     md = res.max_drift
-    rate = B * steps / res.elapsed if res.elapsed > 0 else float("inf")
     con.print(
-        f"{B} orbits x {steps} steps in {res.elapsed:.3f} s ({rate:.3g} orbit-steps/s); "
+        f"{B} orbits x {steps} steps: {timing_text(res)}; "
         f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}" if B else
         f"{B} orbits: nothing to iterate"
     )

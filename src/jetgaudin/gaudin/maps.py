@@ -24,6 +24,8 @@ the two-point map, ``p = S^-/(2b)`` with ``S = Σ_i y^{(i)}_0`` for the one-poin
 
 from __future__ import annotations
 
+import glob
+import os
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -50,6 +52,8 @@ _ID = np.eye(2, dtype=complex)
 #: ``Backend.AUTO`` runs the compiled kernel from this many orbit-steps on (compiling it costs a few seconds
 #: the first time, ~10^4 NumPy steps of a small chain; Numba caches it on disk afterwards)
 _AUTO_MIN_WORK = 20000
+#: expected first-use compile time of the chain kernel (seconds, idle core of docs/performance.md's machine)
+_CHAIN_COMPILE_S = 10.0
 
 
 def _check_model(model) -> None:
@@ -262,6 +266,24 @@ class ChainTwoPointBacklund(_ChainMap):
             return self.backend
         work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
         return Backend.COMPILED if work >= _AUTO_MIN_WORK else Backend.NUMPY
+
+    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+        """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
+        :meth:`jetgaudin.TwoPointBacklund.prepare_kernels`: a message with the expected time first, one when done;
+        nothing when it is loaded already, in Numba's cache (loaded quietly, timed) or the NumPy route is used).
+        Returns a ``CompileReport`` or ``None``."""
+        if self.resolved_backend(steps, X) is not Backend.COMPILED or np.size(X) == 0:
+            return None
+        from ..backlund._compiled import kernels
+        from . import _kernels
+
+        x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[:1]
+        loaded = bool(getattr(_kernels.run_orbit, "signatures", None))
+        where = getattr(getattr(_kernels.run_orbit, "_cache", None), "_cache_path", None)  # Numba's cache directory
+        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, "_kernels.run_orbit-*.nbi")))
+        compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
+        return kernels().prepare_call(("gaudin.run_orbit",), loaded, _CHAIN_COMPILE_S,
+                                      lambda: compiled.advance(x0, None, 0), notify, cached)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """As :meth:`_ChainMap.advance`; on the compiled route (``backend``, :meth:`resolved_backend`) the steps run

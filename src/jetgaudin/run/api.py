@@ -15,7 +15,7 @@ import numpy as np
 from .. import _fs
 from .._errors import InvalidParameterError, JetGaudinError, RecordingError, RunDirectoryError
 from ..maps import Backend, Map, map_from_description
-from .driver import Driver, Position, RunInterrupted
+from .driver import CompileInterrupted, Driver, Position, RaiseOnSignal, RunInterrupted
 from .files import (
     ENSEMBLE_H5,
     ORBIT_CSV,
@@ -43,6 +43,10 @@ class RunResult:
     ``drift_abs`` ``(..., k)``: ``max |I_k(n) − I_k(0)|`` over the checked states (saved rows and chunk ends);
     ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``
     (absolute where ``I_k(0) = 0``).  ``spec``: the run's :class:`RunSpec`; ``record``: the final ``run.json``.
+    ``elapsed``: wall seconds of stepping over all sessions of the run (compile/load time excluded).  This
+    session (the call that returned it): ``compile_seconds`` compiling or loading the kernels before the loop
+    (0 when they were loaded), ``session_steps`` steps done in ``session_seconds`` of stepping, and
+    :attr:`step_rate` (orbit-steps per second, compile/load excluded).
     """
 
     out_dir: Path
@@ -61,6 +65,17 @@ class RunResult:
     kernel: str
     spec: RunSpec
     record: dict
+    compile_seconds: float = 0.0
+    session_steps: int = 0
+    session_seconds: float = 0.0
+
+    @property
+    def step_rate(self) -> float:
+        """Orbit-steps per second of this session's stepping (orbits × steps / ``session_seconds``; compile and
+        load time excluded); ``nan`` when no step was done."""
+        if self.session_steps <= 0 or self.session_seconds <= 0:
+            return float("nan")
+        return self.session_steps * self.spec.B / self.session_seconds
 
     @property
     def max_drift_abs(self) -> np.ndarray:
@@ -212,22 +227,28 @@ def _resolved(spec: RunSpec) -> RunSpec:
 
 # --------------------------------------------------------------------------------------- entry points
 def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record: dict | None = None,
-          **options: Any) -> RunResult:
+          notify: Callable[[str], None] | None = None, **options: Any) -> RunResult:
     """Run ``spec`` into the new run directory ``out_dir``.
 
     The directory is checked before anything is written (:func:`jetgaudin._fs.check_new_run_dir`: a directory
     holding a run or other files is refused unless ``overwrite``; a directory in use by another writer always) and
     locked for the run's life.  ``options``: ``progress(n, steps)``, ``handle_signals``, ``max_chunk_steps``,
     ``max_chunk_bytes``, ``chunk_rows`` (how a run is cut never changes its bits).  ``record``: extra top-level
-    fields of ``run.json`` (e.g. the command line's ``plots`` choice, honoured by a resume).
+    fields of ``run.json`` (e.g. the command line's ``plots`` choice, honoured by a resume).  ``notify(message)``:
+    where the compile messages go (the map's kernels are compiled or loaded before the loop, with a message
+    giving the expected time and one when done; default: stderr; nothing is said when they are loaded).
 
     Returns a :class:`RunResult`; raises :class:`RunInterrupted` on SIGINT/SIGTERM (checkpoint written),
     :class:`jetgaudin.RunDirectoryError` / :class:`jetgaudin.RunLockedError` for a refused directory.
     """
     out_dir = Path(out_dir)
     _fs.check_new_run_dir(out_dir, overwrite=overwrite)
-    _fs.make_run_dir(out_dir)
     spec = _resolved(spec)
+    compile_s = _prepare(spec, spec.X0, out_dir, notify, options.get("handle_signals", True),
+                         f"while compiling the kernels; nothing was written to {out_dir}")
+    if compile_s:  # the directory may have changed during the compile: checked again, as just before it
+        _fs.check_new_run_dir(out_dir, overwrite=overwrite)
+    _fs.make_run_dir(out_dir)
     with _fs.RunDirLock(out_dir):
         if overwrite:
             _clear(out_dir)
@@ -235,7 +256,25 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
         run = dict(_new_record(spec, health), **(record or {}))
         store = _open_store(spec, out_dir, run, fresh=True)
         pos = Position(0, spec.X0.copy(), None)
-        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, **options)
+        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, compile_s=compile_s, **options)
+
+
+def _prepare(spec: RunSpec, X: np.ndarray, out_dir: Path, notify: Callable[[str], None] | None,
+             handle_signals: bool, interrupted: str) -> float:
+    """Compile or load the kernels the run's map will call (its ``prepare_kernels``, when it has one), visibly:
+    a message with the expected time first and one when done (``notify``; default: stderr), before the run's
+    loop, so that the stepping rate excludes it.  SIGINT/SIGTERM during the compile stop the command with
+    :class:`RunInterrupted` (message ``interrupted``; nothing of the run is written by then).  Returns the
+    seconds spent (0 when the kernels were loaded or the map has no compiled route)."""
+    prepare = getattr(spec.map, "prepare_kernels", None)
+    if prepare is None:
+        return 0.0
+    try:
+        with RaiseOnSignal(handle_signals):
+            report = prepare(X, spec.steps, notify)
+    except CompileInterrupted as exc:
+        raise RunInterrupted(exc.signum, 0, out_dir, command=spec.program, message=interrupted) from None
+    return 0.0 if report is None else float(report.seconds)
 
 
 def _clear(out_dir: Path) -> None:
@@ -253,8 +292,9 @@ def _clear(out_dir: Path) -> None:
 
 
 def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: Health, elapsed0: float, *,
-           first: bool, progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
-           max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20, chunk_rows: int = 4096) -> RunResult:
+           first: bool, compile_s: float = 0.0, progress: Callable[[int, int], None] | None = None,
+           handle_signals: bool = True, max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20,
+           chunk_rows: int = 4096) -> RunResult:
     if isinstance(store, EnsembleStore):
         store.drift_rel = health.relative
         original = store.checkpoint
@@ -264,7 +304,14 @@ def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: He
             original(step, X, carry, summary)
 
         store.checkpoint = checkpoint  # type: ignore[method-assign]
-    driver = Driver(spec, store, pos, health, summary=_summary(spec), elapsed0=elapsed0, progress=progress,
+    layout_summary = _summary(spec)
+    compile_total = float(store.run.get("compile_seconds", 0.0)) + compile_s  # over the sessions of the run
+
+    def summary(h: Health, elapsed: float) -> dict:
+        return dict(layout_summary(h, elapsed), compile_seconds=compile_total)
+
+    n0 = pos.n
+    driver = Driver(spec, store, pos, health, summary=summary, elapsed0=elapsed0, progress=progress,
                     handle_signals=handle_signals, max_chunk_steps=max_chunk_steps, max_chunk_bytes=max_chunk_bytes,
                     chunk_rows=chunk_rows, first=first)
     try:
@@ -279,21 +326,24 @@ def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: He
         rows=int(store.run["checkpoint"]["rows"]), integrals0=health.I0, drift_abs=health.drift.copy(),
         drift=health.relative, max_imag_residue=health.imag, sphere_radius0=health.r0,
         sphere_max_deviation=health.sphere, elapsed=out.elapsed, files=_files(spec, out_dir),
-        kernel=spec.map.backend.value, spec=spec, record=store.run)
+        kernel=spec.map.backend.value, spec=spec, record=store.run, compile_seconds=compile_s,
+        session_steps=out.last_safe_step - n0, session_seconds=out.elapsed - elapsed0)
     if out.status is RunStatus.INTERRUPTED:
         raise RunInterrupted(out.signum, out.last_safe_step, out_dir, command=spec.program, result=result)
     return result
 
 
 def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_seconds: float | None = None,
-           map_options: dict | None = None, program: str | None = None, **options: Any) -> RunResult:
+           map_options: dict | None = None, program: str | None = None,
+           notify: Callable[[str], None] | None = None, **options: Any) -> RunResult:
     """Continue the run recorded in ``out_dir`` from its last durable checkpoint (bit for bit the uninterrupted run).
 
     ``expect`` maps names of ``run.json["inputs"]`` to the values the user gave: a difference is refused with
     :class:`jetgaudin.RecordingError`.  The checkpoint is cross-checked against the last saved row (step, state bits
     when the checkpoint is on a row, the integrals, and ``ν1`` against the branch rule at the checkpoint state).
     ``map_options``: extra fields of an ensemble's map (``scheduler``, ``chunk_size``).  Other ``options`` as in
-    :func:`start`.  ``program``: refuse a run of another command (e.g. an orbit given to ``ensemble --resume``).
+    :func:`start` (``notify``: the compile messages).  ``program``: refuse a run of another command (e.g. an orbit
+    given to ``ensemble --resume``).
     """
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
@@ -324,10 +374,14 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
         store = _open_store(spec, out_dir, run, fresh=False)
         try:
             _cross_check(store, spec, pos, health)
+            compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
+                                 f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
+                                 f"{spec.program} --resume {out_dir}")
         except BaseException:
             store.close()
             raise
-        return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, **options)
+        return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, compile_s=compile_s,
+                      **options)
 
 
 def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float]:

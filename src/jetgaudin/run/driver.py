@@ -36,19 +36,28 @@ class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input
     """The run stopped on SIGINT / SIGTERM after writing a checkpoint (``signum``, ``last_safe_step``)."""
 
     def __init__(self, signum: int, last_safe_step: int, out_dir: Path, command: str = "jetgaudin orbit",
-                 result: Any = None):
+                 result: Any = None, message: str | None = None):
         self.signum = int(signum)
         self.last_safe_step = int(last_safe_step)
         self.out_dir = Path(out_dir)
         self.result = result
         name = signal.Signals(self.signum).name
         super().__init__(
+            f"interrupted by {name} {message}" if message is not None else
             f"interrupted by {name} at step {last_safe_step} (saved); resume with: {command} --resume {out_dir}"
         )
 
     @property
     def exit_code(self) -> int:
         return 128 + self.signum
+
+
+class CompileInterrupted(Exception):  # noqa: N818 - a normal outcome, turned into RunInterrupted by the run layer
+    """SIGINT / SIGTERM arrived while the kernels were being compiled (before anything of the run was written)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = int(signum)
 
 
 class SignalFlag:
@@ -71,6 +80,15 @@ class SignalFlag:
     def __exit__(self, *exc: Any) -> None:
         for s, h in self._old.items():
             signal.signal(s, h)
+
+
+class RaiseOnSignal(SignalFlag):
+    """While compiling kernels (before a run's loop): SIGINT/SIGTERM raise :class:`CompileInterrupted` at the next
+    Python instruction (Numba's compiler is Python, so within a fraction of a second except inside one long LLVM
+    pass).  Main thread only, and only when ``enabled``; the previous handlers are restored on exit."""
+
+    def _handler(self, signum: int, _frame: Any) -> None:
+        raise CompileInterrupted(signum)
 
 
 @dataclass
@@ -124,10 +142,17 @@ class Driver:
         row_bytes = 8 * spec.B * spec.n_state
         self.max_rows = max(1, min(int(chunk_rows), int(max_chunk_bytes) // max(1, row_bytes)))
         self.max_steps = max_chunk_steps
+        self.n_start = pos.n
         self.t_start = time.monotonic()
 
     def summary(self, status: str) -> dict:
-        return dict(self.summary_fn(self.health, self.elapsed()), status=status)
+        """The layout's summary fields, ``status`` and the stepping rate of this session (orbit-steps per second of
+        wall time since the loop started: compile/load time, spent before, is not in it)."""
+        d = dict(self.summary_fn(self.health, self.elapsed()), status=status)
+        dt = time.monotonic() - self.t_start
+        if self.pos.n > self.n_start and dt > 0:
+            d["orbit_steps_per_second"] = (self.pos.n - self.n_start) * self.spec.B / dt
+        return d
 
     def elapsed(self) -> float:
         return self.elapsed0 + time.monotonic() - self.t_start

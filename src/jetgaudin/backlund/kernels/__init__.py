@@ -33,7 +33,6 @@ from typing import Any
 
 from ._drivers import (
     INT64_MAX,
-    NU_PARALLEL_MIN,
     batch_kernel,
     check_counts,
     closed_form_orbit,
@@ -54,6 +53,8 @@ from ._select import (
     kernel_names,
     kernels_state,
     prepare,
+    prepare_call,
+    remote_notice,
     warmup,
 )
 from ._status import STATUS_BRANCH, STATUS_MESSAGES, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL, status_error
@@ -66,7 +67,6 @@ __all__ = [
     "STATUS_NONFINITE",
     "STATUS_MESSAGES",
     "INT64_MAX",
-    "NU_PARALLEL_MIN",
     "KERNEL_MODULES",
     "CompileReport",
     "auto_kernel",
@@ -82,6 +82,8 @@ __all__ = [
     "kernels_state",
     "nu_default",
     "prepare",
+    "prepare_call",
+    "remote_notice",
     "run_batch",
     "run_ensemble",
     "saved_count",

@@ -125,9 +125,9 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
                                           drift, status, fail, nu_last, bool(want_drift))
 
 
-def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True):
+def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_drift=True):
     r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,); never raises on a
-    singular step.
+    singular step.  ``want_drift=False``: the drift pass is skipped (``drift`` is then zeros).
 
     Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,), status (B,), fail (B,))``
     (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit); ``out`` is a transposed
@@ -140,23 +140,25 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True):
     out = np.empty((S, B, n3))
     final = np.empty((B, n3))
     drift = np.empty((B, 2 * (n3 // 3)))
-    status = np.zeros(B, np.int64)
-    fail = np.zeros(B, np.int64)
+    status = np.empty(B, np.int64)  # every entry is written by the kernel
+    fail = np.empty(B, np.int64)
     nu_last = np.empty(B, np.complex128)
-    run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last)
+    run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last,
+                 want_drift)
     return out.transpose(1, 0, 2), final, drift, nu_last, status, fail
 
 
-def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True):
-    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,).
+def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
+    r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,)
+    (``want_drift=False``: no drift pass, ``drift`` zeros).
 
     Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,))``; raises
     :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
     """
-    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
-    bad = np.flatnonzero(status)
-    if bad.size:
-        i = bad[0]
+    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise,
+                                                         want_drift)
+    if status.any():
+        i = int(np.flatnonzero(status)[0])
         raise status_error(status[i], fail[i], i)
     return out, final, drift, nu_last
 
@@ -179,24 +181,18 @@ def iterate_single(x, b, eta, nu0, cont, steps, save_every, *, specialise=True, 
     return out, final, drift, nu
 
 
-#: batches from this size on use the parallel branch-rule kernel (below: no parallel region, whose start-up
-#: costs more than the work and loads the threading layer)
-NU_PARALLEL_MIN = 256
-
-
 def nu_default(X, b, eta, sheet=1):
     r"""Compiled :func:`jetgaudin.nu` (default branch times ``sheet``) for states ``X`` (B, 3N) with per-orbit
-    ``b``, ``eta`` (B,); equal to the NumPy branch rule to round-off.  Raises :class:`jetgaudin.BranchPointError`
-    where the rule is undefined."""
+    ``b``, ``eta`` (B,) (:func:`._branch.nu_default_kernel`); equal to the NumPy branch rule to round-off.  Raises
+    :class:`jetgaudin.BranchPointError` where the rule is undefined."""
     X = np.ascontiguousarray(X, dtype=np.float64)
     B = X.shape[0]
     nu = np.empty(B, np.complex128)
-    ok = np.zeros(B, np.bool_)
-    k = kernel_module("_branch")
-    fn = k._nu_default_batch if B >= NU_PARALLEL_MIN else k._nu_default_serial
-    fn(X, np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(eta, dtype=np.complex128), float(sheet), nu,
-       ok)
-    if not np.all(ok):
+    ok = np.empty(B, np.bool_)
+    kernel_module("_branch").nu_default_kernel(
+        X, np.ascontiguousarray(b, dtype=np.float64), np.ascontiguousarray(eta, dtype=np.complex128), float(sheet),
+        np.empty(2 * (X.shape[1] // 3) + 1), nu, ok)
+    if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         raise BranchPointError(
             f"orbit {i}: nu has a branch point on the vertical segment from Re(eta) to eta (or Re(eta) = 0); "

@@ -24,6 +24,8 @@ __all__ = [
     "kernels_state",
     "auto_kernel",
     "prepare",
+    "prepare_call",
+    "remote_notice",
     "warmup",
 ]
 
@@ -33,8 +35,7 @@ KERNEL_MODULES = {
     "run_orbit": "_generic",
     "run_batch_generic": "_generic",
     "run_lanes3": "_lanes",
-    "_nu_default_serial": "_branch",
-    "_nu_default_batch": "_branch",
+    "nu_default_kernel": "_branch",
 }
 
 #: "auto" uses the compiled kernels once they are loaded, and otherwise from this many orbit-steps on.
@@ -47,14 +48,14 @@ _AUTO_MIN_WORK = 2000
 _AUTO_MIN_WORK_COLD = 20000
 
 #: expected first-use compile time of each kernel in seconds on an idle core of the AMD EPYC of docs/performance.md
-#: (part i measures them; a loaded machine takes 2-3 times longer)
+#: (benchmarks/setup_parts.py measures them, each in a fresh process with an empty cache; a loaded machine takes
+#: 2-3 times longer)
 EXPECTED_COMPILE_S = {
-    "run_orbit3": 6.0,
+    "run_orbit3": 6.5,
     "run_orbit": 6.0,
     "run_batch_generic": 5.0,
-    "run_lanes3": 12.0,
-    "_nu_default_serial": 2.0,
-    "_nu_default_batch": 3.0,
+    "run_lanes3": 23.0,
+    "nu_default_kernel": 2.5,
 }
 #: expected time to load one cached kernel (seconds)
 EXPECTED_LOAD_S = 0.1
@@ -62,13 +63,11 @@ EXPECTED_LOAD_S = 0.1
 
 def kernel_names(n_state: int, batch: bool, batch_size: int = 1, specialise: bool = True) -> tuple[str, ...]:
     """The compiled functions a run calls: the stepping kernel for ``n_state`` = 3N components (a batch or one
-    orbit) and the branch rule for ``ν1`` (the parallel one for ``batch_size`` ≥ ``NU_PARALLEL_MIN``)."""
-    from ._drivers import NU_PARALLEL_MIN
-
+    orbit) and the branch rule for ``ν1`` (one serial kernel for every batch size; ``batch_size`` is kept for
+    callers that name it)."""
     n3 = specialise and int(n_state) == 9
     step = ("run_lanes3" if n3 else "run_batch_generic") if batch else ("run_orbit3" if n3 else "run_orbit")
-    nu = "_nu_default_batch" if batch and int(batch_size) >= NU_PARALLEL_MIN else "_nu_default_serial"
-    return (step, nu)
+    return (step, "nu_default_kernel")
 
 
 def _cache_dirs() -> list[str]:
@@ -87,9 +86,23 @@ def _loaded(name: str) -> bool:
 
 
 def _cached(name: str) -> bool:
+    """Numba's cache holds ``name`` compiled from the present kernel sources: an index file, next to a stamp that
+    records the sources' digest (:func:`._target.refresh_stale_cache` drops the files of a stale directory at the
+    first use, so a cache without the right stamp means a compile)."""
+    from ._target import STAMP_NAME, _state, sources_digest
+
+    digest = _state.get("digest") or sources_digest()
+    _state["digest"] = digest
     pattern = f"{KERNEL_MODULES[name]}.{name}-*.nbi"
-    return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
-               for d in _cache_dirs())
+    for d in _cache_dirs():
+        for f in glob.glob(os.path.join(d, pattern)) + glob.glob(os.path.join(d, "**", pattern), recursive=True):
+            try:
+                with open(os.path.join(os.path.dirname(f), STAMP_NAME)) as stamp:
+                    if stamp.read().strip() == digest:
+                        return True
+            except OSError:
+                continue
+    return False
 
 
 def kernels_state(names: Sequence[str]) -> str:
@@ -132,6 +145,10 @@ def _stderr(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
 
+def _quiet(msg: str) -> None:
+    """Says nothing (loading cached kernels when ``announce_load`` is false)."""
+
+
 def _compile_one(name: str, n_state: int) -> None:
     """Call kernel ``name`` on a dummy input of 0 steps through the driver's argument types (the signature a
     run uses), which compiles it or loads it from the cache."""
@@ -145,9 +162,9 @@ def _compile_one(name: str, n_state: int) -> None:
     elif name in ("run_lanes3", "run_batch_generic"):
         _drivers.run_batch(x[None], [1.0], [2 + 1j], [1 + 0j], False, 0, 1, specialise=name == "run_lanes3")
     else:
-        k = _drivers.kernel_module("_branch")
-        getattr(k, name)(x[None], np.ones(1), np.full(1, 2 + 1j), 1.0, np.empty(1, np.complex128),
-                         np.zeros(1, np.bool_))
+        _drivers.kernel_module("_branch").nu_default_kernel(x[None], np.ones(1), np.full(1, 2 + 1j), 1.0,
+                                                            np.empty(2 * N + 1), np.empty(1, np.complex128),
+                                                            np.empty(1, np.bool_))
 
 
 def _expected(names: Sequence[str], state: str) -> float:
@@ -156,11 +173,14 @@ def _expected(names: Sequence[str], state: str) -> float:
     return sum(EXPECTED_COMPILE_S[n] for n in names if not (_loaded(n) or _cached(n)))
 
 
-def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], None] | None) -> CompileReport:
+def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], None] | None,
+                   announce_load: bool = True) -> CompileReport:
     state = kernels_state(names)
     if state == "loaded":
         return CompileReport(tuple(names), state, 0.0)
     say = _stderr if notify is None else notify
+    if state == "cached" and not announce_load:  # a fraction of a second: timed, not announced
+        say = _quiet
     what = "compiling the" if state == "cold" else "loading the cached"
     say(f"jetgaudin: {what} Numba kernels {', '.join(names)} (about {_expected(names, state):.2g} s"
         + (", once per installation)" if state == "cold" else ")") + " ...")
@@ -173,17 +193,53 @@ def _prepare_names(names: Sequence[str], n_state: int, notify: Callable[[str], N
     return CompileReport(tuple(names), state, dt)
 
 
+def prepare_call(kernels: tuple[str, ...], loaded: bool, expected: float, call: Callable[[], None],
+                 notify: Callable[[str], None] | None = None, cached: bool = False) -> CompileReport:
+    """Make one compile visible for kernels outside this package (the chains' kernel): unless ``loaded``, say
+    that ``kernels`` are being compiled or loaded with the ``expected`` seconds, run ``call()`` (which compiles
+    them), and say when they are ready; ``cached`` (Numba's cache holds them): load them without a message.
+    Returns a :class:`CompileReport` (state ``"loaded"``, ``"cached"`` or ``"compiled"``)."""
+    if loaded:
+        return CompileReport(tuple(kernels), "loaded", 0.0)
+    if cached:
+        t0 = time.perf_counter()
+        call()
+        return CompileReport(tuple(kernels), "cached", time.perf_counter() - t0)
+    say = _stderr if notify is None else notify
+    say(f"jetgaudin: compiling (or loading from Numba's cache) the kernels {', '.join(kernels)} (about "
+        f"{expected:.2g} s the first time, once per installation) ...")
+    t0 = time.perf_counter()
+    call()
+    dt = time.perf_counter() - t0
+    say(f"jetgaudin: kernels ready in {dt:.1f} s")
+    return CompileReport(tuple(kernels), "compiled", dt)
+
+
+def remote_notice(n_state: int = 9, batch_size: int = 2, *, specialise: bool = True) -> str:
+    """What a run on a Dask cluster says before its first tasks: the workers load or compile the stepping kernel
+    themselves, on their first task, each with its own Numba cache (``jetgaudin warmup`` on a worker compiles it
+    ahead)."""
+    step = kernel_names(n_state, True, batch_size, specialise)[0]
+    return (f"jetgaudin: the Dask workers compile (or load from their Numba cache) the kernel {step} on their "
+            f"first task: about {EXPECTED_COMPILE_S[step]:.2g} s on a worker where it is not cached (run "
+            "`jetgaudin warmup` on the workers to compile it ahead)")
+
+
 def prepare(n_state: int = 9, batch_size: int | None = None, *, specialise: bool = True,
-            notify: Callable[[str], None] | None = None) -> CompileReport:
+            notify: Callable[[str], None] | None = None, step: bool = True,
+            announce_load: bool = True) -> CompileReport:
     """Load or compile the kernels a compiled run of ``batch_size`` orbits (``None``: one orbit through
     ``iterate_single``) of ``n_state`` = 3N components needs, saying so first with the expected time
     (``notify(message)``; default: a line on stderr; nothing is said when they are already loaded).
 
     Call it before timing a run: the time it returns is the compile/load time, to be reported apart from the
-    stepping rate.  Returns a :class:`CompileReport`.
+    stepping rate.  ``step=False``: the branch rule only (a Dask run: the workers compile the stepping kernel,
+    :func:`remote_notice`).  ``announce_load=False``: kernels found in Numba's cache are loaded without a message
+    (a fraction of a second; the time is still returned); only a compile is announced.  Returns a
+    :class:`CompileReport`.
     """
     names = kernel_names(n_state, batch_size is not None, batch_size or 1, specialise)
-    return _prepare_names(names, n_state, notify)
+    return _prepare_names(names if step else names[1:], n_state, notify, announce_load)
 
 
 def warmup(notify: Callable[[str], None] | None = None) -> CompileReport:

@@ -1,0 +1,59 @@
+"""The compiled branch rule of ``ν1`` (``backlund/kernels/_branch.py``): its exact no-stepping test and its
+stepping both give the root of :func:`jetgaudin.nu`'s default rule."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import jetgaudin as jg
+from jetgaudin.backlund import kernels as K
+from jetgaudin.ensemble import sample_on_leaf
+
+
+def _p_and_bound(X, b, a):
+    """``P(a) = ν²(a)`` and ``D = Σ m |κ_m| |a|^{-m-1}`` from :func:`jetgaudin.integrals` (an independent sum)."""
+    kappa = np.concatenate([np.full((len(X), 1), b**2), np.asarray(jg.integrals(X, b)).reshape(len(X), -1)], axis=1)
+    m = np.arange(kappa.shape[1])
+    return (kappa * float(a) ** -m).sum(axis=1), (m * np.abs(kappa) * abs(a) ** (-m - 1.0)).sum(axis=1)
+
+
+def test_no_stepping_test_cases_agree_with_nu(rng):
+    # states where |Im eta| D <= P(a)/2 (the exact test holds): the rule returns the principal sqrt of P(eta), which
+    # is jg.nu's root; 1e-13 relative: the two sum nu^2 in different orders (Horner vs powers)
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 400, seed=2)
+    eta = 5 + 0.1j
+    p, d = _p_and_bound(X, 1.0, eta.real)
+    fast = abs(eta.imag) * d <= 0.5 * p
+    assert fast.mean() > 0.9  # the common case of a small time step
+    got = K.nu_default(X, np.ones(len(X)), np.full(len(X), eta))
+    ref = np.array([jg.nu(eta, x, 1.0) for x in X])
+    assert np.all(np.abs(got - ref) <= 1e-13 * np.abs(ref))
+    principal = np.sqrt(np.array([jg.nu_squared(eta, x, 1.0) for x in X]))
+    assert np.all(np.abs(got[fast] - principal[fast]) <= 1e-13 * np.abs(principal[fast]))
+
+
+def test_stepping_cases_where_the_principal_root_is_not_the_branch(rng):
+    # N = 1, y = (1, 0, -2), b = 1: nu^2 = (l^2 - 4l + 5)/l^2 with branch points 2 +- i.  Along [a, a + iY] with
+    # a < 2 and Y > 1 the segment passes left of the branch point 2 + i: nu^2 crosses the cut of the principal
+    # sqrt and the continued root is minus the principal one at the end; the exact test fails and the rule steps
+    x = np.array([[1.0, 0.0, -2.0]])
+    for eta in (2.01 + 3j, 2.2 + 1.5j, 1.9 + 3j, 1.5 + 2j, 1.0 + 5j, -3 - 2j):
+        p, d = _p_and_bound(x, 1.0, eta.real)
+        assert abs(eta.imag) * d[0] > 0.5 * p[0]  # the exact test does not hold: stepping
+        ref = jg.nu(eta, x[0], 1.0)
+        got = K.nu_default(x, [1.0], [eta])[0]
+        assert abs(got - ref) <= 1e-13 * abs(ref)
+    for eta in (1.9 + 3j, 1.5 + 2j, 1.0 + 5j):  # the case the exact test must not take: -sqrt(nu^2)
+        principal = np.sqrt(jg.nu_squared(eta, x[0], 1.0))
+        assert abs(K.nu_default(x, [1.0], [eta])[0] + principal) <= 1e-13 * abs(principal)
+
+
+def test_sheet_and_batches_of_any_size(rng):
+    # one serial kernel for every batch size: orbit i of a batch equals its single-orbit value bit for bit
+    X = sample_on_leaf(2, [0.3, 1.0], 300, seed=5)
+    eta = rng.uniform(1, 6, 300) + 1j * rng.uniform(-2, 2, 300)
+    b = rng.uniform(0.5, 2, 300)
+    whole = K.nu_default(X, b, eta, -1)
+    single = np.array([K.nu_default(X[i:i + 1], b[i:i + 1], eta[i:i + 1], -1)[0] for i in range(300)])
+    assert np.array_equal(whole, single)
+    assert np.array_equal(K.nu_default(X, b, eta, 1), -whole)
