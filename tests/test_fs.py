@@ -70,6 +70,23 @@ def test_lock_file_symlink_is_not_followed(tmp_path):
 
 
 # ----------------------------------------------------------------------------------------- new runs
+def test_a_new_directory_that_cannot_be_created_is_refused_by_the_check(tmp_path):
+    """Refused by the check itself (before a run compiles anything), leaving nothing behind: under /proc no
+    directory can be made; under a read-only directory neither (as non-root); a new path deep below tmp_path is
+    accepted and not created."""
+    with pytest.raises(RunDirectoryError, match="--out: cannot create"):
+        fs.check_new_run_dir("/proc/jetgaudin-x/run")
+    if os.geteuid() != 0:
+        ro = tmp_path / "ro"
+        ro.mkdir()
+        ro.chmod(0o500)
+        with pytest.raises(RunDirectoryError, match="cannot create"):
+            fs.check_new_run_dir(ro / "a" / "b")
+        ro.chmod(0o700)
+    assert fs.check_new_run_dir(tmp_path / "x" / "y") == tmp_path / "x" / "y"
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["ro"] if os.geteuid() != 0 else [])
+
+
 def test_check_new_run_dir_rules(tmp_path):
     assert fs.check_new_run_dir(tmp_path / "new") == tmp_path / "new"
     assert not (tmp_path / "new").exists()  # creates nothing

@@ -131,6 +131,53 @@ _SLOW_COMPILE = textwrap.dedent("""
 """)
 
 
+#: a compile that spends seconds in ONE call of C code releasing the GIL, as Numba inside an LLVM pass: a matrix
+#: product (single-threaded BLAS) sized in the subprocess itself to last about 3 s on the machine at hand
+_C_COMPILE = textwrap.dedent("""
+    import sys, time
+    import numpy as np
+    import jetgaudin as jg
+    from jetgaudin.cli import main
+
+    def prepare_kernels(self, X, steps, notify=None):
+        a = np.random.default_rng(0).random((600, 600))
+        t = time.perf_counter(); a @ a; t = time.perf_counter() - t
+        n = int(600 * (3.0 / max(t, 1e-6)) ** (1 / 3))
+        b = np.random.default_rng(1).random((n, n))
+        notify(f"jetgaudin: compiling the Numba kernels (one C call of about {(n / 600) ** 3 * t:.1f} s) ...")
+        b @ b
+
+    jg.TwoPointBacklund.prepare_kernels = prepare_kernels
+    main(sys.argv[1:])
+""")
+
+
+def test_a_signal_during_a_long_c_call_of_the_compile_is_honoured_at_once(tmp_path):
+    """The compile runs in a worker thread and the main thread waits in steps of 0.05 s, so a signal is honoured
+    while the compiler is inside one C call (which a handler on the compiling thread could not interrupt)."""
+    import os
+    import re
+
+    out = tmp_path / "run"
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    proc = subprocess.Popen([sys.executable, "-c", _C_COMPILE, "orbit", "--kernel", "compiled", "--no-plots",
+                             "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    line = proc.stderr.readline()
+    call_s = float(re.search(r"about ([0-9.]+) s", line).group(1))
+    time.sleep(0.2)  # inside the C call by now
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    took = time.monotonic() - t0
+    assert proc.returncode == 130, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "while compiling the kernels" in lines[0], err
+    # honoured well before the C call could have returned (it had call_s - 0.2 s to go); 1.0 s allows for a loaded
+    # machine's process exit, and the call is sized to ~3 s so that waiting for it would fail this
+    assert call_s >= 2.0 and took < min(1.0, call_s - 0.8), (took, call_s)
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_during_the_compile_ends_with_one_line(tmp_path, signum):
     out = tmp_path / "run"

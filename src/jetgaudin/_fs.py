@@ -23,6 +23,7 @@ import errno
 import json
 import os
 import stat
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -320,6 +321,7 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
     try:
         st = os.stat(path)
     except FileNotFoundError:
+        _probe_creatable(path, option)
         return path
     except OSError as exc:
         raise RunDirectoryError(f"{option}: cannot use {path}: {exc.strerror or exc}") from None
@@ -340,6 +342,19 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
                                 "directory, or pass --overwrite")
     _probe_lock(path, option)
     return path
+
+
+def _probe_creatable(path: Path, option: str) -> None:
+    """Refuse a new ``path`` that could not be created (its nearest existing ancestor not a directory, or one in
+    which no directory can be made, as under ``/proc``), before a run spends time on anything (e.g. compiling):
+    an empty directory is made there and removed at once, so nothing is left."""
+    parent = path.parent
+    while not os.path.lexists(parent) and parent != parent.parent:
+        parent = parent.parent
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".jetgaudin-probe-", dir=parent))
+    except OSError as exc:
+        raise RunDirectoryError(f"{option}: cannot create {path}: {exc.strerror or exc}") from None
 
 
 def _probe_lock(path: Path, option: str) -> None:

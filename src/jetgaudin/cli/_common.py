@@ -5,6 +5,7 @@ No mathematics here: everything numerical comes from the public API (``import je
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import sys
@@ -390,10 +391,22 @@ def run_with_progress(description: str, progress: bool | None, run):
         if bar:
             bar.close()
         typer.echo(f"{prog()}: {exc}", err=True)
+        if exc.compile_running:  # nothing was written; the abandoned compile would slow the shutdown (~1 s)
+            _exit_now(exc.exit_code)
         raise typer.Exit(exc.exit_code) from None
     finally:
         if bar:
             bar.close()
+
+
+def _exit_now(code: int) -> None:
+    """Flush the standard streams and end the process with ``code`` at once (no interpreter shutdown)."""
+    import os
+
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(code)
 
 
 class _Interrupted(Exception):  # noqa: N818

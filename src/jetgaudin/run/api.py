@@ -270,10 +270,11 @@ def _prepare(spec: RunSpec, X: np.ndarray, out_dir: Path, notify: Callable[[str]
     if prepare is None:
         return 0.0
     try:
-        with RaiseOnSignal(handle_signals):
-            report = prepare(X, spec.steps, notify)
+        with RaiseOnSignal(handle_signals) as guard:
+            report = guard.call(lambda: prepare(X, spec.steps, notify))
     except CompileInterrupted as exc:
-        raise RunInterrupted(exc.signum, 0, out_dir, command=spec.program, message=interrupted) from None
+        raise RunInterrupted(exc.signum, 0, out_dir, command=spec.program, message=interrupted,
+                             compile_running=handle_signals) from None
     return 0.0 if report is None else float(report.seconds)
 
 

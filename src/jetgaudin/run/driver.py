@@ -36,8 +36,12 @@ class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input
     """The run stopped on SIGINT / SIGTERM after writing a checkpoint (``signum``, ``last_safe_step``)."""
 
     def __init__(self, signum: int, last_safe_step: int, out_dir: Path, command: str = "jetgaudin orbit",
-                 result: Any = None, message: str | None = None):
+                 result: Any = None, message: str | None = None, compile_running: bool = False):
         self.signum = int(signum)
+        #: the signal came during a compile that is still running in its worker thread (see
+        #: :meth:`RaiseOnSignal.call`): a command line tool should exit at once (``os._exit`` once its message is
+        #: out) instead of letting the interpreter shut down around the compiler, which takes up to a second
+        self.compile_running = compile_running
         self.last_safe_step = int(last_safe_step)
         self.out_dir = Path(out_dir)
         self.result = result
@@ -87,8 +91,38 @@ class RaiseOnSignal(SignalFlag):
     Python instruction (Numba's compiler is Python, so within a fraction of a second except inside one long LLVM
     pass).  Main thread only, and only when ``enabled``; the previous handlers are restored on exit."""
 
+    def __enter__(self) -> RaiseOnSignal:
+        super().__enter__()
+        return self
+
     def _handler(self, signum: int, _frame: Any) -> None:
         raise CompileInterrupted(signum)
+
+    def call(self, fn: Callable[[], Any]) -> Any:
+        """``fn()``, run in a daemon thread while this (main) thread waits in steps of 0.05 s, so that a signal is
+        honoured within 0.05 s even while the compiler is inside one long LLVM pass (C code, during which the
+        thread calling it cannot run a Python signal handler; llvmlite releases the GIL there).  On a signal
+        :class:`CompileInterrupted` is raised here and the compile is abandoned: nothing of the run exists yet,
+        and Numba writes its cache files by an atomic rename, so an abandoned compile leaves no partial file.
+        Without signal handling (``enabled`` false: not the main thread, or the caller's choice) ``fn`` runs here.
+        """
+        if not self.enabled:
+            return fn()
+        box: dict[str, Any] = {}
+
+        def target() -> None:
+            try:
+                box["value"] = fn()
+            except BaseException as exc:  # handed to the waiting thread below
+                box["error"] = exc
+
+        worker = threading.Thread(target=target, name="jetgaudin-compile", daemon=True)
+        worker.start()
+        while worker.is_alive():
+            worker.join(0.05)
+        if "error" in box:
+            raise box["error"]
+        return box.get("value")
 
 
 @dataclass
