@@ -1,8 +1,9 @@
 r"""N = 3 ensembles: ``LANES`` orbits in lock-step (structure of arrays), branch-free, for SIMD across orbits.
 
 :func:`_lane3` is :func:`._n3._step3` with both sides of every choice computed and the same value selected, so
-each lane gives the bits of the single-orbit route; lanes whose Newton update of ``ν1`` is refused are redone by
-:func:`._n3._step3` itself.  Import only after :func:`._target.configure`.
+each lane gives the bits of the single-orbit route; lanes whose Newton update of ``ν1`` is refused are redone by a
+second pass with ``ν1`` continued by the closest root (:func:`_lanes3_step`).  Import only after
+:func:`._target.configure`.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import _scalar as S
-from ._n3 import NCONST, _axis, _constants3, _dress3, _ell3, _finite9, _step3
+from ._n3 import NCONST, _axis, _constants3, _dress3, _ell3, _finite9
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
@@ -20,11 +21,11 @@ def _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst, nu, nu_sq, inv_2nu, newto
     """:func:`._n3._step3` without data-dependent branches: both sides of every choice are computed and the
     same value is selected, so each lane gives the bits of :func:`._n3._step3`.  Returns
     ``(status, ν1, y0, …, y8, need_root)``; on a failed step the old state is returned (as :func:`._n3._step3`
-    does); ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone by :func:`._n3._step3`."""
+    does); ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst[0], cst[1], cst[2], cst[3], cst[4], cst[5])
     nu2 = u * u + v * w
     c = nu2 - nu_sq
-    # the closest-root fallback of _step3 is rare: flag the lane (it is redone by _step3) instead of computing it
+    # the closest-root fallback of _step3 is rare: flag the lane (redone by a second pass) instead of computing it
     newton_ok = S._abs2(c) <= 1e-16 * S._abs2(nu2)
     need_root = S._sel(newton, not newton_ok, False)  # selects, no short-circuit control flow (vectorisation)
     nu = S._selc(newton, nu + c * inv_2nu, nu)
@@ -44,17 +45,21 @@ def _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst, nu, nu_sq, inv_2nu, newto
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 64
-# rows: 0-8 state, 9-10 ν, 11 b, 12-32 the constants of _n3._constants3, 33 alive, 34 status, 35 redo (the lane
-# needs the closest-root fallback)
+# rows: 0-8 state, 9-10 ν, 11 b, 12-32 the constants of _n3._constants3, then alive, status, redo (the lane
+# needs the closest-root fallback) and a copy of alive during the second pass
 _C0 = 12
 _ALIVE = _C0 + NCONST
-_ROWS = _ALIVE + 3
+_STATUS = _ALIVE + 1
+_REDO = _ALIVE + 2
+_SAVED = _ALIVE + 3
+_ROWS = _ALIVE + 4
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lane_values(x0, x1, x2, x3, x4, x5, x6, x7, x8, nur, nui, b, cst, alive, newton):
+def _lane_values(x0, x1, x2, x3, x4, x5, x6, x7, x8, nur, nui, b, cst, alive, old_status, newton):
     """New values of the rows 0-10, status and redo of one lane (the array is not passed in: an array argument
-    would bring reference counting into the loop and stop its vectorisation)."""
+    would bring reference counting into the loop and stop its vectorisation).  A lane that is not alive, or is to
+    be redone, keeps its values and status."""
     nu = complex(nur, nui)
     r = _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst, nu, nu * nu, S._cdiv(complex(1.0, 0.0), nu + nu), newton)
     redo = S._sel(alive, r[11], False)
@@ -62,14 +67,12 @@ def _lane_values(x0, x1, x2, x3, x4, x5, x6, x7, x8, nur, nui, b, cst, alive, ne
     return (S._sel(a, r[2], x0), S._sel(a, r[3], x1), S._sel(a, r[4], x2), S._sel(a, r[5], x3),
             S._sel(a, r[6], x4), S._sel(a, r[7], x5), S._sel(a, r[8], x6), S._sel(a, r[9], x7),
             S._sel(a, r[10], x8), S._sel(a, r[1].real, nur), S._sel(a, r[1].imag, nui),
-            S._sel(a, float(r[0]), 0.0), S._sel(redo, 1.0, 0.0))
+            S._sel(a, float(r[0]), old_status), S._sel(redo, 1.0, 0.0))
 
 
 @njit(cache=True, error_model="numpy")
-def _lanes3_step(buf, newton):
-    """One step of ``LANES`` lock-stepped N = 3 orbits stored by rows in ``buf`` (``_ROWS × LANES``).  Lanes
-    flagged ``redo`` are then stepped by :func:`._n3._step3` itself (closest-root continuation of ``ν1``), one by
-    one."""
+def _lanes_pass(buf, newton):
+    """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes."""
     L = LANES
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
@@ -79,34 +82,43 @@ def _lanes3_step(buf, newton):
                buf[32 * L + l])
         v = _lane_values(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
                          buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[9 * L + l], buf[10 * L + l],
-                         buf[11 * L + l], cst, buf[_ALIVE * L + l] != 0.0, newton)
+                         buf[11 * L + l], cst, buf[_ALIVE * L + l] != 0.0, buf[_STATUS * L + l], newton)
         for i in range(11):
             buf[i * L + l] = v[i]
-        buf[(_ALIVE + 1) * L + l] = v[11]
-        buf[(_ALIVE + 2) * L + l] = v[12]
-    for l in range(L):
-        if buf[(_ALIVE + 2) * L + l] != 0.0:
-            _redo_lane(buf, l, newton)
+        buf[_STATUS * L + l] = v[11]
+        buf[_REDO * L + l] = v[12]
 
 
 @njit(cache=True, error_model="numpy")
-def _redo_lane(buf, l, newton):
-    """Lane ``l`` stepped by :func:`._n3._step3` (rare: the Newton update of ``ν1`` was refused)."""
+def _lanes3_step(buf, newton):
+    """One step of ``LANES`` lock-stepped N = 3 orbits stored by rows in ``buf`` (``_ROWS × LANES``).
+
+    Lanes whose Newton update of ``ν1`` is refused are left unchanged by the first pass; their ``ν1`` is then
+    continued by the closest root (as :func:`._n3._step3` does) and they alone are stepped by a second pass without
+    the Newton update: the same operations as :func:`._n3._step3`'s fallback, hence the same bits."""
     L = LANES
-    nu = complex(buf[9 * L + l], buf[10 * L + l])
-    x = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
-         buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-    cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
-           buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
-           buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
-           buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
-           buf[32 * L + l])
-    st, nu, xn = _step3(x, buf[11 * L + l], cst, nu, nu * nu, S._cdiv(complex(1.0, 0.0), nu + nu), newton)
-    buf[(_ALIVE + 1) * L + l] = float(st)
-    buf[9 * L + l] = nu.real
-    buf[10 * L + l] = nu.imag
-    for i in range(9):
-        buf[i * L + l] = xn[i]
+    redo = False
+    for second in (False, True):  # one call site of the pass (LLVM inlines it once)
+        if second:
+            for l in range(L):
+                if buf[_REDO * L + l] != 0.0:
+                    redo = True
+                    u, v, w = _ell3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l],
+                                    buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l],
+                                    buf[16 * L + l], buf[17 * L + l])
+                    nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
+                    buf[9 * L + l] = nu.real
+                    buf[10 * L + l] = nu.imag
+            if not redo:
+                break
+            for l in range(L):
+                buf[_SAVED * L + l] = buf[_ALIVE * L + l]
+                buf[_ALIVE * L + l] = buf[_REDO * L + l]
+        _lanes_pass(buf, newton and not second)
+    if redo:
+        for l in range(L):
+            buf[_ALIVE * L + l] = buf[_SAVED * L + l]
 
 
 @njit(cache=True, error_model="numpy")
@@ -128,8 +140,8 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
             buf[(_C0 + i) * L + l] = cst[i]
         buf[11 * L + l] = b[src]
         buf[_ALIVE * L + l] = 1.0
-        buf[(_ALIVE + 1) * L + l] = 0.0
-        buf[(_ALIVE + 2) * L + l] = 0.0
+        buf[_STATUS * L + l] = 0.0
+        buf[_REDO * L + l] = 0.0
     for l in range(W):
         for i in range(9):
             out[0, l, i] = X0[l, i]
@@ -138,10 +150,10 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
     for n in range(steps):
         _lanes3_step(buf, n > 0 or cont)
         for l in range(L):
-            if buf[(_ALIVE + 1) * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
+            if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
                 buf[_ALIVE * L + l] = 0.0
                 if l < W:
-                    status[l] = int(buf[(_ALIVE + 1) * L + l])
+                    status[l] = int(buf[_STATUS * L + l])
                     fail[l] = n
         if (n + 1) % save_every == 0:
             j = (n + 1) // save_every
