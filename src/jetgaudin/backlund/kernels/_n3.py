@@ -34,8 +34,11 @@ the generic route; ``tests/test_routes.py`` checks the route against the generic
 The rest is as before: ``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` with ``z^m = η^{-m}`` precomputed (Estrin-like, on the
 real components), ``ν1`` continued by one Newton step ``ν ← ν + (ν² − ν_prev²)/(2ν_prev)`` (``ν²`` is an
 integral of the map, so the correction is at round-off level; the closest-root square root is used otherwise),
-and the eigenvector of :func:`._scalar._eigvec`.  The blocks are scalars only and inlined, so the lock-step lanes
-(:mod:`._lanes`) perform the same operations in the same order.  Import only after :func:`._target.configure`.
+and the eigenvector of :func:`._scalar._eigvec`.  The blocks are scalars only, so the lock-step lanes (:mod:`._lanes`)
+perform the same operations in the same order (no fastmath, no contraction: the same bits).  :func:`_dress3` and
+:func:`_step3` are inlined by Numba (left to LLVM, the lanes lose their vectorisation); the small blocks are left
+to LLVM's inliner, which cut the first-use compile time by ~2 s (CPU) at an unchanged or better stepping rate
+(docs/performance.md).  Import only after :func:`._target.configure`.
 """
 
 from __future__ import annotations
@@ -52,7 +55,7 @@ from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 NCONST = 21
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _constants3(eta):
     r"""Per-run constants of the N = 3 step for ``η = a + ic`` (a tuple of ``NCONST`` floats):
     ``z^1, z^2, z^3`` (``z = 1/η``, real and imaginary parts), ``m = −a``, ``c``, ``bu`` (1.0: bottom-up,
@@ -78,7 +81,7 @@ def _constants3(eta):
             m2c, m2c, -d1, m2c, -d1, -d2, 1.0, d2, d1, d2, 0.0, m2c)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
     """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m``: components ``Y^a = Σ_m y_m^a z^m``, then ``u = b + Y³``, ``v = Y¹ − iY²``,
     ``w = Y¹ + iY²``."""
@@ -91,7 +94,7 @@ def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
     return (complex(b + Y3r, Y3i), complex(Y1r + Y2i, Y1i - Y2r), complex(Y1r - Y2i, Y1i + Y2r))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _axis(k1, k2, nk):
     """``n̂`` of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``)."""
     r = 1.0 / nk
@@ -100,24 +103,24 @@ def _axis(k1, k2, nk):
     return -(pr + pr) * r, -(pi + pi) * r, (S._abs2(k2) - S._abs2(k1)) * r
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _cross(n1, n2, n3, y1, y2, y3):
     """``K y = n̂ × y``."""
     return n2 * y3 - n3 * y2, n3 * y1 - n1 * y3, n1 * y2 - n2 * y1
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _v3(p1, p2, p3, y1, y2, y3, a1, a2, a3, m, c):
     """``v_k = (y_{k+1} + m y_k) − c K y_k`` (``p = y_{k+1}``, ``a = K y_k``)."""
     return (p1 + m * y1) - c * a1, (p2 + m * y2) - c * a2, (p3 + m * y3) - c * a3
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _sel3(c, a1, a2, a3, b1, b2, b3):
     return S._sel(c, a1, b1), S._sel(c, a2, b2), S._sel(c, a3, b3)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _norm_ok(e1, e2, e3, t):
     """The residual test of the complex route for the Hermitian residual ``e·σ``: ``|u|² = e3²`` and
     ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails)."""
@@ -172,7 +175,7 @@ def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst):
             x8 + w3[2])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _finite9(y0, y1, y2, y3, y4, y5, y6, y7, y8):
     acc = ((y0 + y1) + (y2 + y3)) + ((y4 + y5) + (y6 + y7)) + y8
     return acc - acc == 0.0  # false for NaN or inf anywhere
