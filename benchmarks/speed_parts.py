@@ -147,3 +147,40 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
             os.environ.pop("NUMBA_NUM_THREADS", None)
         else:
             os.environ["NUMBA_NUM_THREADS"] = old
+
+
+def bench_step_accuracy(rows, Row, steps=200):
+    """Per-step error of the compiled N = 3 and generic routes against the NumPy reference route (relative to
+    ``max|X|``): after one step, and ``max_n err_n/n`` over ``steps`` steps, on Appendix 2 and 4 random leaf states
+    for each η (both division directions, two near the pole); and the NumPy route's own sensitivity (a 1e-16
+    relative perturbation of X0), which bounds what "round-off level" can mean.  Not a lettered part of the
+    harness yet; call it with the harness's ``Row``."""
+    import jetgaudin as jg
+    from jetgaudin.backlund import kernels
+    from jetgaudin.ensemble import sample_on_leaf
+
+    rng = np.random.default_rng(7)
+    cases = [("Appendix 2", X0_APPENDIX2, 1.0, 5 + 0.1j)]
+    for eta in (5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j, 0.3 + 0.5j, -3 + 2j):
+        c = np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), 1.0])
+        for x in sample_on_leaf(3, c, 4, seed=int(rng.integers(1 << 30)), scale=0.5):
+            cases.append((f"η = {eta}", x, 1.3, eta))
+    n = np.arange(1, steps + 1)
+    worst: dict[str, list[float]] = {}
+    for name, x, b, eta in cases:
+        B = jg.TwoPointBacklund(b, eta)
+        ref = B.iterate(x, steps, kernel="numpy")
+        moved = B.iterate(x * (1 + 1e-16 * rng.choice([-1, 1], 9)), steps, kernel="numpy")
+        nu0 = B.nu1(x)
+        s = np.max(np.abs(ref))
+        got = {r: kernels.iterate_single(x, b, eta, nu0, False, steps, 1, specialise=r == "N = 3")[0]
+               for r in ("N = 3", "generic")}
+        for r, orbit in got.items():
+            d = np.max(np.abs(orbit - ref), axis=1) / s
+            w = worst.setdefault(f"{r} {name}", [0.0, 0.0, 0.0])
+            w[0] = max(w[0], d[1])
+            w[1] = max(w[1], float(np.max(d[1:] / n)))
+            w[2] = max(w[2], float(np.max(np.max(np.abs(moved - ref), axis=1)[1:] / s / n)))
+    for key, (one, per, sens) in worst.items():
+        rows.append(Row("acc", f"{key}: per-step error vs NumPy", per, "relative",
+                        f"after one step {one:.2g}; NumPy route moved by 1e-16 in X0: {sens:.2g} per step"))

@@ -304,3 +304,84 @@ def test_a_changed_kernel_source_invalidates_every_cached_kernel(tmp_path):
     lanes = kernels.kernel_module("_lanes")
     stamp = os.path.join(lanes.run_lanes3._cache._cache_path, _target.STAMP_NAME)
     assert open(stamp).read().strip() == digest
+
+
+# ---------------------------------------------------------------------------------------------
+# the real form of the N = 3 step (kernels/_n3.py): its formulas against the complex products of the NumPy route
+# ---------------------------------------------------------------------------------------------
+
+_SIGMA = np.array([[[0, 1], [1, 0]], [[0, -1j], [1j, 0]], [[1, 0], [0, -1]]])
+
+
+def _sigma(y):
+    """``y·σ`` for real or complex 3-vectors ``y`` (..., 3): the ``ℓ_m = [[u, v], [w, −u]]`` of lax.ell_coefficients."""
+    return np.einsum("...a,aij->...ij", np.asarray(y, dtype=complex), _SIGMA)
+
+
+def test_real_form_of_the_dressing_products(rng):
+    # M0 = -Re(eta) I + i Im(eta) n.sigma with n real and |n| = 1, so T1 = M0 l + l adj M0 and T2 = M0 l adj M0 are
+    # the real maps 2m y - 2c n x y and |eta|^2 y - 2mc n x y + 2c^2 n x (n x y) (m = -Re eta, c = Im eta).  Reference:
+    # the NumPy route's M0 (_dressing.real_two_point_M0) and 2x2 complex products; the axis n from the kernel block.
+    from jetgaudin.backlund import _dressing
+    from jetgaudin.backlund.kernels._drivers import kernel_module
+
+    n3 = kernel_module("_n3")
+    for _ in range(200):
+        eta = complex(rng.uniform(-4, 4), rng.uniform(-3, 3)) * rng.choice([0.2, 1.0])
+        k1, k2 = rng.normal(size=2) + 1j * rng.normal(size=2)
+        y = rng.normal(size=3)
+        M0 = _dressing.real_two_point_M0(eta, k1, k2)
+        ell = _sigma(y)
+        T1 = _dressing.mm(M0, ell) + _dressing.mm(ell, _dressing.adj(M0))
+        T2 = _dressing.mm(_dressing.mm(M0, ell), _dressing.adj(M0))
+        n = np.array(n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2))
+        assert abs(n @ n - 1) <= 1e-15  # a few ulp
+        m, c = -eta.real, eta.imag
+        ny = np.cross(n, y)
+        # 1e-13 relative to the largest term (|eta|^2 |y|): ~500 ulp; a wrong sign or factor is an O(1) error
+        tol = 1e-13 * (1 + abs(eta)) ** 2 * np.linalg.norm(y)
+        assert np.max(np.abs(_sigma(2 * m * y - 2 * c * ny) - T1)) <= tol
+        assert np.max(np.abs(_sigma(abs(eta) ** 2 * y - 2 * m * c * ny + 2 * c * c * np.cross(n, ny)) - T2)) <= tol
+
+
+@pytest.mark.parametrize("eta", [5 + 0.1j, 2 - 1j, 0.6 - 0.2j, 0.3 + 0.5j])  # both division directions
+def test_real_form_step_equals_the_complex_division(eta, rng):
+    # one dressing by the kernel block _dress3 (real form, one recurrence for both directions) against the NumPy
+    # route's complex R(lambda) and Laurent division (_dressing.dress_two_point); and its residual test: exact for
+    # the eigenvector of l(eta), refused (flag false) for a perturbed one, where the complex division leaves a
+    # remainder.  Tolerance 1e-14 of the state (~50 ulp, as test_one_step_matches_numpy_to_few_ulp).
+    from jetgaudin import lax
+    from jetgaudin.backlund import _dressing
+    from jetgaudin.backlund.kernels._drivers import kernel_module
+
+    n3 = kernel_module("_n3")
+    cst = n3._constants3(eta)
+    b = 1.3
+    for x in sample_on_leaf(3, [0.3, -0.2, 1.0], 10, seed=int(rng.integers(1 << 30)), scale=0.5):
+        ell = lax.ell_coefficients(x, b)
+        le = _dressing.horner(ell, eta)
+        u, v, w = le[0, 0], le[0, 1], le[1, 0]
+        k1, k2 = _dressing.eigenvector(u, v, w, jg.nu(eta, x, b))
+        for scale, exact in ((1.0, True), (1.0 + 1e-3, False)):
+            M0 = _dressing.real_two_point_M0(eta, k1 * scale, k2)
+            new, res = _dressing.dress_two_point(ell, eta, np.conj(eta), M0)
+            ref = lax.state_from_ell(new).real
+            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2)
+            ok, *got = n3._dress3(*x, b, *n, cst)
+            assert bool(ok) is exact and bool(res <= 1e-8 * (1 + np.max(np.abs(ell)))) is exact
+            if exact:
+                assert np.max(np.abs(np.array(got) - ref)) <= 1e-14 * np.max(np.abs(ref))
+
+
+def test_lanes_redo_path_equals_the_single_orbit():
+    # orbits whose Newton update of nu1 is refused (nu1 passed 1e-3 off, cont=True) are redone by the lanes' second
+    # pass with the closest root: bit for bit the single-orbit route's fallback
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 70, seed=4)
+    b = np.full(70, 1.0)
+    eta = np.full(70, 5 + 0.1j)
+    nu = _kernels.nu_default(X, b, eta) * np.where(np.arange(70) % 3 == 0, 1 + 1e-3, 1.0)
+    out, _, _, nu_last, status, _ = _kernels.run_batch(X, b, eta, nu, True, 30, 1)
+    assert np.all(status == 0)
+    for i in (0, 1, 3, 66, 69):
+        single, _, _, nu_i = _kernels.iterate_single(X[i], 1.0, 5 + 0.1j, nu[i], True, 30, 1)
+        assert np.array_equal(out[i], single) and nu_i == nu_last[i]

@@ -18,14 +18,14 @@ def flops_per_step(N: int, route: str = "auto") -> dict[str, int]:
     if route == "n3":
         if N != 3:
             raise ValueError("route 'n3' is the N = 3 kernel")
-        parts = {
-            "ell_at_eta": 12 + 22 + 22,  # u: 3 real×complex + 3 adds; v, w: 3 complex products + 2 adds each
+        parts = {  # the real form of the step (module docstring of _n3)
+            "ell_at_eta": 30 + 5,  # 6 components Σ y_m^a z^m (3 mul + 2 add each); u, v, w from them
             "nu": 14 + 17 + 22,  # u² + vw; Newton update; ν_prev², 1/(2ν_prev) (previous step's ν)
             "eigenvector": 35,  # two |k|², the scale of the branch-point test
-            "M0": 26,
-            "R_products": 62 + 3 * 118 + 36,  # T1, T2 for ℓ_0 (b real) and ℓ_1..ℓ_3; sums into R_k
-            "division": 72 + 38,  # Q_3..Q_0 bottom-up; residual of the two unused equations
-            "checks_and_state": 17 + 12 + 9,  # |ℓ| scale of the residual test; new state; finiteness
+            "axis": 19,  # n̂ from k: 1/|k|², k̄1 k2, |k2|² − |k1|²
+            "Z": 29 + 39 + 36,  # K y_0..K y_3 (2 + 3 cross products); v_0..v_3; Z_k = K v_k (4 cross products)
+            "division": 27 + 41,  # the recurrence f, g, h; residuals e_A, e_B and their two tests
+            "checks_and_state": 17 + 9 + 9,  # |ℓ| scale of the residual test; ỹ = y − 2cW; finiteness
         }
     elif route == "generic":
         parts = {

@@ -1,10 +1,44 @@
-r"""The N = 3 compiled route: the generic route unrolled in scalars (:func:`_step3`, :func:`run_orbit3`), with
-two changes that shorten the chain of dependent operations (round-off level; ``tests/test_routes.py`` compares
-this route with the generic route and with the NumPy route): ``ℓ(η)`` as ``b + Σ ℓ_m z^m`` with precomputed
-``z^m`` (Estrin instead of Horner), and ``ν1`` continued by one Newton step ``ν ← ν + (ν² − ν_prev²)/(2ν_prev)``
-(``ν²`` is an integral of the map, so the correction is at round-off level; the closest-root square root is
-used otherwise).  The blocks here are scalars only and inlined, so the lock-step lanes (:mod:`._lanes`) perform
-the same operations in the same order.  Import only after :func:`._target.configure`.
+r"""The N = 3 compiled route: the dressing step in real form (:func:`_step3`, :func:`run_orbit3`).
+
+**Real form of the step.**  For a real state ``ℓ_m = y_m·σ`` (``u = y³``, ``v = y¹ − i y²``, ``w = y¹ + i y²``,
+``y_0 = b e_3``) and the ``M0`` of eq. (mm) with ``η_1 = η̄_2 = η = a + ic`` and ``κ = 1/s̄`` (reality, eq. (X))
+(:func:`._scalar._m0_from_k`):
+
+    ``M0 = −a I + i c (n̂·σ)``,   ``n̂_1 + i n̂_2 = −2 k̄_1 k_2/|k|²``,   ``n̂_3 = (|k_2|² − |k_1|²)/|k|²``
+
+with ``k`` the eigenvector of ``ℓ(η)`` for ``ν1`` and ``n̂`` a real unit vector (``|n̂|² = (|k_1|² + |k_2|²)²/|k|⁴``).
+Write ``K y = n̂ × y`` and ``m = −a``.  With ``[n̂·σ, y·σ] = 2i (n̂ × y)·σ`` and
+``(n̂·σ)(y·σ)(n̂·σ) = (2 (n̂·y) n̂ − y)·σ``, ``adj M0 = m I − i c n̂·σ`` and
+
+    ``R(λ) = (λ + M0) ℓ(λ) adj(λ + M0) = D(λ) ℓ(λ) − 2c Z(λ)``,   ``D(λ) = (λ − η)(λ − η̄) = λ² + δ1 λ + δ2``,
+    ``Z(λ) = K (λ + m − c K) ℓ(λ)``,
+
+all real 3×3 maps of the vectors ``y_m`` (``T1 = 2m − 2cK``, ``T2 = |η|² − 2mcK + 2c²K²`` are the products
+``M0 ℓ + ℓ adj M0``, ``M0 ℓ adj M0`` of the generic route).  Hence the new state of the dressing relation
+eq. (128), ``ℓ̆ = R/D`` (exact division), is ``ỹ_j = y_j − 2c W_j`` (j = 1, 2, 3) with ``W = Z/D``:
+
+    ``Z_{−1} = K y_0``,   ``Z_k = K v_k``,   ``v_k = y_{k+1} + m y_k − c K y_k``  (k = 0..3, ``y_4 = 0``),
+    ``W_{k+2} + δ1 W_{k+1} + δ2 W_k = Z_k``   (k = −1..3; ``W_j = 0`` outside j = 1..3).
+
+Five vector equations for three unknowns: three are solved, the other two are the residual (exactness of the
+division, i.e. the eigenvector condition).  Top-down (``|η| < 1``): k = −1, 0, 1 give ``W_1, W_2, W_3`` (this
+is Appendix 1's lower-triangular affine map ``X̆ = Φ X + X_0`` of eq. (2p)); bottom-up (``|η| ≥ 1``): k = 3, 2,
+1 give ``W_3, W_2, W_1`` (the same map, evaluated without the cancellation of the powers of ``η`` that costs the
+top-down form accuracy for ``|η| > 1``).  The two recurrences have the same shape, so one set of per-run
+constants (:func:`_constants3`) and selects of the ``Z_k`` give both without a branch; the residual is that of
+the unused equations of the complex division, ``2|c|`` times the residual of the ``Z`` equations (k = 0, −1
+recombined as the complex route's ``R_0 − Q_0``, ``R_1 − Q_1 − δ1 Q_0``; or k = 2, 3), tested against the same
+relative tolerance.  ``tests/test_kernels.py`` checks ``T1``, ``T2`` and ``Z`` against the complex products of
+the generic route; ``tests/test_routes.py`` checks the route against the generic and the NumPy routes.
+
+The rest is as before: ``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` with ``z^m = η^{-m}`` precomputed (Estrin-like, on the
+real components), ``ν1`` continued by one Newton step ``ν ← ν + (ν² − ν_prev²)/(2ν_prev)`` (``ν²`` is an
+integral of the map, so the correction is at round-off level; the closest-root square root is used otherwise),
+and the eigenvector of :func:`._scalar._eigvec`.  The blocks are scalars only, so the lock-step lanes (:mod:`._lanes`)
+perform the same operations in the same order (no fastmath, no contraction: the same bits).  :func:`_dress3` and
+:func:`_step3` are inlined by Numba (left to LLVM, the lanes lose their vectorisation); the small blocks are left
+to LLVM's inliner, which cut the first-use compile time by ~2 s (CPU) at an unchanged or better stepping rate
+(docs/performance.md).  Import only after :func:`._target.configure`.
 """
 
 from __future__ import annotations
@@ -14,194 +48,186 @@ import math
 import numpy as np
 from numba import njit
 
-from ._scalar import (
-    _RESIDUAL_TOL2,
-    _abs2,
-    _cdiv,
-    _continue_nu,
-    _cr,
-    _division_constants,
-    _drift_pass,
-    _eigvec,
-    _integrals,
-    _m0_from_k,
-    _products,
-    _products0,
-)
+from . import _scalar as S
 from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
-# ---------------------------------------------------------------------------------------------
-# N = 3: the same route, unrolled, with the parameters of M0 in closed form (shorter dependency chain)
-# ---------------------------------------------------------------------------------------------
-#
-# For a real state the eigenvector datum at η̄ is κ = conj(1/s): with u(η̄) = conj u(η),
-# v(η̄) = conj w(η), ν = −conj ν1,  κ = (ν − u(η̄))/v(η̄) = conj(−(u + ν1)/w) = conj(1/s)  since
-# s = −w/(u + ν1).  Hence s + κ = (1 + |s|²)/conj(s) never vanishes and, writing s = n/d (the form with
-# the larger |d|), q = n·conj(d), ρ = 1/(|n|² + |d|²), δ = η − η̄ = 2i Im η:
-#     t = δ conj(s)/(1 + |s|²) = δ conj(q) ρ,      s t = δ |n|² ρ,      −s² t + δ s = δ q ρ,
-# so M0 = [[−η + δ|n|²ρ, δ conj(q) ρ], [δ q ρ, −η̄ − δ|n|²ρ]] costs one real division.  ℓ(η) is
-# evaluated as b + Σ_m ℓ_m z^m with the powers z^m = η^{-m} precomputed (Estrin instead of Horner),
-# and ν1 is continued by one Newton step ν ← ν + (ν² − ν_prev²)/(2ν_prev) from the previous value
-# (ν² is an integral of the map, so the correction is at round-off level; the square root with the
-# closest-root rule is used if it is not).  These change the result at round-off level only; the
-# tests compare this route with the generic route and with the NumPy route.
+#: number of per-run constants of :func:`_constants3`
+NCONST = 21
 
 
-# ---------------------------------------------------------------------------------------------
-# N = 3 building blocks, shared by the single-orbit step and the lock-step lanes (scalars only: inlined
-# into both, so the two perform the same operations in the same order and give the same bits)
-# ---------------------------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy")
+def _constants3(eta):
+    r"""Per-run constants of the N = 3 step for ``η = a + ic`` (a tuple of ``NCONST`` floats):
+    ``z^1, z^2, z^3`` (``z = 1/η``, real and imaginary parts), ``m = −a``, ``c``, ``bu`` (1.0: bottom-up,
+    ``|η| ≥ 1``), the recurrence coefficients ``α, β, γ, δ, ε, ζ`` (with the factor ``−2c`` of ``ỹ = y − 2cW``
+    in ``α, β, δ``), the residual coefficients ``s0, s1, s2, r1, r2`` and ``−2c``.
+
+    ``f = αZ_a``, ``g = βZ_b + γf``, ``h = (δZ_c + εg) + ζf`` with ``(Z_a, Z_b, Z_c) = (Z_3, Z_2, Z_1)``
+    bottom-up (``f, g, h = −2c (W_3, W_2, W_1)``) and ``(Z_{−1}, Z_0, Z_1)`` top-down (``−2c (W_1, W_2, W_3)``);
+    residuals ``e_A = s0 ((−2c Z_d − s1 g) − s2 h)``, ``e_B = (−2c Z_e − r1 h) − r2 e_A`` with
+    ``(Z_d, Z_e) = (Z_0, Z_{−1})`` bottom-up, ``(Z_2, Z_3)`` top-down."""
+    z1 = S._cdiv(complex(1.0, 0.0), eta)
+    z2 = z1 * z1
+    z3 = z2 * z1
+    d1, d2, inv_d2, bottom_up = S._division_constants(eta)
+    c = eta.imag
+    m2c = -(c + c)
+    if bottom_up:
+        al = m2c * inv_d2
+        ga = -(inv_d2 * d1)
+        return (z1.real, z1.imag, z2.real, z2.imag, z3.real, z3.imag, -eta.real, c, 1.0,
+                al, al, ga, al, ga, -inv_d2, inv_d2, 1.0, d1, 1.0, d1, m2c)
+    return (z1.real, z1.imag, z2.real, z2.imag, z3.real, z3.imag, -eta.real, c, 0.0,
+            m2c, m2c, -d1, m2c, -d1, -d2, 1.0, d2, d1, d2, 0.0, m2c)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _uvw3(x0, x1, x2, x3, x4, x5, x6, x7, x8):
-    """``(u_m, v_m, w_m)`` of ``ℓ_m``, m = 1, 2, 3: ``u = y^3``, ``v = y^1 − i y^2``, ``w = y^1 + i y^2``."""
-    return (x2, complex(x0, -x1), complex(x0, x1), x5, complex(x3, -x4), complex(x3, x4),
-            x8, complex(x6, -x7), complex(x6, x7))
+@njit(cache=True, error_model="numpy")
+def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
+    """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m``: components ``Y^a = Σ_m y_m^a z^m``, then ``u = b + Y³``, ``v = Y¹ − iY²``,
+    ``w = Y¹ + iY²``."""
+    Y1r = (x0 * z1r + x3 * z2r) + x6 * z3r
+    Y1i = (x0 * z1i + x3 * z2i) + x6 * z3i
+    Y2r = (x1 * z1r + x4 * z2r) + x7 * z3r
+    Y2i = (x1 * z1i + x4 * z2i) + x7 * z3i
+    Y3r = (x2 * z1r + x5 * z2r) + x8 * z3r
+    Y3i = (x2 * z1i + x5 * z2i) + x8 * z3i
+    return (complex(b + Y3r, Y3i), complex(Y1r + Y2i, Y1i - Y2r), complex(Y1r - Y2i, Y1i + Y2r))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _ell3(b, z1, z2, z3, u1, v1, w1, u2, v2, w2, u3, v3, w3):
-    """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` (``z^m = η^-m`` precomputed): entries ``(u, v, w)``."""
-    u = (complex(b, 0.0) + _cr(z1, u1)) + (_cr(z2, u2) + _cr(z3, u3))
-    v = (v1 * z1 + v2 * z2) + v3 * z3
-    w = (w1 * z1 + w2 * z2) + w3 * z3
-    return u, v, w
+@njit(cache=True, error_model="numpy")
+def _axis(k1, k2, nk):
+    """``n̂`` of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``)."""
+    r = 1.0 / nk
+    pr = k1.real * k2.real + k1.imag * k2.imag  # k̄1 k2
+    pi = k1.real * k2.imag - k1.imag * k2.real
+    return -(pr + pr) * r, -(pi + pi) * r, (S._abs2(k2) - S._abs2(k1)) * r
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _R3(m00, m01, m10, m11, b, u1, v1, w1, u2, v2, w2, u3, v3, w3):
-    """Entries of ``R(λ) = λ² ℓ + λ (M0 ℓ + ℓ adj M0) + M0 ℓ adj M0`` by powers, ``R_0 … R_5`` (``R_0 = b``)."""
-    T1u0, T1v0, T1w0, T2u0, T2v0, T2w0 = _products0(m00, m01, m10, m11, b)
-    T1u1, T1v1, T1w1, T2u1, T2v1, T2w1 = _products(m00, m01, m10, m11, u1, v1, w1)
-    T1u2, T1v2, T1w2, T2u2, T2v2, T2w2 = _products(m00, m01, m10, m11, u2, v2, w2)
-    T1u3, T1v3, T1w3, T2u3, T2v3, T2w3 = _products(m00, m01, m10, m11, u3, v3, w3)
-    return (complex(b, 0.0),
-            complex(u1, 0.0) + T1u0, v1 + T1v0, w1 + T1w0,
-            (complex(u2, 0.0) + T1u1) + T2u0, (v2 + T1v1) + T2v0, (w2 + T1w1) + T2w0,
-            (complex(u3, 0.0) + T1u2) + T2u1, (v3 + T1v2) + T2v1, (w3 + T1w2) + T2w1,
-            T1u3 + T2u2, T1v3 + T2v2, T1w3 + T2w2,
-            T2u3, T2v3, T2w3)
+@njit(cache=True, error_model="numpy")
+def _cross(n1, n2, n3, y1, y2, y3):
+    """``K y = n̂ × y``."""
+    return n2 * y3 - n3 * y2, n3 * y1 - n1 * y3, n1 * y2 - n2 * y1
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def _bottom_up3(Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, inv_d2):
-    """Laurent division of ``R`` by ``λ² + δ1 λ + δ2`` from the lowest power (``|η| ≥ 1``): ``Q_1 … Q_3`` and
-    the squared residual of the two unused equations."""
-    Qu3 = _cr(Ru5, inv_d2)
-    Qv3 = _cr(Rv5, inv_d2)
-    Qw3 = _cr(Rw5, inv_d2)
-    Qu2 = _cr(Ru4 - _cr(Qu3, d1), inv_d2)
-    Qv2 = _cr(Rv4 - _cr(Qv3, d1), inv_d2)
-    Qw2 = _cr(Rw4 - _cr(Qw3, d1), inv_d2)
-    Qu1 = _cr((Ru3 - Qu3) - _cr(Qu2, d1), inv_d2)
-    Qv1 = _cr((Rv3 - Qv3) - _cr(Qv2, d1), inv_d2)
-    Qw1 = _cr((Rw3 - Qw3) - _cr(Qw2, d1), inv_d2)
-    Qu0 = _cr((Ru2 - Qu2) - _cr(Qu1, d1), inv_d2)
-    Qv0 = _cr((Rv2 - Qv2) - _cr(Qv1, d1), inv_d2)
-    Qw0 = _cr((Rw2 - Qw2) - _cr(Qw1, d1), inv_d2)
-    res2 = max(_abs2(Ru0 - Qu0), _abs2(Qv0), _abs2(Qw0))
-    res2 = max(
-        res2,
-        _abs2(Ru1 - Qu1 - _cr(Qu0, d1)),
-        _abs2(Rv1 - Qv1 - _cr(Qv0, d1)),
-        _abs2(Rw1 - Qw1 - _cr(Qw0, d1)),
-    )
-    return Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2
+@njit(cache=True, error_model="numpy")
+def _v3(p1, p2, p3, y1, y2, y3, a1, a2, a3, m, c):
+    """``v_k = (y_{k+1} + m y_k) − c K y_k`` (``p = y_{k+1}``, ``a = K y_k``)."""
+    return (p1 + m * y1) - c * a1, (p2 + m * y2) - c * a2, (p3 + m * y3) - c * a3
+
+
+@njit(cache=True, error_model="numpy")
+def _sel3(c, a1, a2, a3, b1, b2, b3):
+    return S._sel(c, a1, b1), S._sel(c, a2, b2), S._sel(c, a3, b3)
+
+
+@njit(cache=True, error_model="numpy")
+def _norm_ok(e1, e2, e3, t):
+    """The residual test of the complex route for the Hermitian residual ``e·σ``: ``|u|² = e3²`` and
+    ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails)."""
+    return (e3 * e3 <= t) & (e1 * e1 + e2 * e2 <= t)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _top_down3(Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, d2):
-    """The same division from the highest power (``|η| < 1``)."""
-    Qu0 = Ru0
-    Qu1 = Ru1 - _cr(Qu0, d1)
-    Qv1 = Rv1
-    Qw1 = Rw1
-    Qu2 = (Ru2 - _cr(Qu1, d1)) - _cr(Qu0, d2)
-    Qv2 = Rv2 - _cr(Qv1, d1)
-    Qw2 = Rw2 - _cr(Qw1, d1)
-    Qu3 = (Ru3 - _cr(Qu2, d1)) - _cr(Qu1, d2)
-    Qv3 = (Rv3 - _cr(Qv2, d1)) - _cr(Qv1, d2)
-    Qw3 = (Rw3 - _cr(Qw2, d1)) - _cr(Qw1, d2)
-    res2 = max(
-        _abs2(Ru4 - _cr(Qu3, d1) - _cr(Qu2, d2)),
-        _abs2(Rv4 - _cr(Qv3, d1) - _cr(Qv2, d2)),
-        _abs2(Rw4 - _cr(Qw3, d1) - _cr(Qw2, d2)),
-    )
-    res2 = max(res2, _abs2(Ru5 - _cr(Qu3, d2)), _abs2(Rv5 - _cr(Qv3, d2)), _abs2(Rw5 - _cr(Qw3, d2)))
-    return Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2
+def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst):
+    """The real form of the dressing (module docstring): returns ``(residual_ok, ỹ_1 … ỹ_9)``."""
+    m = cst[6]
+    c = cst[7]
+    bu = cst[8] != 0.0
+    al, be, ga, de, ep, ze = cst[9], cst[10], cst[11], cst[12], cst[13], cst[14]
+    s0, s1, s2, r1, r2, m2c = cst[15], cst[16], cst[17], cst[18], cst[19], cst[20]
+    # K y_k (K y_0 = n̂ × b e_3 = Z_{-1})
+    a0x = n2 * b
+    a0y = -(n1 * b)
+    a1x, a1y, a1z = _cross(n1, n2, n3, x0, x1, x2)
+    a2x, a2y, a2z = _cross(n1, n2, n3, x3, x4, x5)
+    a3x, a3y, a3z = _cross(n1, n2, n3, x6, x7, x8)
+    # Z_k = K v_k, k = 0..3
+    Z0 = _cross(n1, n2, n3, x0 - c * a0x, x1 - c * a0y, x2 + m * b)
+    v1x, v1y, v1z = _v3(x3, x4, x5, x0, x1, x2, a1x, a1y, a1z, m, c)
+    v2x, v2y, v2z = _v3(x6, x7, x8, x3, x4, x5, a2x, a2y, a2z, m, c)
+    Z1 = _cross(n1, n2, n3, v1x, v1y, v1z)
+    Z2 = _cross(n1, n2, n3, v2x, v2y, v2z)
+    Z3 = _cross(n1, n2, n3, m * x6 - c * a3x, m * x7 - c * a3y, m * x8 - c * a3z)
+    # the two directions of the division as one recurrence on selected equations
+    Za = _sel3(bu, Z3[0], Z3[1], Z3[2], a0x, a0y, 0.0)
+    Zb = _sel3(bu, Z2[0], Z2[1], Z2[2], Z0[0], Z0[1], Z0[2])
+    Zd = _sel3(bu, Z0[0], Z0[1], Z0[2], Z2[0], Z2[1], Z2[2])
+    Ze = _sel3(bu, a0x, a0y, 0.0, Z3[0], Z3[1], Z3[2])
+    f1, f2, f3 = al * Za[0], al * Za[1], al * Za[2]
+    g1, g2, g3 = be * Zb[0] + ga * f1, be * Zb[1] + ga * f2, be * Zb[2] + ga * f3
+    h1 = (de * Z1[0] + ep * g1) + ze * f1
+    h2 = (de * Z1[1] + ep * g2) + ze * f2
+    h3 = (de * Z1[2] + ep * g3) + ze * f3
+    # residual of the unused equations (scaled as the complex route's)
+    eA1 = s0 * ((m2c * Zd[0] - s1 * g1) - s2 * h1)
+    eA2 = s0 * ((m2c * Zd[1] - s1 * g2) - s2 * h2)
+    eA3 = s0 * ((m2c * Zd[2] - s1 * g3) - s2 * h3)
+    eB1 = (m2c * Ze[0] - r1 * h1) - r2 * eA1
+    eB2 = (m2c * Ze[1] - r1 * h2) - r2 * eA2
+    eB3 = (m2c * Ze[2] - r1 * h3) - r2 * eA3
+    e2 = max(b * b, x2 * x2, x0 * x0 + x1 * x1, x5 * x5, x3 * x3 + x4 * x4, x8 * x8, x6 * x6 + x7 * x7)
+    sc = 1.0 + math.sqrt(e2)
+    t = S._RESIDUAL_TOL2 * sc * sc
+    ok = _norm_ok(eA1, eA2, eA3, t) & _norm_ok(eB1, eB2, eB3, t)
+    w1 = _sel3(bu, h1, h2, h3, f1, f2, f3)  # −2c W_1
+    w3 = _sel3(bu, f1, f2, f3, h1, h2, h3)  # −2c W_3
+    return (ok, x0 + w1[0], x1 + w1[1], x2 + w1[2], x3 + g1, x4 + g2, x5 + g3, x6 + w3[0], x7 + w3[1],
+            x8 + w3[2])
+
+
+@njit(cache=True, error_model="numpy")
+def _finite9(y0, y1, y2, y3, y4, y5, y6, y7, y8):
+    acc = ((y0 + y1) + (y2 + y3)) + ((y4 + y5) + (y6 + y7)) + y8
+    return acc - acc == 0.0  # false for NaN or inf anywhere
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _step3(x, b, eta, z1, z2, z3, d1, d2, inv_d2, bottom_up, nu, nu_sq, inv_2nu, newton):
-    """One N = 3 step from the tuple ``x`` (9 floats); returns ``(status, ν1, x_new)``."""
-    u1, v1, w1, u2, v2, w2, u3, v3, w3 = _uvw3(x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8])
-    u, v, w = _ell3(b, z1, z2, z3, u1, v1, w1, u2, v2, w2, u3, v3, w3)  # ℓ(η) = Σ ℓ_m η^{-m}
+def _step3(x, b, cst, nu, nu_sq, inv_2nu, newton):
+    """One N = 3 step from the tuple ``x`` (9 floats) with the constants ``cst`` of :func:`_constants3`;
+    returns ``(status, ν1, x_new)`` (``x`` itself on a failed step)."""
+    x0, x1, x2, x3, x4, x5, x6, x7, x8 = x
+    u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst[0], cst[1], cst[2], cst[3], cst[4], cst[5])
     nu2 = u * u + v * w
     if newton:
         c = nu2 - nu_sq
-        if _abs2(c) <= 1e-16 * _abs2(nu2):
+        if S._abs2(c) <= 1e-16 * S._abs2(nu2):
             nu = nu + c * inv_2nu
         else:
-            nu = _continue_nu(u, v, w, nu)
-    k1, k2, nk, st = _eigvec(u, v, w, nu)
+            nu = S._continue_nu(u, v, w, nu)
+    k1, k2, nk, st = S._eigvec(u, v, w, nu)
     if st != STATUS_OK:
         return st, nu, x
-    m00, m01, m10, m11 = _m0_from_k(eta, k1, k2, nk)
-    (Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5,
-     Rw5) = _R3(m00, m01, m10, m11, b, u1, v1, w1, u2, v2, w2, u3, v3, w3)
-    if bottom_up:
-        Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2 = _bottom_up3(
-            Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, inv_d2)
-    else:
-        Qu1, Qv1, Qw1, Qu2, Qv2, Qw2, Qu3, Qv3, Qw3, res2 = _top_down3(
-            Ru0, Ru1, Rv1, Rw1, Ru2, Rv2, Rw2, Ru3, Rv3, Rw3, Ru4, Rv4, Rw4, Ru5, Rv5, Rw5, d1, d2)
-    e2 = max(b * b, u1 * u1, _abs2(v1), u2 * u2, _abs2(v2), u3 * u3, _abs2(v3))
-    sc = 1.0 + math.sqrt(e2)
-    xn = (
-        0.5 * (Qv1.real + Qw1.real),
-        0.5 * (Qw1.imag - Qv1.imag),
-        Qu1.real,
-        0.5 * (Qv2.real + Qw2.real),
-        0.5 * (Qw2.imag - Qv2.imag),
-        Qu2.real,
-        0.5 * (Qv3.real + Qw3.real),
-        0.5 * (Qw3.imag - Qv3.imag),
-        Qu3.real,
-    )
-    if not (res2 <= _RESIDUAL_TOL2 * sc * sc):
+    n1, n2, n3 = _axis(k1, k2, nk)
+    r = _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst)
+    xn = (r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
+    if not r[0]:
         return STATUS_RESIDUAL, nu, x
-    acc = ((xn[0] + xn[1]) + (xn[2] + xn[3])) + ((xn[4] + xn[5]) + (xn[6] + xn[7])) + xn[8]
-    if not (acc - acc == 0.0):  # NaN or inf somewhere
+    if not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9]):
         return STATUS_NONFINITE, nu, x
     return STATUS_OK, nu, xn
 
 
 @njit(cache=True, error_model="numpy")
 def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_drift):
-    """:func:`run_orbit` for ``N = 3`` (``x0`` of shape ``(9,)``) by the closed-form route of :func:`_step3`
+    """:func:`._generic.run_orbit` for ``N = 3`` (``x0`` of shape ``(9,)``) by the real form of :func:`_step3`
     (equal to the generic route to round-off)."""
     I0 = np.empty(6)
     Ib = np.empty(6)
     x = (x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8])
     for i in range(9):
         out[0, i] = x0[i]
-    _integrals(x0, b, 3, I0)
+    S._integrals(x0, b, 3, I0)
     for k in range(6):
         drift[k] = 0.0
-    z1 = _cdiv(complex(1.0, 0.0), eta)
-    z2 = z1 * z1
-    z3 = z2 * z1
-    d1, d2, inv_d2, bottom_up = _division_constants(eta)
+    cst = _constants3(eta)
     nu = nu0
     status = STATUS_OK
     n = 0
     for n in range(steps):
         # quantities of the previous ν1, off the critical path of the step
         nu_sq = nu * nu
-        inv_2nu = _cdiv(complex(1.0, 0.0), nu + nu)
-        status, nu, x = _step3(x, b, eta, z1, z2, z3, d1, d2, inv_d2, bottom_up, nu, nu_sq, inv_2nu,
-                               n > 0 or cont)
+        inv_2nu = S._cdiv(complex(1.0, 0.0), nu + nu)
+        status, nu, x = _step3(x, b, cst, nu, nu_sq, inv_2nu, n > 0 or cont)
         if status != STATUS_OK:
             break
         if (n + 1) % save_every == 0:
@@ -213,5 +239,5 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
     for i in range(9):
         final[i] = x[i]
     if want_drift:
-        _drift_pass(out, final, n // save_every, b, 3, I0, Ib, drift)
+        S._drift_pass(out, final, n // save_every, b, 3, I0, Ib, drift)
     return status, n, nu

@@ -43,12 +43,6 @@ def _cdiv(a, b):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _rmul(d, q):
-    """real × complex, as NumPy's complex product with ``d + 0i`` (identical for finite values)."""
-    return complex(d * q.real, d * q.imag)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
 def _csqrt(z):
     r"""A square root of ``z`` (principal; the sign is fixed by the caller): ``t = √((|z| + |a|)/2)``,
     no cancellation; ``|z|`` as ``√(a² + b²)`` (no overflow guard: fine for ``|z| < 1e150``)."""
