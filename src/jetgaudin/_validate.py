@@ -35,7 +35,7 @@ def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.nda
             f"{name} must have shape (..., 3N) with N >= 1 (components y_0, ..., y_(N-1)); "
             f"its last axis has length {n}, not a positive multiple of 3"
         )
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidStateError(f"{name} has non-finite entries (NaN or inf); give finite numbers")
     return arr, arr.shape[-1] // 3
 
@@ -59,7 +59,7 @@ def field_vector(b) -> np.ndarray:
         arr = np.array([0.0, 0.0, float(arr)])
     if arr.shape != (3,):
         raise InvalidParameterError(f"the field b must be a float or a 3-vector, got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidParameterError("the field b must be finite")
     return arr
 
@@ -123,7 +123,7 @@ def complex_points(lam, *, name: str = "lambda") -> np.ndarray:
         arr = np.asarray(lam, dtype=complex)
     except (TypeError, ValueError):
         raise InvalidParameterError(f"{name} must be a (complex) number or array, got {lam!r}") from None
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidParameterError(f"{name} must be finite (NaN or inf given)")
     return arr
 
@@ -147,7 +147,7 @@ def check_gradient(grad, n: int, *, name: str = "gradient") -> np.ndarray:
 
 def finite_result(arr, what: str):
     """Raise :class:`InvalidStateError` if a computed quantity overflowed (never return a silent inf/NaN)."""
-    if not np.all(np.isfinite(arr)):
+    if not np.isfinite(arr).all():
         raise InvalidStateError(
             f"{what} overflow for this input (products of components exceed the float range, |X| or |b| "
             "above ~1e154); rescale the state and the field"

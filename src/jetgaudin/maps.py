@@ -115,12 +115,16 @@ class Advance:
     imag_max: np.ndarray
 
 
+#: the largest count: int64, as the compiled kernels' loop counters and the HDF5 files
+_INT64_MAX = 2**63 - 1
+
+
 def check_count(value: object, name: str, minimum: int = 0) -> int:
     """An integer count ``>= minimum`` that fits in int64 (the compiled kernels and the HDF5 files use int64);
     :class:`InvalidParameterError` naming ``name`` otherwise."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < minimum:
         raise InvalidParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if int(value) > np.iinfo(np.int64).max:
+    if int(value) > _INT64_MAX:
         raise InvalidParameterError(f"{name} = {value} does not fit in 64 bits; give at most 2**63 - 1")
     return int(value)
 

@@ -298,7 +298,8 @@ class TwoPointBacklund(Map):
         lead = X.shape[:-1]
         Xb = X.reshape(-1, X.shape[-1])
         B = Xb.shape[0]
-        bb, ee = np.full(B, self.b), np.full(B, self.eta, dtype=complex)
+        bb = np.array([self.b]) if B == 1 else np.full(B, self.b)
+        ee = np.array([self.eta], dtype=complex) if B == 1 else np.full(B, self.eta, dtype=complex)
         nu0 = np.reshape(carry, -1) if cont else K.nu_default(Xb, bb, ee, self.sheet)
         if X.ndim == 1:
             out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
