@@ -264,6 +264,23 @@ def test_hostile_out_paths(tmp_path, capsys, out, monkeypatch):
     assert list(tmp_path.iterdir()) == []  # nothing written into the current directory
 
 
+def test_the_entry_point_flushes_everything_and_keeps_the_exit_code(tmp_path):
+    """`python -m jetgaudin` ends by os._exit after main() (no interpreter teardown, ~0.5 s with the kernels
+    loaded): the output written to a pipe must still be complete (a JSON document of tens of kB parses), and the
+    exit codes stay those of main() (0, 2)."""
+    import json
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "jetgaudin", "verify", "--coverage", "--json"], capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert len(p.stdout) > 10_000 and len(json.loads(p.stdout)) > 100
+    p = subprocess.run([sys.executable, "-m", "jetgaudin", "orbit", "--steps", "-1", "--out", str(tmp_path / "r")],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "--steps" in p.stderr, p.stderr
+
+
 def test_broken_pipe_is_not_a_failure(tmp_path):
     """`jetgaudin info | head -1`: the reader leaves early; exit 0 (exit 1 is reserved for failed runs)."""
     import subprocess

@@ -1,6 +1,6 @@
 """``python -m jetgaudin`` runs the command line (same as the ``jetgaudin`` script)."""
 
-from jetgaudin.cli import main
+from jetgaudin.cli import entry
 
 if __name__ == "__main__":
-    main()
+    entry()
