@@ -16,7 +16,7 @@ from . import app
 
 __all__ = ["harness", "bench_command"]
 
-_PARTS = "abcdefghij"
+_PARTS = "abcdefghijkl"
 
 
 def harness() -> ModuleType:
