@@ -58,12 +58,18 @@ def test_lock_held_by_other_process_then_released_by_sigkill(tmp_path):
         pass
 
 
-def test_lock_file_symlink_is_not_followed(tmp_path):
+def _planted(tmp_path, name):
+    """A file ``victim`` ("precious") and an empty run directory whose ``name`` is a symlink to it."""
     victim = tmp_path / "victim"
     victim.write_text("precious")
     run = tmp_path / "run"
     run.mkdir()
-    (run / fs.LOCK_NAME).symlink_to(victim)
+    (run / name).symlink_to(victim)
+    return victim, run
+
+
+def test_lock_file_symlink_is_not_followed(tmp_path):
+    victim, run = _planted(tmp_path, fs.LOCK_NAME)
     with pytest.raises(RunDirectoryError, match="symbolic link"):
         fs.RunDirLock(run).acquire()
     assert victim.read_text() == "precious"
@@ -168,11 +174,7 @@ def test_names_must_stay_inside_the_directory(tmp_path, name):
 
 # ------------------------------------------------------------------------------------------- writes
 def test_atomic_write_replaces_and_removes_planted_tmp_link(tmp_path):
-    victim = tmp_path / "victim"
-    victim.write_text("precious")
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / "run.json.tmp").symlink_to(victim)
+    victim, run = _planted(tmp_path, "run.json.tmp")
     fs.atomic_write_text(run, "run.json", "new")
     assert (run / "run.json").read_text() == "new"
     assert victim.read_text() == "precious"
@@ -180,22 +182,14 @@ def test_atomic_write_replaces_and_removes_planted_tmp_link(tmp_path):
 
 
 def test_atomic_write_over_a_symlink_replaces_the_link_not_its_target(tmp_path):
-    victim = tmp_path / "victim"
-    victim.write_text("precious")
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / "run.json").symlink_to(victim)
+    victim, run = _planted(tmp_path, "run.json")
     fs.atomic_write_text(run, "run.json", "new")
     assert not (run / "run.json").is_symlink() and (run / "run.json").read_text() == "new"
     assert victim.read_text() == "precious"
 
 
 def test_open_write_refuses_symlink(tmp_path):
-    victim = tmp_path / "victim"
-    victim.write_text("precious")
-    run = tmp_path / "run"
-    run.mkdir()
-    (run / "orbit.csv").symlink_to(victim)
+    victim, run = _planted(tmp_path, "orbit.csv")
     for append in (False, True):
         with pytest.raises(RunDirectoryError, match="symbolic link"):
             fs.open_write(run, "orbit.csv", append=append)

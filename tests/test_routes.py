@@ -92,13 +92,21 @@ def numpy_step_loop(c: Case) -> np.ndarray:
     return np.array(out)
 
 
+def _iterate(c: Case, kernel: str) -> np.ndarray:
+    return _map(c).iterate(c.x, STEPS, kernel=kernel)
+
+
+def _iterate_member(c: Case, kernel: str) -> np.ndarray:
+    X, _ = c.batch()
+    return _map(c).iterate(X, STEPS, kernel=kernel)[:, MEMBER]
+
+
 def numpy_iterate(c: Case) -> np.ndarray:
-    return _map(c).iterate(c.x, STEPS, kernel="numpy")
+    return _iterate(c, "numpy")
 
 
 def numpy_iterate_batch_member(c: Case) -> np.ndarray:
-    X, _ = c.batch()
-    return _map(c).iterate(X, STEPS, kernel="numpy")[:, MEMBER]
+    return _iterate_member(c, "numpy")
 
 
 def compiled_generic_single(c: Case) -> np.ndarray:
@@ -126,12 +134,11 @@ def compiled_generic_batch_member(c: Case) -> np.ndarray:
 
 
 def compiled_iterate(c: Case) -> np.ndarray:
-    return _map(c).iterate(c.x, STEPS, kernel="compiled")
+    return _iterate(c, "compiled")
 
 
 def compiled_iterate_batch_member(c: Case) -> np.ndarray:
-    X, _ = c.batch()
-    return _map(c).iterate(X, STEPS, kernel="compiled")[:, MEMBER]
+    return _iterate_member(c, "compiled")
 
 
 def compiled_closed_form(c: Case) -> np.ndarray:

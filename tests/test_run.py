@@ -27,6 +27,18 @@ from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 X0 = np.array(APPENDIX2_X0)
 
 
+def interrupted_run(out, steps):
+    """A finished run of ``steps`` steps in ``out``, its ``run.json`` marked interrupted (so resumable); returns the
+    record."""
+    from jetgaudin.run.files import write_run
+
+    rl.start(spec(steps), out)
+    run = rl.read_run(out)
+    run["status"] = "interrupted"
+    write_run(out, run)
+    return run
+
+
 def spec(steps=120, kernel="numpy", every=1, **kw):
     return rl.RunSpec(jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA, backend=kernel), X0, steps, every,
                       checkpoint_seconds=0.0, **kw)
@@ -124,9 +136,7 @@ def test_edited_checkpoint_with_recomputed_digest_is_refused(tmp_path, field):
     from jetgaudin.run.files import write_run
 
     out = tmp_path / "e"
-    rl.start(spec(40), out)
-    run = rl.read_run(out)
-    run["status"] = "interrupted"
+    run = interrupted_run(out, 40)
     ck = run["checkpoint"]
     if field == "X_hex":
         ck["X_hex"][0] = (float.fromhex(ck["X_hex"][0]) * (1 + 1e-12)).hex()
@@ -142,12 +152,7 @@ def test_edited_checkpoint_with_recomputed_digest_is_refused(tmp_path, field):
 # ------------------------------------------------------------------------------------------ one writer
 def test_second_writer_is_refused_with_the_holders_pid(tmp_path, capsys):
     out = tmp_path / "w"
-    rl.start(spec(5), out)
-    run = rl.read_run(out)
-    run["status"] = "interrupted"
-    from jetgaudin.run.files import write_run
-
-    write_run(out, run)
+    interrupted_run(out, 5)
     holder = subprocess.Popen([sys.executable, "-c", "import sys, time; from jetgaudin._fs import RunDirLock\n"
                                f"l = RunDirLock({str(out)!r}).acquire(); print('locked', flush=True); time.sleep(60)"],
                               stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=os.pathsep.join(
@@ -182,12 +187,7 @@ def test_symlinks_in_the_run_directory_are_not_followed(tmp_path, name):
 @pytest.mark.parametrize("name", ["run.json", "orbit.csv", "orbit.h5"])
 def test_symlinked_run_files_are_refused(tmp_path, name):
     out = tmp_path / "l"
-    rl.start(spec(5), out)
-    run = rl.read_run(out)
-    run["status"] = "interrupted"
-    from jetgaudin.run.files import write_run
-
-    write_run(out, run)
+    interrupted_run(out, 5)
     victim = tmp_path / "victim"
     os.replace(out / name, victim)
     (out / name).symlink_to(victim)
