@@ -334,7 +334,8 @@ def test_real_form_of_the_dressing_products(rng):
         ell = _sigma(y)
         T1 = _dressing.mm(M0, ell) + _dressing.mm(ell, _dressing.adj(M0))
         T2 = _dressing.mm(_dressing.mm(M0, ell), _dressing.adj(M0))
-        n = np.array(n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2))
+        *n, r = n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2)  # unnormalised axis n' and r = 1/|k|^2
+        n = np.array(n) * r
         assert abs(n @ n - 1) <= 1e-15  # a few ulp
         m, c = -eta.real, eta.imag
         ny = np.cross(n, y)
@@ -361,12 +362,12 @@ def test_real_form_step_equals_the_complex_division(eta, rng):
         ell = lax.ell_coefficients(x, b)
         le = _dressing.horner(ell, eta)
         u, v, w = le[0, 0], le[0, 1], le[1, 0]
-        k1, k2 = _dressing.eigenvector(u, v, w, jg.nu(eta, x, b))
+        k1, k2 = (complex(k) for k in _dressing.eigenvector(u, v, w, jg.nu(eta, x, b)))
         for scale, exact in ((1.0, True), (1.0 + 1e-3, False)):
             M0 = _dressing.real_two_point_M0(eta, k1 * scale, k2)
             new, res = _dressing.dress_two_point(ell, eta, np.conj(eta), M0)
             ref = lax.state_from_ell(new).real
-            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2)
+            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2)  # (n', r)
             ok, *got = n3._dress3(*x, b, *n, cst)
             assert bool(ok) is exact and bool(res <= 1e-8 * (1 + np.max(np.abs(ell)))) is exact
             if exact:

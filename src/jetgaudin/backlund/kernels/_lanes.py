@@ -12,39 +12,45 @@ import numpy as np
 from numba import njit, prange
 
 from . import _scalar as S
-from ._n3 import NCONST, _axis, _constants3, _dress3, _ell3, _finite9
+from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _solve3, _zed3
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst, nu, nu_sq, inv_2nu, newton):
-    """:func:`._n3._step3` without data-dependent branches: both sides of every choice are computed and the
-    same value is selected, so each lane gives the bits of :func:`._n3._step3`.  Returns
-    ``(status, ν1, y0, …, y8, need_root)``; on a failed step the old state is returned (as :func:`._n3._step3`
-    does); ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
-    u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst[0], cst[1], cst[2], cst[3], cst[4], cst[5])
-    nu2 = u * u + v * w
-    c = nu2 - nu_sq
+def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, nu, newton):
+    """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``,
+    the eigenvector and the axis ``n̂``.  Returns ``(ν1, n̂_1, n̂_2, n̂_3, need_root, nonfinite, branch)``;
+    ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
+    u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
+    nu2 = _nu2(u, v, w)
+    c = nu2 - nu * nu
     # the closest-root fallback of _step3 is rare: flag the lane (redone by a second pass) instead of computing it
     newton_ok = S._abs2(c) <= 1e-16 * S._abs2(nu2)
     need_root = S._sel(newton, not newton_ok, False)  # selects, no short-circuit control flow (vectorisation)
-    nu = S._selc(newton, nu + c * inv_2nu, nu)
+    nu = S._selc(newton, _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu)), nu)
     k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
-    n1, n2, n3 = _axis(k1, k2, nk)
-    r = _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst)
+    n1, n2, n3, r = _axis(k1, k2, nk)
+    return nu, n1, n2, n3, r, need_root, bad_scale, branch
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, bad_scale, branch):
+    """Second half of :func:`._n3._step3` without data-dependent branches: the dressing from the axis ``n̂``.
+    Returns ``(status, y0, …, y8)``; on a failed step the old state (as :func:`._n3._step3` does)."""
+    r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst)
     nonfinite = not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     st = S._sel(nonfinite, STATUS_NONFINITE, 0)
     st = S._sel(bad_scale, STATUS_NONFINITE, S._sel(branch, STATUS_BRANCH, S._sel(not r[0], STATUS_RESIDUAL, st)))
     ok = st == 0
-    return (st, nu, S._sel(ok, r[1], x0), S._sel(ok, r[2], x1), S._sel(ok, r[3], x2), S._sel(ok, r[4], x3),
+    return (st, S._sel(ok, r[1], x0), S._sel(ok, r[2], x1), S._sel(ok, r[3], x2), S._sel(ok, r[4], x3),
             S._sel(ok, r[5], x4), S._sel(ok, r[6], x5), S._sel(ok, r[7], x6), S._sel(ok, r[8], x7),
-            S._sel(ok, r[9], x8), need_root)
+            S._sel(ok, r[9], x8))
 
 
 #: orbits per lock-stepped block.  A compile-time constant: with the rows of the block at constant offsets
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
-LANES = 64
+LANES = 32
 # rows: 0-8 state, 9-10 ν, 11 b, 12-32 the constants of _n3._constants3, then alive, status, redo (the lane
 # needs the closest-root fallback) and a copy of alive during the second pass
 _C0 = 12
@@ -52,41 +58,96 @@ _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
 _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
-_ROWS = _ALIVE + 4
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _lane_values(x0, x1, x2, x3, x4, x5, x6, x7, x8, nur, nui, b, cst, alive, old_status, newton):
-    """New values of the rows 0-10, status and redo of one lane (the array is not passed in: an array argument
-    would bring reference counting into the loop and stop its vectorisation).  A lane that is not alive, or is to
-    be redone, keeps its values and status."""
-    nu = complex(nur, nui)
-    r = _lane3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst, nu, nu * nu, S._cdiv(complex(1.0, 0.0), nu + nu), newton)
-    redo = S._sel(alive, r[11], False)
-    a = S._sel(redo, False, alive)
-    return (S._sel(a, r[2], x0), S._sel(a, r[3], x1), S._sel(a, r[4], x2), S._sel(a, r[5], x3),
-            S._sel(a, r[6], x4), S._sel(a, r[7], x5), S._sel(a, r[8], x6), S._sel(a, r[9], x7),
-            S._sel(a, r[10], x8), S._sel(a, r[1].real, nur), S._sel(a, r[1].imag, nui),
-            S._sel(a, float(r[0]), old_status), S._sel(redo, 1.0, 0.0))
+# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch
+_MID = _ALIVE + 4
+# the new values of the rows 0-10 and of the status, copied back by a loop of their own (a select stored in place
+# becomes a masked store, ~10× slower on AMD Zen than a plain one)
+_NEW = _MID + 9
+# Z'_0 … Z'_3 between the two halves of the dressing
+_ZED = _NEW + 12
+_ROWS = _ZED + 12
 
 
 @njit(cache=True, error_model="numpy")
 def _lanes_pass(buf, newton):
-    """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes."""
+    """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
+    the lanes (the axis ``n̂``, then the dressing) joined by scratch rows.  Each loop body is short enough for
+    the processor to overlap consecutive lanes' dependency chains (one loop with the whole step was latency-bound:
+    docs/performance.md); the operations, hence the bits, are those of :func:`._n3._step3`.  A lane that is not
+    alive, or is to be redone, keeps its values and status."""
     L = LANES
+    M = _MID * L
+    for l in range(L):
+        r = _lane_axis(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
+                       buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[12 * L + l],
+                       buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
+                       complex(buf[9 * L + l], buf[10 * L + l]), newton)
+        buf[M + l] = r[0].real
+        buf[M + L + l] = r[0].imag
+        buf[M + 2 * L + l] = r[1]
+        buf[M + 3 * L + l] = r[2]
+        buf[M + 4 * L + l] = r[3]
+        buf[M + 5 * L + l] = r[4]
+        buf[M + 6 * L + l] = S._sel(r[5], 1.0, 0.0)
+        buf[M + 7 * L + l] = S._sel(r[6], 1.0, 0.0)
+        buf[M + 8 * L + l] = S._sel(r[7], 1.0, 0.0)
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
                buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
                buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
                buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
                buf[32 * L + l])
-        v = _lane_values(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
-                         buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[9 * L + l], buf[10 * L + l],
-                         buf[11 * L + l], cst, buf[_ALIVE * L + l] != 0.0, buf[_STATUS * L + l], newton)
-        for i in range(11):
-            buf[i * L + l] = v[i]
-        buf[_STATUS * L + l] = v[11]
-        buf[_REDO * L + l] = v[12]
+        Z = _zed3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
+                  buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[M + 2 * L + l],
+                  buf[M + 3 * L + l], buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
+        buf[_ZED * L + l] = Z[0]
+        buf[(_ZED + 1) * L + l] = Z[1]
+        buf[(_ZED + 2) * L + l] = Z[2]
+        buf[(_ZED + 3) * L + l] = Z[3]
+        buf[(_ZED + 4) * L + l] = Z[4]
+        buf[(_ZED + 5) * L + l] = Z[5]
+        buf[(_ZED + 6) * L + l] = Z[6]
+        buf[(_ZED + 7) * L + l] = Z[7]
+        buf[(_ZED + 8) * L + l] = Z[8]
+        buf[(_ZED + 9) * L + l] = Z[9]
+        buf[(_ZED + 10) * L + l] = Z[10]
+        buf[(_ZED + 11) * L + l] = Z[11]
+    for l in range(L):
+        cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
+               buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
+               buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
+               buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
+               buf[32 * L + l])
+        x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+                                              buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
+        alive = buf[_ALIVE * L + l] != 0.0
+        Z = (buf[_ZED * L + l], buf[(_ZED + 1) * L + l], buf[(_ZED + 2) * L + l], buf[(_ZED + 3) * L + l],
+             buf[(_ZED + 4) * L + l], buf[(_ZED + 5) * L + l], buf[(_ZED + 6) * L + l], buf[(_ZED + 7) * L + l],
+             buf[(_ZED + 8) * L + l], buf[(_ZED + 9) * L + l], buf[(_ZED + 10) * L + l], buf[(_ZED + 11) * L + l])
+        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
+                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 7 * L + l] != 0.0,
+                        buf[M + 8 * L + l] != 0.0)
+        redo = S._sel(alive, buf[M + 6 * L + l] != 0.0, False)
+        a = S._sel(redo, False, alive)
+        N = _NEW * L
+        buf[N + l] = S._sel(a, r[1], x0)
+        buf[N + L + l] = S._sel(a, r[2], x1)
+        buf[N + 2 * L + l] = S._sel(a, r[3], x2)
+        buf[N + 3 * L + l] = S._sel(a, r[4], x3)
+        buf[N + 4 * L + l] = S._sel(a, r[5], x4)
+        buf[N + 5 * L + l] = S._sel(a, r[6], x5)
+        buf[N + 6 * L + l] = S._sel(a, r[7], x6)
+        buf[N + 7 * L + l] = S._sel(a, r[8], x7)
+        buf[N + 8 * L + l] = S._sel(a, r[9], x8)
+        buf[N + 9 * L + l] = S._sel(a, buf[M + l], buf[9 * L + l])
+        buf[N + 10 * L + l] = S._sel(a, buf[M + L + l], buf[10 * L + l])
+        buf[N + 11 * L + l] = S._sel(a, float(r[0]), buf[_STATUS * L + l])
+        buf[_REDO * L + l] = S._sel(redo, 1.0, 0.0)
+    for i in range(11):
+        for l in range(L):
+            buf[i * L + l] = buf[(_NEW + i) * L + l]
+    for l in range(L):
+        buf[_STATUS * L + l] = buf[(_NEW + 11) * L + l]
 
 
 @njit(cache=True, error_model="numpy")

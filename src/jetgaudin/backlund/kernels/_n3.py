@@ -51,6 +51,8 @@ from numba import njit
 from . import _scalar as S
 from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
+F = S._fma
+
 #: number of per-run constants of :func:`_constants3`
 NCONST = 21
 
@@ -83,36 +85,55 @@ def _constants3(eta):
 
 @njit(cache=True, error_model="numpy")
 def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
-    """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m``: components ``Y^a = Σ_m y_m^a z^m``, then ``u = b + Y³``, ``v = Y¹ − iY²``,
-    ``w = Y¹ + iY²``."""
-    Y1r = (x0 * z1r + x3 * z2r) + x6 * z3r
-    Y1i = (x0 * z1i + x3 * z2i) + x6 * z3i
-    Y2r = (x1 * z1r + x4 * z2r) + x7 * z3r
-    Y2i = (x1 * z1i + x4 * z2i) + x7 * z3i
-    Y3r = (x2 * z1r + x5 * z2r) + x8 * z3r
-    Y3i = (x2 * z1i + x5 * z2i) + x8 * z3i
-    return (complex(b + Y3r, Y3i), complex(Y1r + Y2i, Y1i - Y2r), complex(Y1r - Y2i, Y1i + Y2r))
+    """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m``: components ``Y^a = Σ_m y_m^a z^m`` (fused, ``b`` added in the first fused
+    operation of ``Y³``), then ``u = b + Y³``, ``v = Y¹ − iY²``, ``w = Y¹ + iY²``."""
+    Y1r = F(x6, z3r, F(x3, z2r, x0 * z1r))
+    Y1i = F(x6, z3i, F(x3, z2i, x0 * z1i))
+    Y2r = F(x7, z3r, F(x4, z2r, x1 * z1r))
+    Y2i = F(x7, z3i, F(x4, z2i, x1 * z1i))
+    Y3r = F(x8, z3r, F(x5, z2r, F(x2, z1r, b)))
+    Y3i = F(x8, z3i, F(x5, z2i, x2 * z1i))
+    return (complex(Y3r, Y3i), complex(Y1r + Y2i, Y1i - Y2r), complex(Y1r - Y2i, Y1i + Y2r))
+
+
+@njit(cache=True, error_model="numpy")
+def _nu2(u, v, w):
+    """``ν² = u² + vw`` (``ℓ(η)² = ν² I``), fused: ``Re = (Re u − Im u)(Re u + Im u) + Re(vw)``,
+    ``Im = 2 Re u Im u + Im(vw)``."""
+    p = F(v.real, w.real, -(v.imag * w.imag))
+    q = F(v.real, w.imag, v.imag * w.real)
+    return complex(F(u.real - u.imag, u.real + u.imag, p), F(u.real + u.real, u.imag, q))
+
+
+@njit(cache=True, error_model="numpy")
+def _newton_nu(nu, c, inv_2nu):
+    """``ν + c/(2ν)`` (``c = ν²(state) − ν²``, ``inv_2nu = 1/(2ν)``), fused."""
+    return complex(F(c.real, inv_2nu.real, F(-c.imag, inv_2nu.imag, nu.real)),
+                   F(c.real, inv_2nu.imag, F(c.imag, inv_2nu.real, nu.imag)))
 
 
 @njit(cache=True, error_model="numpy")
 def _axis(k1, k2, nk):
-    """``n̂`` of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``)."""
+    """The axis of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``), unnormalised:
+    ``(n', r)`` with ``n' = |k|² n̂ = (−2 Re k̄1k2, −2 Im k̄1k2, |k2|² − |k1|²)`` and ``r = 1/|k|²``.  The step
+    multiplies by ``r`` only where it is needed (:func:`_dress3`), so the division is off the dependency chain."""
     r = 1.0 / nk
-    pr = k1.real * k2.real + k1.imag * k2.imag  # k̄1 k2
-    pi = k1.real * k2.imag - k1.imag * k2.real
-    return -(pr + pr) * r, -(pi + pi) * r, (S._abs2(k2) - S._abs2(k1)) * r
+    pr = F(k1.real, k2.real, k1.imag * k2.imag)  # k̄1 k2
+    pi = F(k1.real, k2.imag, -(k1.imag * k2.real))
+    n3 = F(k2.real, k2.real, k2.imag * k2.imag) - F(k1.real, k1.real, k1.imag * k1.imag)
+    return -(pr + pr), -(pi + pi), n3, r
 
 
 @njit(cache=True, error_model="numpy")
 def _cross(n1, n2, n3, y1, y2, y3):
-    """``K y = n̂ × y``."""
-    return n2 * y3 - n3 * y2, n3 * y1 - n1 * y3, n1 * y2 - n2 * y1
+    """``K' y = n' × y``, fused."""
+    return F(n2, y3, -(n3 * y2)), F(n3, y1, -(n1 * y3)), F(n1, y2, -(n2 * y1))
 
 
 @njit(cache=True, error_model="numpy")
-def _v3(p1, p2, p3, y1, y2, y3, a1, a2, a3, m, c):
-    """``v_k = (y_{k+1} + m y_k) − c K y_k`` (``p = y_{k+1}``, ``a = K y_k``)."""
-    return (p1 + m * y1) - c * a1, (p2 + m * y2) - c * a2, (p3 + m * y3) - c * a3
+def _v3(p1, p2, p3, y1, y2, y3, a1, a2, a3, m, cr):
+    """``v_k = (y_{k+1} + m y_k) − c K y_k`` (``p = y_{k+1}``, ``a = K' y_k``, ``cr = c/|k|²``), fused."""
+    return F(-cr, a1, F(m, y1, p1)), F(-cr, a2, F(m, y2, p2)), F(-cr, a3, F(m, y3, p3))
 
 
 @njit(cache=True, error_model="numpy")
@@ -124,48 +145,61 @@ def _sel3(c, a1, a2, a3, b1, b2, b3):
 def _norm_ok(e1, e2, e3, t):
     """The residual test of the complex route for the Hermitian residual ``e·σ``: ``|u|² = e3²`` and
     ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails)."""
-    return (e3 * e3 <= t) & (e1 * e1 + e2 * e2 <= t)
+    return (e3 * e3 <= t) & (F(e1, e1, e2 * e2) <= t)
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst):
-    """The real form of the dressing (module docstring): returns ``(residual_ok, ỹ_1 … ỹ_9)``."""
+def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
+    """First half of :func:`_dress3`: ``Z'_k = K' v_k`` (k = 0..3; 12 floats), ``v_k = (y_{k+1} + m y_k) − c K y_k``
+    with ``K = r K'``, ``K' y = n' × y``."""
     m = cst[6]
-    c = cst[7]
-    bu = cst[8] != 0.0
-    al, be, ga, de, ep, ze = cst[9], cst[10], cst[11], cst[12], cst[13], cst[14]
-    s0, s1, s2, r1, r2, m2c = cst[15], cst[16], cst[17], cst[18], cst[19], cst[20]
-    # K y_k (K y_0 = n̂ × b e_3 = Z_{-1})
+    cr = cst[7] * r
+    # K' y_k (K' y_0 = n' × b e_3 = Z'_{-1})
     a0x = n2 * b
     a0y = -(n1 * b)
     a1x, a1y, a1z = _cross(n1, n2, n3, x0, x1, x2)
     a2x, a2y, a2z = _cross(n1, n2, n3, x3, x4, x5)
     a3x, a3y, a3z = _cross(n1, n2, n3, x6, x7, x8)
-    # Z_k = K v_k, k = 0..3
-    Z0 = _cross(n1, n2, n3, x0 - c * a0x, x1 - c * a0y, x2 + m * b)
-    v1x, v1y, v1z = _v3(x3, x4, x5, x0, x1, x2, a1x, a1y, a1z, m, c)
-    v2x, v2y, v2z = _v3(x6, x7, x8, x3, x4, x5, a2x, a2y, a2z, m, c)
+    Z0 = _cross(n1, n2, n3, F(-cr, a0x, x0), F(-cr, a0y, x1), F(m, b, x2))
+    v1x, v1y, v1z = _v3(x3, x4, x5, x0, x1, x2, a1x, a1y, a1z, m, cr)
+    v2x, v2y, v2z = _v3(x6, x7, x8, x3, x4, x5, a2x, a2y, a2z, m, cr)
     Z1 = _cross(n1, n2, n3, v1x, v1y, v1z)
     Z2 = _cross(n1, n2, n3, v2x, v2y, v2z)
-    Z3 = _cross(n1, n2, n3, m * x6 - c * a3x, m * x7 - c * a3y, m * x8 - c * a3z)
+    Z3 = _cross(n1, n2, n3, F(m, x6, -(cr * a3x)), F(m, x7, -(cr * a3y)), F(m, x8, -(cr * a3z)))
+    return Z0[0], Z0[1], Z0[2], Z1[0], Z1[1], Z1[2], Z2[0], Z2[1], Z2[2], Z3[0], Z3[1], Z3[2]
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst):
+    """Second half of :func:`_dress3`: the recurrence for ``W`` on the selected equations, the residual of the
+    other two and the new state, from ``Z = (Z'_0 … Z'_3)`` of :func:`_zed3`."""
+    bu = cst[8] != 0.0
+    al, be, ga, de, ep, ze = cst[9], cst[10], cst[11], cst[12], cst[13], cst[14]
+    s0, s1, s2, r1, r2, m2c = cst[15], cst[16], cst[17], cst[18], cst[19], cst[20]
+    alr = al * r
+    ber = be * r
+    der = de * r
+    m2cr = m2c * r
+    a0x = n2 * b  # Z'_{-1}
+    a0y = -(n1 * b)
     # the two directions of the division as one recurrence on selected equations
-    Za = _sel3(bu, Z3[0], Z3[1], Z3[2], a0x, a0y, 0.0)
-    Zb = _sel3(bu, Z2[0], Z2[1], Z2[2], Z0[0], Z0[1], Z0[2])
-    Zd = _sel3(bu, Z0[0], Z0[1], Z0[2], Z2[0], Z2[1], Z2[2])
-    Ze = _sel3(bu, a0x, a0y, 0.0, Z3[0], Z3[1], Z3[2])
-    f1, f2, f3 = al * Za[0], al * Za[1], al * Za[2]
-    g1, g2, g3 = be * Zb[0] + ga * f1, be * Zb[1] + ga * f2, be * Zb[2] + ga * f3
-    h1 = (de * Z1[0] + ep * g1) + ze * f1
-    h2 = (de * Z1[1] + ep * g2) + ze * f2
-    h3 = (de * Z1[2] + ep * g3) + ze * f3
+    Za = _sel3(bu, Z[9], Z[10], Z[11], a0x, a0y, 0.0)
+    Zb = _sel3(bu, Z[6], Z[7], Z[8], Z[0], Z[1], Z[2])
+    Zd = _sel3(bu, Z[0], Z[1], Z[2], Z[6], Z[7], Z[8])
+    Ze = _sel3(bu, a0x, a0y, 0.0, Z[9], Z[10], Z[11])
+    f1, f2, f3 = alr * Za[0], alr * Za[1], alr * Za[2]
+    g1, g2, g3 = F(ber, Zb[0], ga * f1), F(ber, Zb[1], ga * f2), F(ber, Zb[2], ga * f3)
+    h1 = F(ze, f1, F(ep, g1, der * Z[3]))
+    h2 = F(ze, f2, F(ep, g2, der * Z[4]))
+    h3 = F(ze, f3, F(ep, g3, der * Z[5]))
     # residual of the unused equations (scaled as the complex route's)
-    eA1 = s0 * ((m2c * Zd[0] - s1 * g1) - s2 * h1)
-    eA2 = s0 * ((m2c * Zd[1] - s1 * g2) - s2 * h2)
-    eA3 = s0 * ((m2c * Zd[2] - s1 * g3) - s2 * h3)
-    eB1 = (m2c * Ze[0] - r1 * h1) - r2 * eA1
-    eB2 = (m2c * Ze[1] - r1 * h2) - r2 * eA2
-    eB3 = (m2c * Ze[2] - r1 * h3) - r2 * eA3
-    e2 = max(b * b, x2 * x2, x0 * x0 + x1 * x1, x5 * x5, x3 * x3 + x4 * x4, x8 * x8, x6 * x6 + x7 * x7)
+    eA1 = s0 * F(-s2, h1, F(-s1, g1, m2cr * Zd[0]))
+    eA2 = s0 * F(-s2, h2, F(-s1, g2, m2cr * Zd[1]))
+    eA3 = s0 * F(-s2, h3, F(-s1, g3, m2cr * Zd[2]))
+    eB1 = F(-r2, eA1, F(-r1, h1, m2cr * Ze[0]))
+    eB2 = F(-r2, eA2, F(-r1, h2, m2cr * Ze[1]))
+    eB3 = F(-r2, eA3, F(-r1, h3, m2cr * Ze[2]))
+    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
     sc = 1.0 + math.sqrt(e2)
     t = S._RESIDUAL_TOL2 * sc * sc
     ok = _norm_ok(eA1, eA2, eA3, t) & _norm_ok(eB1, eB2, eB3, t)
@@ -173,6 +207,17 @@ def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst):
     w3 = _sel3(bu, f1, f2, f3, h1, h2, h3)  # −2c W_3
     return (ok, x0 + w1[0], x1 + w1[1], x2 + w1[2], x3 + g1, x4 + g2, x5 + g3, x6 + w3[0], x7 + w3[1],
             x8 + w3[2])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
+    """The real form of the dressing (module docstring) from the unnormalised axis ``n' = n̂/r`` of
+    :func:`_axis`: returns ``(residual_ok, ỹ_1 … ỹ_9)``.  ``K = r K'`` with ``K' y = n' × y``: ``Z_k = r K' v_k``,
+    so ``r`` is folded into ``c`` and the coefficients that multiply ``Z`` (computed while the cross products
+    ``K' y_k`` wait for no division).  Two halves (:func:`_zed3`, :func:`_solve3`), which the lanes run as two
+    loops."""
+    Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst)
+    return _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst)
 
 
 @njit(cache=True, error_model="numpy")
@@ -187,18 +232,18 @@ def _step3(x, b, cst, nu, nu_sq, inv_2nu, newton):
     returns ``(status, ν1, x_new)`` (``x`` itself on a failed step)."""
     x0, x1, x2, x3, x4, x5, x6, x7, x8 = x
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, cst[0], cst[1], cst[2], cst[3], cst[4], cst[5])
-    nu2 = u * u + v * w
+    nu2 = _nu2(u, v, w)
     if newton:
         c = nu2 - nu_sq
         if S._abs2(c) <= 1e-16 * S._abs2(nu2):
-            nu = nu + c * inv_2nu
+            nu = _newton_nu(nu, c, inv_2nu)
         else:
             nu = S._continue_nu(u, v, w, nu)
     k1, k2, nk, st = S._eigvec(u, v, w, nu)
     if st != STATUS_OK:
         return st, nu, x
-    n1, n2, n3 = _axis(k1, k2, nk)
-    r = _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, cst)
+    n1, n2, n3, rk = _axis(k1, k2, nk)
+    r = _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, rk, cst)
     xn = (r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     if not r[0]:
         return STATUS_RESIDUAL, nu, x

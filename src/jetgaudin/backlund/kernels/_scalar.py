@@ -14,7 +14,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from llvmlite import ir
 from numba import njit
+from numba.core import types
+from numba.extending import intrinsic
 
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK
 
@@ -24,6 +27,26 @@ _EIG_TOL2 = 1e-30
 _RESIDUAL_TOL2 = 1e-16
 
 
+
+
+@intrinsic
+def _fma(typingctx, a, b, c):
+    r"""``a·b + c`` rounded once (IEEE 754 fusedMultiplyAdd): LLVM's ``llvm.fma.f64``, an FMA instruction where the
+    target has one, else the C library's correctly rounded ``fma`` (the same bits either way).  Written
+    explicitly where the N = 3 blocks use it, so that the single-orbit route and the vectorised lanes perform the
+    same fused operations (LLVM's own contraction, ``fastmath={"contract"}``, fuses differently in scalar and
+    vector code).  An intrinsic, not a Numba function: no call for Numba's inliner to expand (hundreds of call
+    sites made the lanes kernel's compile twice as long)."""
+    if not all(isinstance(t, (types.Float, types.Integer)) for t in (a, b, c)):
+        return None
+    sig = types.float64(a, b, c)
+
+    def codegen(context, builder, signature, args):
+        vals = [context.cast(builder, v, t, types.float64) for v, t in zip(args, signature.args)]
+        fn = builder.module.declare_intrinsic("llvm.fma", [ir.DoubleType()] * 3)
+        return builder.call(fn, vals)
+
+    return sig, codegen
 
 
 @njit(cache=True, error_model="numpy", inline="always")
