@@ -1,8 +1,9 @@
 r"""N = 3 ensembles: ``LANES`` orbits in lock-step (structure of arrays), branch-free, for SIMD across orbits.
 
-:func:`_lane3` is :func:`._n3._step3` with both sides of every choice computed and the same value selected, so
-each lane gives the bits of the single-orbit route; lanes whose Newton update of ``ν1`` is refused are redone by a
-second pass with ``ν1`` continued by the closest root (:func:`_lanes3_step`).  Import only after
+:func:`_lane_axis` and :func:`_lane_dress` are the two halves of :func:`._n3._step3` with both sides of every
+choice computed and the same value selected, so each lane gives the bits of the single-orbit route (the same
+operations, fused multiply-adds included, in the same order); lanes whose Newton update of ``ν1`` is refused are
+redone by a second pass with ``ν1`` continued by the closest root (:func:`_lanes3_step`).  Import only after
 :func:`._target.configure`.
 """
 
@@ -19,7 +20,8 @@ from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 @njit(cache=True, error_model="numpy", inline="always")
 def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, nu, newton):
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``,
-    the eigenvector and the axis ``n̂``.  Returns ``(ν1, n̂_1, n̂_2, n̂_3, need_root, nonfinite, branch)``;
+    the eigenvector and the unnormalised axis ``n'`` with ``r = 1/|k|²`` (:func:`._n3._axis`).  Returns
+    ``(ν1, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
     ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
     nu2 = _nu2(u, v, w)
@@ -35,8 +37,9 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, bad_scale, branch):
-    """Second half of :func:`._n3._step3` without data-dependent branches: the dressing from the axis ``n̂``.
-    Returns ``(status, y0, …, y8)``; on a failed step the old state (as :func:`._n3._step3` does)."""
+    """Second half of :func:`._n3._step3` without data-dependent branches: the dressing (:func:`._n3._solve3`) from
+    the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``; on a failed step
+    the old state (as :func:`._n3._step3` does)."""
     r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst)
     nonfinite = not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     st = S._sel(nonfinite, STATUS_NONFINITE, 0)
@@ -63,18 +66,16 @@ _MID = _ALIVE + 4
 # the new values of the rows 0-10 and of the status, copied back by a loop of their own (a select stored in place
 # becomes a masked store, ~10× slower on AMD Zen than a plain one)
 _NEW = _MID + 9
-# Z'_0 … Z'_3 between the two halves of the dressing
-_ZED = _NEW + 12
-_ROWS = _ZED + 12
+_ROWS = _NEW + 12
 
 
 @njit(cache=True, error_model="numpy")
 def _lanes_pass(buf, newton):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
-    the lanes (the axis ``n̂``, then the dressing) joined by scratch rows.  Each loop body is short enough for
-    the processor to overlap consecutive lanes' dependency chains (one loop with the whole step was latency-bound:
-    docs/performance.md); the operations, hence the bits, are those of :func:`._n3._step3`.  A lane that is not
-    alive, or is to be redone, keeps its values and status."""
+    the lanes (the axis ``n'``, then the dressing) joined by scratch rows, and a copy of the new values into the
+    state rows (stores to other rows than the loaded ones: no masked stores).  Two shorter loop bodies ran faster
+    than one (docs/performance.md); the operations, hence the bits, are those of :func:`._n3._step3`.  A lane that
+    is not alive, or is to be redone, keeps its values and status."""
     L = LANES
     M = _MID * L
     for l in range(L):
@@ -97,33 +98,11 @@ def _lanes_pass(buf, newton):
                buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
                buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
                buf[32 * L + l])
-        Z = _zed3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
-                  buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[M + 2 * L + l],
-                  buf[M + 3 * L + l], buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
-        buf[_ZED * L + l] = Z[0]
-        buf[(_ZED + 1) * L + l] = Z[1]
-        buf[(_ZED + 2) * L + l] = Z[2]
-        buf[(_ZED + 3) * L + l] = Z[3]
-        buf[(_ZED + 4) * L + l] = Z[4]
-        buf[(_ZED + 5) * L + l] = Z[5]
-        buf[(_ZED + 6) * L + l] = Z[6]
-        buf[(_ZED + 7) * L + l] = Z[7]
-        buf[(_ZED + 8) * L + l] = Z[8]
-        buf[(_ZED + 9) * L + l] = Z[9]
-        buf[(_ZED + 10) * L + l] = Z[10]
-        buf[(_ZED + 11) * L + l] = Z[11]
-    for l in range(L):
-        cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
-               buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
-               buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
-               buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
-               buf[32 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
         alive = buf[_ALIVE * L + l] != 0.0
-        Z = (buf[_ZED * L + l], buf[(_ZED + 1) * L + l], buf[(_ZED + 2) * L + l], buf[(_ZED + 3) * L + l],
-             buf[(_ZED + 4) * L + l], buf[(_ZED + 5) * L + l], buf[(_ZED + 6) * L + l], buf[(_ZED + 7) * L + l],
-             buf[(_ZED + 8) * L + l], buf[(_ZED + 9) * L + l], buf[(_ZED + 10) * L + l], buf[(_ZED + 11) * L + l])
+        Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l], buf[M + 3 * L + l],
+                  buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
                         buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 7 * L + l] != 0.0,
                         buf[M + 8 * L + l] != 0.0)

@@ -42,7 +42,7 @@ def _fma(typingctx, a, b, c):
     sig = types.float64(a, b, c)
 
     def codegen(context, builder, signature, args):
-        vals = [context.cast(builder, v, t, types.float64) for v, t in zip(args, signature.args)]
+        vals = [context.cast(builder, v, t, types.float64) for v, t in zip(args, signature.args, strict=True)]
         fn = builder.module.declare_intrinsic("llvm.fma", [ir.DoubleType()] * 3)
         return builder.call(fn, vals)
 
