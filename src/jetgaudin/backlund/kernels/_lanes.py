@@ -36,15 +36,15 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, bad_scale, branch):
+def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, bad_scale, branch, a):
     """Second half of :func:`._n3._step3` without data-dependent branches: the dressing (:func:`._n3._solve3`) from
-    the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``; on a failed step
-    the old state (as :func:`._n3._step3` does)."""
+    the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``; the old state on a
+    failed step (as :func:`._n3._step3` does) and when ``a`` is false (a lane not stepped: one select for both)."""
     r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst)
     nonfinite = not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     st = S._sel(nonfinite, STATUS_NONFINITE, 0)
     st = S._sel(bad_scale, STATUS_NONFINITE, S._sel(branch, STATUS_BRANCH, S._sel(not r[0], STATUS_RESIDUAL, st)))
-    ok = st == 0
+    ok = (st == 0) & a
     return (st, S._sel(ok, r[1], x0), S._sel(ok, r[2], x1), S._sel(ok, r[3], x2), S._sel(ok, r[4], x3),
             S._sel(ok, r[5], x4), S._sel(ok, r[6], x5), S._sel(ok, r[7], x6), S._sel(ok, r[8], x7),
             S._sel(ok, r[9], x8))
@@ -103,21 +103,21 @@ def _lanes_pass(buf, newton):
         alive = buf[_ALIVE * L + l] != 0.0
         Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l], buf[M + 3 * L + l],
                   buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
-        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
-                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 7 * L + l] != 0.0,
-                        buf[M + 8 * L + l] != 0.0)
         redo = S._sel(alive, buf[M + 6 * L + l] != 0.0, False)
         a = S._sel(redo, False, alive)
+        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
+                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 7 * L + l] != 0.0,
+                        buf[M + 8 * L + l] != 0.0, a)
         N = _NEW * L
-        buf[N + l] = S._sel(a, r[1], x0)
-        buf[N + L + l] = S._sel(a, r[2], x1)
-        buf[N + 2 * L + l] = S._sel(a, r[3], x2)
-        buf[N + 3 * L + l] = S._sel(a, r[4], x3)
-        buf[N + 4 * L + l] = S._sel(a, r[5], x4)
-        buf[N + 5 * L + l] = S._sel(a, r[6], x5)
-        buf[N + 6 * L + l] = S._sel(a, r[7], x6)
-        buf[N + 7 * L + l] = S._sel(a, r[8], x7)
-        buf[N + 8 * L + l] = S._sel(a, r[9], x8)
+        buf[N + l] = r[1]
+        buf[N + L + l] = r[2]
+        buf[N + 2 * L + l] = r[3]
+        buf[N + 3 * L + l] = r[4]
+        buf[N + 4 * L + l] = r[5]
+        buf[N + 5 * L + l] = r[6]
+        buf[N + 6 * L + l] = r[7]
+        buf[N + 7 * L + l] = r[8]
+        buf[N + 8 * L + l] = r[9]
         buf[N + 9 * L + l] = S._sel(a, buf[M + l], buf[9 * L + l])
         buf[N + 10 * L + l] = S._sel(a, buf[M + L + l], buf[10 * L + l])
         buf[N + 11 * L + l] = S._sel(a, float(r[0]), buf[_STATUS * L + l])
