@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit, prange
 
 from . import _scalar as S
-from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _solve3, _zed3
+from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _solve3, _tol3, _zed3
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
@@ -36,11 +36,11 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, bad_scale, branch, a):
+def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, bad_scale, branch, a):
     """Second half of :func:`._n3._step3` without data-dependent branches: the dressing (:func:`._n3._solve3`) from
     the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``; the old state on a
     failed step (as :func:`._n3._step3` does) and when ``a`` is false (a lane not stepped: one select for both)."""
-    r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst)
+    r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t)
     nonfinite = not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     st = S._sel(nonfinite, STATUS_NONFINITE, 0)
     st = S._sel(bad_scale, STATUS_NONFINITE, S._sel(branch, STATUS_BRANCH, S._sel(not r[0], STATUS_RESIDUAL, st)))
@@ -61,11 +61,12 @@ _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
 _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
-# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch
+# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch, the residual
+# tolerance
 _MID = _ALIVE + 4
 # the new values of the rows 0-10 and of the status, copied back by a loop of their own (a select stored in place
 # becomes a masked store, ~10× slower on AMD Zen than a plain one)
-_NEW = _MID + 9
+_NEW = _MID + 10
 _ROWS = _NEW + 12
 
 
@@ -92,6 +93,9 @@ def _lanes_pass(buf, newton):
         buf[M + 6 * L + l] = S._sel(r[5], 1.0, 0.0)
         buf[M + 7 * L + l] = S._sel(r[6], 1.0, 0.0)
         buf[M + 8 * L + l] = S._sel(r[7], 1.0, 0.0)
+        # the residual tolerance (from the state alone) here, where the loop has idle issue slots
+        buf[M + 9 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+                                   buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
                buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
@@ -106,7 +110,7 @@ def _lanes_pass(buf, newton):
         redo = S._sel(alive, buf[M + 6 * L + l] != 0.0, False)
         a = S._sel(redo, False, alive)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
-                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 7 * L + l] != 0.0,
+                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 9 * L + l], buf[M + 7 * L + l] != 0.0,
                         buf[M + 8 * L + l] != 0.0, a)
         N = _NEW * L
         buf[N + l] = r[1]

@@ -148,6 +148,16 @@ def _norm_ok(e1, e2, e3, t):
     return (e3 * e3 <= t) & (F(e1, e1, e2 * e2) <= t)
 
 
+@njit(cache=True, error_model="numpy")
+def _tol3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
+    """The squared residual tolerance of the step, ``(1e-8 (1 + max_m |ℓ_m|))²`` with ``|ℓ_m|`` the largest entry
+    of ``ℓ_m = y_m·σ`` (``|u| = |y³|``, ``|v| = |w| = |y¹ + iy²|``; ``ℓ_0 = diag(b, −b)``), as the complex
+    route's relative test."""
+    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
+    sc = 1.0 + math.sqrt(e2)
+    return S._RESIDUAL_TOL2 * sc * sc
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     """First half of :func:`_dress3`: ``Z'_k = K' v_k`` (k = 0..3; 12 floats), ``v_k = (y_{k+1} + m y_k) − c K y_k``
@@ -170,9 +180,10 @@ def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst):
+def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
     """Second half of :func:`_dress3`: the recurrence for ``W`` on the selected equations, the residual of the
-    other two and the new state, from ``Z = (Z'_0 … Z'_3)`` of :func:`_zed3`."""
+    other two (tested against ``t`` of :func:`_tol3`) and the new state, from ``Z = (Z'_0 … Z'_3)`` of
+    :func:`_zed3`."""
     bu = cst[8] != 0.0
     al, be, ga, de, ep, ze = cst[9], cst[10], cst[11], cst[12], cst[13], cst[14]
     s0, s1, s2, r1, r2, m2c = cst[15], cst[16], cst[17], cst[18], cst[19], cst[20]
@@ -199,9 +210,6 @@ def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst):
     eB1 = F(-r2, eA1, F(-r1, h1, m2cr * Ze[0]))
     eB2 = F(-r2, eA2, F(-r1, h2, m2cr * Ze[1]))
     eB3 = F(-r2, eA3, F(-r1, h3, m2cr * Ze[2]))
-    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
-    sc = 1.0 + math.sqrt(e2)
-    t = S._RESIDUAL_TOL2 * sc * sc
     ok = _norm_ok(eA1, eA2, eA3, t) & _norm_ok(eB1, eB2, eB3, t)
     w1 = _sel3(bu, h1, h2, h3, f1, f2, f3)  # −2c W_1
     w3 = _sel3(bu, f1, f2, f3, h1, h2, h3)  # −2c W_3
@@ -217,7 +225,8 @@ def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     ``K' y_k`` wait for no division).  Two halves (:func:`_zed3`, :func:`_solve3`), which the lanes run as two
     loops."""
     Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst)
-    return _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst)
+    t = _tol3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b)
+    return _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t)
 
 
 @njit(cache=True, error_model="numpy")
