@@ -54,7 +54,7 @@ def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, ba
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 32
-# rows: 0-8 state, 9-10 ν, 11 b, 12-32 the constants of _n3._constants3, then alive, status, redo (the lane
+# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status, redo (the lane
 # needs the closest-root fallback) and a copy of alive during the second pass
 _C0 = 12
 _ALIVE = _C0 + NCONST
@@ -100,8 +100,7 @@ def _lanes_pass(buf, newton):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
                buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
                buf[22 * L + l], buf[23 * L + l], buf[24 * L + l], buf[25 * L + l], buf[26 * L + l],
-               buf[27 * L + l], buf[28 * L + l], buf[29 * L + l], buf[30 * L + l], buf[31 * L + l],
-               buf[32 * L + l])
+               buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
         alive = buf[_ALIVE * L + l] != 0.0
@@ -173,13 +172,17 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
     W = X0.shape[0]
     L = LANES
     buf = np.empty(_ROWS * L)
+    cur = eta[0]
+    cst = _constants3(cur)
     for l in range(L):
         src = l if l < W else 0
         for i in range(9):
             buf[i * L + l] = X0[src, i]
         buf[9 * L + l] = nu0[src].real
         buf[10 * L + l] = nu0[src].imag
-        cst = _constants3(eta[src])
+        if eta[src] != cur:  # the constants of one η are computed once
+            cur = eta[src]
+            cst = _constants3(cur)
         for i in range(NCONST):
             buf[(_C0 + i) * L + l] = cst[i]
         buf[11 * L + l] = b[src]

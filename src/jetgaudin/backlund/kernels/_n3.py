@@ -54,20 +54,21 @@ from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 F = S._fma
 
 #: number of per-run constants of :func:`_constants3`
-NCONST = 21
+NCONST = 17
 
 
 @njit(cache=True, error_model="numpy")
 def _constants3(eta):
     r"""Per-run constants of the N = 3 step for ``η = a + ic`` (a tuple of ``NCONST`` floats):
     ``z^1, z^2, z^3`` (``z = 1/η``, real and imaginary parts), ``m = −a``, ``c``, ``bu`` (1.0: bottom-up,
-    ``|η| ≥ 1``), the recurrence coefficients ``α, β, γ, δ, ε, ζ`` (with the factor ``−2c`` of ``ỹ = y − 2cW``
-    in ``α, β, δ``), the residual coefficients ``s0, s1, s2, r1, r2`` and ``−2c``.
+    ``|η| ≥ 1``), the recurrence coefficients ``α, γ, ζ`` (with the factor ``−2c`` of ``ỹ = y − 2cW`` in ``α``),
+    the residual coefficients ``s0, s1, δ1, r2`` and ``−2c``.
 
-    ``f = αZ_a``, ``g = βZ_b + γf``, ``h = (δZ_c + εg) + ζf`` with ``(Z_a, Z_b, Z_c) = (Z_3, Z_2, Z_1)``
-    bottom-up (``f, g, h = −2c (W_3, W_2, W_1)``) and ``(Z_{−1}, Z_0, Z_1)`` top-down (``−2c (W_1, W_2, W_3)``);
-    residuals ``e_A = s0 ((−2c Z_d − s1 g) − s2 h)``, ``e_B = (−2c Z_e − r1 h) − r2 e_A`` with
-    ``(Z_d, Z_e) = (Z_0, Z_{−1})`` bottom-up, ``(Z_2, Z_3)`` top-down."""
+    ``f = αZ_a``, ``g = αZ_b + γf``, ``h = (αZ_1 + γg) + ζf`` with ``(Z_a, Z_b) = (Z_3, Z_2)`` bottom-up
+    (``f, g, h = −2c (W_3, W_2, W_1)``: ``α = −2c/δ2``, ``γ = −δ1/δ2``, ``ζ = −1/δ2``) and ``(Z_{−1}, Z_0)`` top-down
+    (``−2c (W_1, W_2, W_3)``: ``α = −2c``, ``γ = −δ1``, ``ζ = −δ2``); residuals
+    ``e_A = s0 ((−2c Z_d − s1 g) − δ1 h)``, ``e_B = (−2c Z_e − s1 h) − r2 e_A`` with ``(Z_d, Z_e) = (Z_0, Z_{−1})``,
+    ``(s0, s1, r2) = (1/δ2, 1, δ1)`` bottom-up and ``(Z_2, Z_3)``, ``(1, δ2, 0)`` top-down."""
     z1 = S._cdiv(complex(1.0, 0.0), eta)
     z2 = z1 * z1
     z3 = z2 * z1
@@ -75,12 +76,10 @@ def _constants3(eta):
     c = eta.imag
     m2c = -(c + c)
     if bottom_up:
-        al = m2c * inv_d2
-        ga = -(inv_d2 * d1)
         return (z1.real, z1.imag, z2.real, z2.imag, z3.real, z3.imag, -eta.real, c, 1.0,
-                al, al, ga, al, ga, -inv_d2, inv_d2, 1.0, d1, 1.0, d1, m2c)
+                m2c * inv_d2, -(inv_d2 * d1), -inv_d2, inv_d2, 1.0, d1, d1, m2c)
     return (z1.real, z1.imag, z2.real, z2.imag, z3.real, z3.imag, -eta.real, c, 0.0,
-            m2c, m2c, -d1, m2c, -d1, -d2, 1.0, d2, d1, d2, 0.0, m2c)
+            m2c, -d1, -d2, 1.0, d2, d1, 0.0, m2c)
 
 
 @njit(cache=True, error_model="numpy")
@@ -185,11 +184,9 @@ def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
     other two (tested against ``t`` of :func:`_tol3`) and the new state, from ``Z = (Z'_0 … Z'_3)`` of
     :func:`_zed3`."""
     bu = cst[8] != 0.0
-    al, be, ga, de, ep, ze = cst[9], cst[10], cst[11], cst[12], cst[13], cst[14]
-    s0, s1, s2, r1, r2, m2c = cst[15], cst[16], cst[17], cst[18], cst[19], cst[20]
+    al, ga, ze = cst[9], cst[10], cst[11]
+    s0, s1, d1, r2, m2c = cst[12], cst[13], cst[14], cst[15], cst[16]
     alr = al * r
-    ber = be * r
-    der = de * r
     m2cr = m2c * r
     a0x = n2 * b  # Z'_{-1}
     a0y = -(n1 * b)
@@ -199,17 +196,17 @@ def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
     Zd = _sel3(bu, Z[0], Z[1], Z[2], Z[6], Z[7], Z[8])
     Ze = _sel3(bu, a0x, a0y, 0.0, Z[9], Z[10], Z[11])
     f1, f2, f3 = alr * Za[0], alr * Za[1], alr * Za[2]
-    g1, g2, g3 = F(ber, Zb[0], ga * f1), F(ber, Zb[1], ga * f2), F(ber, Zb[2], ga * f3)
-    h1 = F(ze, f1, F(ep, g1, der * Z[3]))
-    h2 = F(ze, f2, F(ep, g2, der * Z[4]))
-    h3 = F(ze, f3, F(ep, g3, der * Z[5]))
+    g1, g2, g3 = F(alr, Zb[0], ga * f1), F(alr, Zb[1], ga * f2), F(alr, Zb[2], ga * f3)
+    h1 = F(ze, f1, F(ga, g1, alr * Z[3]))
+    h2 = F(ze, f2, F(ga, g2, alr * Z[4]))
+    h3 = F(ze, f3, F(ga, g3, alr * Z[5]))
     # residual of the unused equations (scaled as the complex route's)
-    eA1 = s0 * F(-s2, h1, F(-s1, g1, m2cr * Zd[0]))
-    eA2 = s0 * F(-s2, h2, F(-s1, g2, m2cr * Zd[1]))
-    eA3 = s0 * F(-s2, h3, F(-s1, g3, m2cr * Zd[2]))
-    eB1 = F(-r2, eA1, F(-r1, h1, m2cr * Ze[0]))
-    eB2 = F(-r2, eA2, F(-r1, h2, m2cr * Ze[1]))
-    eB3 = F(-r2, eA3, F(-r1, h3, m2cr * Ze[2]))
+    eA1 = s0 * F(-d1, h1, F(-s1, g1, m2cr * Zd[0]))
+    eA2 = s0 * F(-d1, h2, F(-s1, g2, m2cr * Zd[1]))
+    eA3 = s0 * F(-d1, h3, F(-s1, g3, m2cr * Zd[2]))
+    eB1 = F(-r2, eA1, F(-s1, h1, m2cr * Ze[0]))
+    eB2 = F(-r2, eA2, F(-s1, h2, m2cr * Ze[1]))
+    eB3 = F(-r2, eA3, F(-s1, h3, m2cr * Ze[2]))
     ok = _norm_ok(eA1, eA2, eA3, t) & _norm_ok(eB1, eB2, eB3, t)
     w1 = _sel3(bu, h1, h2, h3, f1, f2, f3)  # −2c W_1
     w3 = _sel3(bu, f1, f2, f3, h1, h2, h3)  # −2c W_3
