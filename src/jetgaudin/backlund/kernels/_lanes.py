@@ -133,6 +133,17 @@ def _lanes_pass(buf, newton):
 
 
 @njit(cache=True, error_model="numpy")
+def _any_row(buf, row):
+    """Whether a row of ``buf`` (holding 0.0 or a positive flag/status) has a nonzero entry: an OR of the bits,
+    which vectorises (a floating-point reduction would not), in place of a scalar loop with a branch per lane."""
+    bits = buf.view(np.int64)
+    acc = 0
+    for l in range(row * LANES, (row + 1) * LANES):
+        acc |= bits[l]
+    return acc != 0
+
+
+@njit(cache=True, error_model="numpy")
 def _lanes3_step(buf, newton):
     """One step of ``LANES`` lock-stepped N = 3 orbits stored by rows in ``buf`` (``_ROWS × LANES``).
 
@@ -143,6 +154,8 @@ def _lanes3_step(buf, newton):
     redo = False
     for second in (False, True):  # one call site of the pass (LLVM inlines it once)
         if second:
+            if not _any_row(buf, _REDO):
+                break
             for l in range(L):
                 if buf[_REDO * L + l] != 0.0:
                     redo = True
@@ -196,7 +209,7 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         fail[l] = steps
     for n in range(steps):
         _lanes3_step(buf, n > 0 or cont)
-        for l in range(L):
+        for l in range(L if _any_row(buf, _STATUS) else 0):
             if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
                 buf[_ALIVE * L + l] = 0.0
                 if l < W:
