@@ -178,7 +178,7 @@ def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     return Z0[0], Z0[1], Z0[2], Z1[0], Z1[1], Z1[2], Z2[0], Z2[1], Z2[2], Z3[0], Z3[1], Z3[2]
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
     """Second half of :func:`_dress3`: the recurrence for ``W`` on the selected equations, the residual of the
     other two (tested against ``t`` of :func:`_tol3`) and the new state, from ``Z = (Z'_0 … Z'_3)`` of
