@@ -10,7 +10,8 @@ timings use wall time.  No mathematics here: everything numerical comes from the
 Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads and
 the flop rate; (e) N = 1..5; (f) the main job in a fresh process; (g) memory of a long run; (h) the fixed cost of
 short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts
-of a call's per-orbit set-up and (l) cold compile kernel by kernel (``setup_parts.py``).
+of a call's per-orbit set-up and (l) cold compile kernel by kernel (``setup_parts.py``); (m) per-step accuracy of the
+compiled N = 3 and generic routes against the NumPy route (``speed_parts.py``).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import numpy as np
 __all__ = ["PARTS", "Row", "run_benchmarks", "machine_info", "rows_to_markdown", "rows_to_text"]
 
 #: the letters of the parts, in order
-PARTS = "abcdefghijkl"
+PARTS = "abcdefghijklm"
 
 X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
 B_APPENDIX2 = 1.0
@@ -408,6 +409,8 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
          _dask_missing),
         ("k", lambda: setup.bench_setup(rows, Row, orbits=10**4 if quick else 10**5, repeat=3 if quick else 15), None),
         ("l", lambda: setup.bench_compile_parts(rows, Row), None),
+        ("m", lambda: extra.bench_step_accuracy(rows, Row, steps=20 if quick else 200, states=1 if quick else 4),
+         None),
     ]
     for letters, run, missing in plan:
         if not set(letters) & set(parts):

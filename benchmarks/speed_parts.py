@@ -1,5 +1,6 @@
-"""Parts (h) fixed cost of short calls, (i) first-use compile time and (j) Dask LocalCluster vs threads of the
-benchmark harness (``benchmarks/harness.py`` loads this file; it has no command line of its own)."""
+"""Parts (h) fixed cost of short calls, (i) first-use compile time, (j) Dask LocalCluster vs threads and (m) per-step
+accuracy of the compiled routes of the benchmark harness (``benchmarks/harness.py`` loads this file; it has no
+command line of its own)."""
 
 from __future__ import annotations
 
@@ -149,38 +150,52 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
             os.environ["NUMBA_NUM_THREADS"] = old
 
 
-def bench_step_accuracy(rows, Row, steps=200):
-    """Per-step error of the compiled N = 3 and generic routes against the NumPy reference route (relative to
-    ``max|X|``): after one step, and ``max_n err_n/n`` over ``steps`` steps, on Appendix 2 and 4 random leaf states
-    for each η (both division directions, two near the pole); and the NumPy route's own sensitivity (a 1e-16
-    relative perturbation of X0), which bounds what "round-off level" can mean.  Not a lettered part of the
-    harness yet; call it with the harness's ``Row``."""
+def bench_step_accuracy(rows, Row, steps=200, states=4, etas=(5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j,
+                                                               0.3 + 0.5j, -3 + 2j)):
+    """(m) Per-step error of the compiled N = 3 and generic routes against the NumPy reference route, relative to
+    ``max|X|`` over the orbit: ``max_n err_n / n`` over ``steps`` steps (the row's value) and the error after one
+    step, on Appendix 2 and ``states`` random leaf states (``sample_on_leaf``, ``b = 1.3``) for each η of ``etas``
+    (both division directions; ``|η| < 1``: near the pole η = 0); and the NumPy route's own sensitivity (the same
+    measure for a 1e-16 relative perturbation of X0), which bounds what "round-off level" can mean.  One row per
+    route and case group, then one summary row per route: its value is the worst per-step error over all cases,
+    its note (and ``extra``) the max over the random cases with ``|η| ≥ 1``, over those with ``|η| < 1``, and
+    Appendix 2.  ``ν1`` comes from the NumPy branch rule, so the routes start from the same carry."""
     import jetgaudin as jg
     from jetgaudin.backlund import kernels
     from jetgaudin.ensemble import sample_on_leaf
 
     rng = np.random.default_rng(7)
     cases = [("Appendix 2", X0_APPENDIX2, 1.0, 5 + 0.1j)]
-    for eta in (5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j, 0.3 + 0.5j, -3 + 2j):
+    for eta in etas:
         c = np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), 1.0])
-        for x in sample_on_leaf(3, c, 4, seed=int(rng.integers(1 << 30)), scale=0.5):
+        for x in sample_on_leaf(3, c, states, seed=int(rng.integers(1 << 30)), scale=0.5):
             cases.append((f"η = {eta}", x, 1.3, eta))
     n = np.arange(1, steps + 1)
-    worst: dict[str, list[float]] = {}
+    routes = ("N = 3", "generic")
+    worst: dict[str, list[float]] = {}  # "route case": [after one step, per step, NumPy route's sensitivity]
+    groups = {r: {"|η| ≥ 1": [0.0, 0.0], "|η| < 1": [0.0, 0.0], "Appendix 2": [0.0, 0.0]} for r in routes}
     for name, x, b, eta in cases:
         B = jg.TwoPointBacklund(b, eta)
         ref = B.iterate(x, steps, kernel="numpy")
         moved = B.iterate(x * (1 + 1e-16 * rng.choice([-1, 1], 9)), steps, kernel="numpy")
         nu0 = B.nu1(x)
         s = np.max(np.abs(ref))
-        got = {r: kernels.iterate_single(x, b, eta, nu0, False, steps, 1, specialise=r == "N = 3")[0]
-               for r in ("N = 3", "generic")}
-        for r, orbit in got.items():
+        sens = float(np.max(np.max(np.abs(moved - ref), axis=1)[1:] / s / n))
+        group = "Appendix 2" if name == "Appendix 2" else ("|η| < 1" if abs(eta) < 1 else "|η| ≥ 1")
+        for r in routes:
+            orbit = kernels.iterate_single(x, b, eta, nu0, False, steps, 1, specialise=r == "N = 3")[0]
             d = np.max(np.abs(orbit - ref), axis=1) / s
+            one, per = float(d[1]), float(np.max(d[1:] / n))
             w = worst.setdefault(f"{r} {name}", [0.0, 0.0, 0.0])
-            w[0] = max(w[0], d[1])
-            w[1] = max(w[1], float(np.max(d[1:] / n)))
-            w[2] = max(w[2], float(np.max(np.max(np.abs(moved - ref), axis=1)[1:] / s / n)))
+            w[:] = max(w[0], one), max(w[1], per), max(w[2], sens)
+            g = groups[r][group]
+            g[:] = max(g[0], per), max(g[1], one)
     for key, (one, per, sens) in worst.items():
-        rows.append(Row("acc", f"{key}: per-step error vs NumPy", per, "relative",
+        rows.append(Row("m", f"{key}: per-step error vs NumPy", per, "relative",
                         f"after one step {one:.2g}; NumPy route moved by 1e-16 in X0: {sens:.2g} per step"))
+    for r in routes:
+        g = groups[r]
+        rows.append(Row("m", f"{r} route: worst per-step error vs NumPy", max(v[0] for v in g.values()), "relative",
+                        "; ".join(f"{k} {v[0]:.2g}" for k, v in g.items())
+                        + f"; after one step, all cases {max(v[1] for v in g.values()):.2g}; {len(cases)} cases, "
+                        f"{steps} steps", extra={k: v[0] for k, v in g.items()}))
