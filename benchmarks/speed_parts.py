@@ -16,15 +16,6 @@ import numpy as np
 X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
 
 
-def _median_wall(fn, repeat: int) -> tuple[float, float]:
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return float(np.median(t)), float(np.min(t))
-
-
 def _ensemble(orbits: int, seed: int = 2):
     from jetgaudin.ensemble import sample_on_leaf
 
@@ -35,6 +26,8 @@ def _ensemble(orbits: int, seed: int = 2):
 def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
     """(h) ``TwoPointBacklund.iterate(X, 10)`` on a batch of ``orbits`` N = 3 orbits: compiled vs NumPy-vectorised
     (the reference), and the per-orbit fixed cost of a call (``steps = 0``: branch rule, set-up, output)."""
+    from jetgaudin_benchmarks_harness import timed  # the harness (registered under this name) loads this file
+
     import jetgaudin as jg
     from jetgaudin.backlund import kernels
 
@@ -42,10 +35,12 @@ def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
     B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
     kernels.prepare(9, orbits, notify=lambda m: None)
     B.iterate(X[:300], 1, kernel="compiled")
-    tc, tcb = _median_wall(lambda: B.iterate(X, steps, kernel="compiled"), 5)
-    t0, _ = _median_wall(lambda: B.iterate(X, 0, kernel="compiled"), 5)
-    tnu, _ = _median_wall(lambda: kernels.nu_default(X, b, eta), 5)
-    tn, _ = _median_wall(lambda: B.iterate(X, steps, kernel="numpy"), 3)
+    wall = time.perf_counter  # all threads
+    t = timed(lambda: B.iterate(X, steps, kernel="compiled"), 5, wall)
+    tc, tcb = np.median(t), t.min()
+    t0 = np.median(timed(lambda: B.iterate(X, 0, kernel="compiled"), 5, wall))
+    tnu = np.median(timed(lambda: kernels.nu_default(X, b, eta), 5, wall))
+    tn = np.median(timed(lambda: B.iterate(X, steps, kernel="numpy"), 3, wall))
     work = orbits * steps
     rows.append(Row("h", f"iterate(X, {steps}), {orbits:.0e} orbits, compiled", work / tc, "orbit-steps/s",
                     f"best {work / tcb:.3g}; wall, all threads"))
@@ -97,6 +92,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
     (empty tasks), and the bits compared."""
     import numba
     from dask.distributed import Client, LocalCluster
+    from jetgaudin_benchmarks_harness import timed  # the harness (registered under this name) loads this file
 
     from jetgaudin.backlund import kernels
 
@@ -110,7 +106,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
         nonlocal ref
         ref = kernels.run_batch(X, b, eta, nu0, False, steps, steps)[1]
 
-    tt, _ = _median_wall(threaded, 3)
+    tt = np.median(timed(threaded, 3, time.perf_counter))
     rows.append(Row("j", f"threads (2): {orbits:.0e} × {steps}", orbits * steps / tt, "orbit-steps/s",
                     f"{tt:.2f} s wall"))
     old = os.environ.get("NUMBA_NUM_THREADS")
@@ -138,7 +134,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
                     return np.concatenate([r[1] for r in client.gather(futs)])
 
                 final = run()
-                td, _ = _median_wall(run, 3)
+                td = np.median(timed(run, 3, time.perf_counter))
                 same = bool(np.array_equal(final, ref))
                 rows.append(Row("j", f"Dask LocalCluster 2×1, chunk {c} ({len(starts)} tasks)",
                                 orbits * steps / td, "orbit-steps/s",
