@@ -7,11 +7,12 @@ thread's CPU time (:func:`time.thread_time`, robust to other processes on a shar
 timings use wall time.  No mathematics here: everything numerical comes from the public API and
 :mod:`jetgaudin.backlund.kernels`.  Parts needing heyoka or Dask are skipped with a note when those are missing.
 
-Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads and
-the flop rate; (e) N = 1..5; (f) the main job in a fresh process; (g) memory of a long run; (h) the fixed cost of
-short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts
-of a call's per-orbit set-up and (l) cold compile kernel by kernel (``setup_parts.py``); (m) per-step accuracy of the
-compiled N = 3 and generic routes against the NumPy route (``speed_parts.py``).
+Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads (and
+in 2 processes × 1 thread at once: the two-core ceiling) and the flop rate; (e) N = 1..5; (f) the main job in a
+fresh process; (g) memory of a long run; (h) the fixed cost of short calls; (i) first-use compile time; (j) Dask
+LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts of a call's per-orbit set-up and (l) cold compile
+kernel by kernel (``setup_parts.py``); (m) per-step accuracy of the compiled N = 3 and generic routes against the
+NumPy route (``speed_parts.py``).
 """
 
 from __future__ import annotations
@@ -242,9 +243,12 @@ def bench_fresh_process(rows):
     rows.append(Row("f", "main job, fresh process, NumPy", out["numpy"] * 1e3, "ms", ""))
 
 
-def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=None):
+def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=None,
+                    processes_size=(10**5, 100)):
     """(c, d) ensembles of N = 3 orbits (B orbits × steps, for each pair of ``sizes``) on 1 and 2 threads; flop rate
-    vs peak."""
+    vs peak.  For the size ``processes_size`` also the machine's two-core ceiling without Numba's threads: the
+    1-thread rate of the same work in one fresh process alone, then in each of 2 processes running it at the same
+    time (``speed_parts.process_rates``: a barrier, only the overlapping calls count), and their sum."""
     import numba
 
     from jetgaudin import ensemble as ens
@@ -287,6 +291,9 @@ def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10*
         numba.set_num_threads(nmax)
         if 2 in rate:
             rows.append(Row("c", f"ensemble {B:.0e} × {steps}: 2 threads / 1 thread", rate[2] / rate[1], "x", ""))
+        if (B, steps) == tuple(processes_size):
+            _bench_two_processes(rows, X0, b, eta, nu0, steps, rate)
+        if 2 in rate:
             peak = _peak_gflops(info or machine_info(), 2)
             rows.append(
                 Row(
@@ -298,6 +305,38 @@ def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10*
                     f"peak {peak:.0f} GFLOP/s",
                 )
             )
+
+
+def _bench_two_processes(rows, X0, b, eta, nu0, steps, rate, rounds=2):
+    """(c) rows of the 1-thread rate in 1 process alone and in each of 2 processes at once (wall; CPU-time rates,
+    hypervisor steal and the load in the notes), alternated ``rounds`` times (means over the rounds), next to the
+    1- and 2-thread rows of ``rate``."""
+    proc = _sibling("speed_parts").process_rates
+    B = X0.shape[0]
+    runs: dict[int, list[dict]] = {1: [], 2: []}
+    for _ in range(rounds):
+        for n in (1, 2):
+            runs[n].append(proc(X0, b, eta, nu0, steps, n))
+
+    def mean(n, key):  # per process, over the rounds
+        return np.mean([r[key] for r in runs[n]], axis=0)
+
+    alone, each, cpu1, cpu2 = mean(1, "wall")[0], mean(2, "wall"), mean(1, "cpu")[0], mean(2, "cpu")
+    head = f"ensemble {B:.0e} × {steps}"
+    kept = "+".join(str(k) for r in runs[2] for k in r["kept"])
+    rows.append(Row("c", f"{head}, 1 process × 1 thread, alone", alone, "orbit-steps/s",
+                    f"fresh process, NUMBA_NUM_THREADS=1, wall; CPU-time rate {cpu1:.3g}; mean of {rounds} rounds "
+                    "alternated with the 2-process runs"))
+    rows.append(Row("c", f"{head}, 2 processes × 1 thread, each", float(np.mean(each)), "orbit-steps/s",
+                    "processes " + ", ".join(f"{w:.3g}" for w in each) + " (wall); CPU-time rates "
+                    + ", ".join(f"{c:.3g}" for c in cpu2) + f"; calls inside the overlap {kept}; hypervisor steal "
+                    f"{100 * max(r['steal'] for r in runs[2]):.1f} %; load {os.getloadavg()[0]:.2f}"))
+    total = float(np.sum(each))
+    vs = f"; the 2-thread row is {rate[2] / total:.2f} × this" if 2 in rate else ""
+    rows.append(Row("c", f"{head}, 2 processes × 1 thread, sum", total, "orbit-steps/s",
+                    f"{total / alone:.2f} × one process alone (2 = two independent cores){vs}.  The two-core "
+                    "ceiling without Numba's threads: a CPU-time rate below the one alone = the cores slow each "
+                    "other (shared cache, memory, hypervisor); a wall rate below the CPU-time rate = other jobs"))
 
 
 def bench_generic(rows, steps=10**5, numpy_steps=300):
@@ -404,7 +443,8 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
                                    repeat=3 if quick else 5), None),
         ("b", lambda: bench_appendix2(rows, repeat=5 if quick else 50), _heyoka_missing),
         ("cd", lambda: bench_ensembles(rows, sizes=((10**3, 100), (10**4, 100)) if quick else
-                                       ((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=info), None),
+                                       ((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=info,
+                                       processes_size=(10**4, 100) if quick else (10**5, 100)), None),
         ("e", lambda: bench_generic(rows, steps=10**4 if quick else 10**5, numpy_steps=50 if quick else 300), None),
         ("f", lambda: bench_fresh_process(rows), None),
         ("g", lambda: bench_memory(rows, steps=10**6 if quick else 10**8), None),

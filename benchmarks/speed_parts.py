@@ -146,6 +146,82 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
             os.environ["NUMBA_NUM_THREADS"] = old
 
 
+_PROCESS_RATE = r"""
+import json, sys, time
+sys.path[:] = json.loads(sys.argv[1])  # the parent's path: the same jetgaudin
+import numpy as np
+from jetgaudin.backlund import kernels
+d = np.load(sys.argv[2])
+X, b, eta, nu, steps = d["X"], d["b"], d["eta"], d["nu"], int(sys.argv[3])
+kernels.run_batch(X[:4], b[:4], eta[:4], nu[:4], False, 2, 1)  # load the cached kernel before the barrier
+print("ready", flush=True)
+sys.stdin.readline()  # the barrier: the parent releases every process at once
+out = []
+for _ in range(int(sys.argv[4])):
+    w, c = time.perf_counter(), time.thread_time()
+    kernels.run_batch(X, b, eta, nu, False, steps, steps)
+    out.append((w, time.perf_counter(), time.thread_time() - c))
+print(json.dumps(out), flush=True)
+"""
+
+
+def _steal_jiffies() -> tuple[int, int]:
+    """(steal, total) jiffies of all CPUs from ``/proc/stat`` (Linux; ``(0, 0)`` elsewhere): the time the
+    hypervisor ran something else on this VM's vCPUs."""
+    try:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+    except (OSError, ValueError):
+        return 0, 0
+    return (v[7] if len(v) > 7 else 0), sum(v[:8])
+
+
+def process_rates(X, b, eta, nu, steps: int, processes: int, reps: int = 5) -> dict:
+    """``run_batch(X, b, eta, nu, False, steps, steps)`` in ``processes`` fresh processes at once (this interpreter,
+    this ``sys.path``, ``NUMBA_NUM_THREADS=1``): each loads the cached kernel, waits at a barrier (a line on its
+    stdin), then times ``reps`` calls (wall with :func:`time.perf_counter`, a system-wide monotonic clock on Linux,
+    and its thread's CPU time).  Only the calls that lie wholly inside the window where every process was calling
+    count (the overlap).  Returns ``{"wall": [orbit-steps/s per process], "cpu": [...], "kept": [calls],
+    "steal": fraction of CPU time stolen by the hypervisor meanwhile}`` (medians of the kept calls)."""
+    import json
+    import tempfile
+
+    work = X.shape[0] * steps
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "batch.npz")
+        np.savez(path, X=X, b=b, eta=eta, nu=nu)
+        env = dict(os.environ, NUMBA_NUM_THREADS="1")
+        argv = [sys.executable, "-c", _PROCESS_RATE, json.dumps(sys.path), path, str(steps), str(reps)]
+        procs = [subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+                 for _ in range(processes)]
+        try:
+            for p in procs:
+                if p.stdout.readline().strip() != "ready":
+                    raise RuntimeError(f"a timing process failed before the barrier (exit {p.wait(60)})")
+            steal0 = _steal_jiffies()
+            for p in procs:
+                p.stdin.write("go\n")
+                p.stdin.flush()
+            runs = [json.loads(p.communicate(timeout=3600)[0].strip().splitlines()[-1]) for p in procs]
+            steal1 = _steal_jiffies()
+        finally:
+            for p in procs:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+    lo, hi = max(r[0][0] for r in runs), min(r[-1][1] for r in runs)
+    out: dict = {"wall": [], "cpu": [], "kept": []}
+    for r in runs:
+        inside = [c for c in r if c[0] >= lo and c[1] <= hi]
+        kept = inside or r  # every call if the start skew left none inside (then "kept" says 0)
+        out["wall"].append(work / float(np.median([c[1] - c[0] for c in kept])))
+        out["cpu"].append(work / float(np.median([c[2] for c in kept])))
+        out["kept"].append(len(inside))
+    total = steal1[1] - steal0[1]
+    out["steal"] = (steal1[0] - steal0[0]) / total if total > 0 else 0.0
+    return out
+
+
 def bench_step_accuracy(rows, Row, steps=200, states=4, etas=(5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j,
                                                                0.3 + 0.5j, -3 + 2j)):
     """(m) Per-step error of the compiled N = 3 and generic routes against the NumPy reference route, relative to

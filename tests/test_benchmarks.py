@@ -110,3 +110,22 @@ def test_bench_unknown_parts_exit_2_with_one_line(parts):
     r = CliRunner().invoke(app, ["bench", "--parts", parts, "--quick"])
     assert r.exit_code == 2
     assert len(r.output.strip().splitlines()) == 1 and "abcdefghijklm" in r.output and "Traceback" not in r.output
+
+
+def test_process_rates_times_each_process_inside_the_overlap():
+    # part (c)'s "2 processes × 1 thread" rows: each fresh process reports a finite positive rate (wall and CPU
+    # time) and no more calls inside the common window than it made; tiny work, structure only (no speed asserted)
+    import numpy as np
+
+    from jetgaudin.backlund import kernels
+    from jetgaudin.cli import bench
+    from jetgaudin.ensemble import sample_on_leaf
+
+    sp = bench.harness()._sibling("speed_parts")
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 64, seed=2)
+    b, eta = np.full(64, 1.0), np.full(64, 5 + 0.1j)
+    nu = kernels.nu_default(X, b, eta)
+    r = sp.process_rates(X, b, eta, nu, 10, 2, reps=3)
+    assert len(r["wall"]) == len(r["cpu"]) == len(r["kept"]) == 2
+    assert all(math.isfinite(v) and v > 0 for v in [*r["wall"], *r["cpu"]])
+    assert all(0 <= k <= 3 for k in r["kept"]) and 0 <= r["steal"] <= 1
