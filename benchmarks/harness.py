@@ -158,7 +158,7 @@ def bench_appendix2(rows, repeat=50):
     tm = timed(lambda: B.iterate(X0_APPENDIX2, n, kernel="compiled"), repeat)
     nu0 = _kernels.nu_default(X0_APPENDIX2[None], [B_APPENDIX2], [ETA_APPENDIX2])[0]
     tk = timed(lambda: _kernels.iterate_single(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, False, n, 1,
-                                                want_drift=False), repeat)
+                                               want_drift=False), repeat)
     tnu = timed(lambda: _kernels.nu_default(X0_APPENDIX2[None], [B_APPENDIX2], [ETA_APPENDIX2]), repeat)
     _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, 2)
     tcf = timed(lambda: _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, n), repeat)

@@ -227,7 +227,7 @@ def bench_step_accuracy(rows, Row, steps=200, states=4, etas=(5 + 0.1j, 2 - 1j, 
     """(m) Per-step error of the compiled N = 3 and generic routes against the NumPy reference route, relative to
     ``max|X|`` over the orbit: ``max_n err_n / n`` over ``steps`` steps (the row's value) and the error after one
     step, on Appendix 2 and ``states`` random leaf states (``sample_on_leaf``, ``b = 1.3``) for each η of ``etas``
-    (both division directions; ``|η| < 1``: near the pole η = 0); and the NumPy route's own sensitivity (the same
+    (both division directions; ``|η| < 1``: near the Lax pole λ = 0); and the NumPy route's own sensitivity (the same
     measure for a 1e-16 relative perturbation of X0), which bounds what "round-off level" can mean.  One row per
     route and case group, then one summary row per route: its value is the worst per-step error over all cases,
     its note (and ``extra``) the max over the random cases with ``|η| ≥ 1``, over those with ``|η| < 1``, and
