@@ -1,11 +1,14 @@
 """Benchmarks of the compiled Bäcklund kernels: one orbit, the Appendix 2 work vs heyoka, ensembles on 1 and 2
 threads with the flop rate, N = 1..5, the main job in a fresh process, memory, the fixed cost of short calls,
-first-use compile time, and Dask LocalCluster vs threads (the harness: ``benchmarks/harness.py``).
+first-use compile time, Dask LocalCluster vs threads, the per-orbit set-up of a call, cold compile kernel by
+kernel, and the per-step accuracy of the compiled routes against the NumPy route (the harness:
+``benchmarks/harness.py``, whose docstring lists the parts a..m).
 
 Examples (every value shown is accepted):
 
     python benchmarks/bench_backlund.py --quick                  # a smoke test, a few minutes
     python benchmarks/bench_backlund.py --parts abcdefhij --markdown table.md
+    python benchmarks/bench_backlund.py --parts m --quick          # accuracy of the compiled routes, seconds
 
 The table of ``docs/performance.md`` is its Markdown output.  Timings are medians of repeated runs (best-of in
 the notes); single-thread timings use the thread's CPU time, multi-thread timings wall time.  Parts needing
@@ -38,7 +41,11 @@ def _parts(text: str) -> str:
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true", help="small sizes (a smoke test)")
-    p.add_argument("--parts", type=_parts, default="abcdefghijkl", help="letters of 'abcdefghijkl' (default: all)")
+    letters = _harness().PARTS
+    p.add_argument("--parts", type=_parts, default=letters,
+                   help=f"letters of '{letters}' (default: all): (a) one orbit, (b) Appendix 2 vs heyoka, (c, d) "
+                   "ensembles and flop rate, (e) N = 1..5, (f) fresh process, (g) memory, (h) short calls, "
+                   "(i) compile, (j) Dask, (k) set-up of a call, (l) compile by kernel, (m) per-step accuracy")
     p.add_argument("--markdown", type=Path, help="write the table as Markdown to this file")
     return p
 

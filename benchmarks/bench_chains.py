@@ -15,6 +15,7 @@ import subprocess
 import time
 
 import numpy as np
+from harness import timed  # benchmarks/harness.py (this script's directory is sys.path[0])
 
 import jetgaudin as jg
 
@@ -36,12 +37,8 @@ def machine() -> str:
 
 
 def rate(B, X, steps, save_every, repeats=3):
-    times = []
-    for _ in range(repeats):
-        t = time.thread_time()
-        B.iterate(X, steps, save_every=save_every)
-        times.append(time.thread_time() - t)
-    return steps / float(np.median(times))
+    """Steps per second of this thread's CPU time, median of ``repeats`` calls."""
+    return steps / float(np.median(timed(lambda: B.iterate(X, steps, save_every=save_every), repeats)))
 
 
 def main():
@@ -67,12 +64,10 @@ def main():
 
 
 def _wall(f, repeats=3):
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        out = f()
-        times.append(time.perf_counter() - t)
-    return float(np.median(times)), out
+    """Median wall time of ``repeats`` calls of ``f`` and the last call's result."""
+    out = []
+    t = timed(lambda: out.append(f()), repeats, time.perf_counter)
+    return float(np.median(t)), out[-1]
 
 
 def same_work(rng, steps):

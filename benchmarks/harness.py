@@ -7,10 +7,12 @@ thread's CPU time (:func:`time.thread_time`, robust to other processes on a shar
 timings use wall time.  No mathematics here: everything numerical comes from the public API and
 :mod:`jetgaudin.backlund.kernels`.  Parts needing heyoka or Dask are skipped with a note when those are missing.
 
-Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads and
-the flop rate; (e) N = 1..5; (f) the main job in a fresh process; (g) memory of a long run; (h) the fixed cost of
-short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts
-of a call's per-orbit set-up and (l) cold compile kernel by kernel (``setup_parts.py``).
+Parts: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2 threads (and
+in 2 processes × 1 thread at once: the two-core ceiling) and the flop rate; (e) N = 1..5; (f) the main job in a
+fresh process; (g) memory of a long run; (h) the fixed cost of short calls; (i) first-use compile time; (j) Dask
+LocalCluster vs threads (h-j: ``speed_parts.py``); (k) the parts of a call's per-orbit set-up and (l) cold compile
+kernel by kernel (``setup_parts.py``); (m) per-step accuracy of the compiled N = 3 and generic routes against the
+NumPy route (``speed_parts.py``).
 """
 
 from __future__ import annotations
@@ -25,10 +27,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["PARTS", "Row", "run_benchmarks", "machine_info", "rows_to_markdown", "rows_to_text"]
+__all__ = ["PARTS", "Row", "timed", "run_benchmarks", "machine_info", "rows_to_markdown", "rows_to_text"]
 
 #: the letters of the parts, in order
-PARTS = "abcdefghijkl"
+PARTS = "abcdefghijklm"
 
 X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
 B_APPENDIX2 = 1.0
@@ -45,7 +47,10 @@ class Row:
     extra: dict = field(default_factory=dict)
 
 
-def _times(fn, repeat, clock=time.thread_time):
+def timed(fn, repeat: int, clock=time.thread_time) -> np.ndarray:
+    """The durations of ``repeat`` calls of ``fn()`` on ``clock``: :func:`time.thread_time` (CPU time of this
+    thread: single-thread work, robust to other processes) or :func:`time.perf_counter` (wall: work on several
+    threads or processes).  The one timing loop of the benchmarks; callers take the median and the best."""
     out = []
     for _ in range(repeat):
         t = clock()
@@ -106,15 +111,15 @@ def bench_single(rows, steps=10**6, numpy_steps=2000, repeat=5):
 
     B = jg.TwoPointBacklund(B_APPENDIX2, ETA_APPENDIX2)
     B.iterate(X0_APPENDIX2, 10, kernel="compiled")  # load / compile
-    t3 = _times(lambda: B.iterate(X0_APPENDIX2, steps, save_every=1000, kernel="compiled"), repeat)
+    t3 = timed(lambda: B.iterate(X0_APPENDIX2, steps, save_every=1000, kernel="compiled"), repeat)
     from jetgaudin.backlund import kernels as _kernels
 
     nu0 = _kernels.nu_default(X0_APPENDIX2[None], [B.b], [B.eta])[0]
     _kernels.iterate_single(X0_APPENDIX2, B.b, B.eta, nu0, False, 10, 10, specialise=False)
-    tg = _times(
+    tg = timed(
         lambda: _kernels.iterate_single(X0_APPENDIX2, B.b, B.eta, nu0, False, steps, 1000, specialise=False), repeat
     )
-    tn = _times(lambda: B.iterate(X0_APPENDIX2, numpy_steps, kernel="numpy"), 3)
+    tn = timed(lambda: B.iterate(X0_APPENDIX2, numpy_steps, kernel="numpy"), 3)
     per_np = np.median(tn) / numpy_steps
     r3 = steps / np.median(t3)
     rows.append(
@@ -150,13 +155,13 @@ def bench_appendix2(rows, repeat=50):
     B = jg.TwoPointBacklund(B_APPENDIX2, ETA_APPENDIX2)
     n = 1000
     orbit = B.iterate(X0_APPENDIX2, n, kernel="compiled")
-    tm = _times(lambda: B.iterate(X0_APPENDIX2, n, kernel="compiled"), repeat)
+    tm = timed(lambda: B.iterate(X0_APPENDIX2, n, kernel="compiled"), repeat)
     nu0 = _kernels.nu_default(X0_APPENDIX2[None], [B_APPENDIX2], [ETA_APPENDIX2])[0]
-    tk = _times(lambda: _kernels.iterate_single(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, False, n, 1,
-                                                want_drift=False), repeat)
-    tnu = _times(lambda: _kernels.nu_default(X0_APPENDIX2[None], [B_APPENDIX2], [ETA_APPENDIX2]), repeat)
+    tk = timed(lambda: _kernels.iterate_single(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, False, n, 1,
+                                               want_drift=False), repeat)
+    tnu = timed(lambda: _kernels.nu_default(X0_APPENDIX2[None], [B_APPENDIX2], [ETA_APPENDIX2]), repeat)
     _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, 2)
-    tcf = _times(lambda: _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, n), repeat)
+    tcf = timed(lambda: _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, n), repeat)
     cf = _kernels.closed_form_orbit(X0_APPENDIX2, B_APPENDIX2, ETA_APPENDIX2, nu0, n)
     ref_np = B.iterate(X0_APPENDIX2, n, kernel="numpy")
     t0 = time.perf_counter()
@@ -177,7 +182,7 @@ def bench_appendix2(rows, repeat=50):
             return ta.propagate_grid(grid)
 
         res = run()
-        t = _times(run, repeat)
+        t = timed(run, repeat)
         return np.asarray(res[-1]), t, t_comp
 
     ref, _, _ = hey(1e-18)  # heyoka at its highest order: the reference of the flow of G_eta
@@ -238,9 +243,12 @@ def bench_fresh_process(rows):
     rows.append(Row("f", "main job, fresh process, NumPy", out["numpy"] * 1e3, "ms", ""))
 
 
-def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=None):
+def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=None,
+                    processes_size=(10**5, 100)):
     """(c, d) ensembles of N = 3 orbits (B orbits × steps, for each pair of ``sizes``) on 1 and 2 threads; flop rate
-    vs peak."""
+    vs peak.  For the size ``processes_size`` also the machine's two-core ceiling without Numba's threads: the
+    1-thread rate of the same work in one fresh process alone, then in each of 2 processes running it at the same
+    time (``speed_parts.process_rates``: a barrier, only the overlapping calls count), and their sum."""
     import numba
 
     from jetgaudin import ensemble as ens
@@ -264,7 +272,7 @@ def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10*
             numba.set_num_threads(threads)
             _kernels.run_batch(X0[:4], b[:4], eta[:4], nu0[:4], False, 2, 1, True)
             rep = 3 if B <= 10**5 else 1
-            t = _times(
+            t = timed(
                 lambda X0=X0, b=b, eta=eta, nu0=nu0, steps=steps: _kernels.run_batch(X0, b, eta, nu0, False, steps,
                                                                                       steps),
                 rep,
@@ -283,6 +291,9 @@ def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10*
         numba.set_num_threads(nmax)
         if 2 in rate:
             rows.append(Row("c", f"ensemble {B:.0e} × {steps}: 2 threads / 1 thread", rate[2] / rate[1], "x", ""))
+        if (B, steps) == tuple(processes_size):
+            _bench_two_processes(rows, X0, b, eta, nu0, steps, rate)
+        if 2 in rate:
             peak = _peak_gflops(info or machine_info(), 2)
             rows.append(
                 Row(
@@ -294,6 +305,38 @@ def bench_ensembles(rows, sizes=((10**3, 100), (10**5, 100), (10**5, 1000), (10*
                     f"peak {peak:.0f} GFLOP/s",
                 )
             )
+
+
+def _bench_two_processes(rows, X0, b, eta, nu0, steps, rate, rounds=2):
+    """(c) rows of the 1-thread rate in 1 process alone and in each of 2 processes at once (wall; CPU-time rates,
+    hypervisor steal and the load in the notes), alternated ``rounds`` times (means over the rounds), next to the
+    1- and 2-thread rows of ``rate``."""
+    proc = _sibling("speed_parts").process_rates
+    B = X0.shape[0]
+    runs: dict[int, list[dict]] = {1: [], 2: []}
+    for _ in range(rounds):
+        for n in (1, 2):
+            runs[n].append(proc(X0, b, eta, nu0, steps, n))
+
+    def mean(n, key):  # per process, over the rounds
+        return np.mean([r[key] for r in runs[n]], axis=0)
+
+    alone, each, cpu1, cpu2 = mean(1, "wall")[0], mean(2, "wall"), mean(1, "cpu")[0], mean(2, "cpu")
+    head = f"ensemble {B:.0e} × {steps}"
+    kept = "+".join(str(k) for r in runs[2] for k in r["kept"])
+    rows.append(Row("c", f"{head}, 1 process × 1 thread, alone", alone, "orbit-steps/s",
+                    f"fresh process, NUMBA_NUM_THREADS=1, wall; CPU-time rate {cpu1:.3g}; mean of {rounds} rounds "
+                    "alternated with the 2-process runs"))
+    rows.append(Row("c", f"{head}, 2 processes × 1 thread, each", float(np.mean(each)), "orbit-steps/s",
+                    "processes " + ", ".join(f"{w:.3g}" for w in each) + " (wall); CPU-time rates "
+                    + ", ".join(f"{c:.3g}" for c in cpu2) + f"; calls inside the overlap {kept}; hypervisor steal "
+                    f"{100 * max(r['steal'] for r in runs[2]):.1f} %; load {os.getloadavg()[0]:.2f}"))
+    total = float(np.sum(each))
+    vs = f"; the 2-thread row is {rate[2] / total:.2f} × this" if 2 in rate else ""
+    rows.append(Row("c", f"{head}, 2 processes × 1 thread, sum", total, "orbit-steps/s",
+                    f"{total / alone:.2f} × one process alone (2 = two independent cores){vs}.  The two-core "
+                    "ceiling without Numba's threads: a CPU-time rate below the one alone = the cores slow each "
+                    "other (shared cache, memory, hypervisor); a wall rate below the CPU-time rate = other jobs"))
 
 
 def bench_generic(rows, steps=10**5, numpy_steps=300):
@@ -309,13 +352,13 @@ def bench_generic(rows, steps=10**5, numpy_steps=300):
         B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
         nu0 = B.nu1(X0)
         _kernels.iterate_single(X0, 1.0, B.eta, nu0, False, 2, 1, specialise=False)
-        t = _times(
+        t = timed(
             lambda X0=X0, nu0=nu0: _kernels.iterate_single(
                 X0, 1.0, 5 + 0.1j, nu0, False, steps, 1000, specialise=False
             ),
             3,
         )
-        tn = _times(lambda X0=X0, B=B: B.iterate(X0, numpy_steps, kernel="numpy"), 1)
+        tn = timed(lambda X0=X0, B=B: B.iterate(X0, numpy_steps, kernel="numpy"), 1)
         rate = steps / np.median(t)
         rows.append(
             Row(
@@ -359,6 +402,8 @@ def _sibling(name: str):
     import importlib.util
     from pathlib import Path
 
+    # the siblings import ``timed`` from the harness under this name, whatever name its loader gave it
+    sys.modules.setdefault("jetgaudin_benchmarks_harness", sys.modules[__name__])
     full = f"jetgaudin_benchmarks_{name}"
     if full in sys.modules:
         return sys.modules[full]
@@ -398,7 +443,8 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
                                    repeat=3 if quick else 5), None),
         ("b", lambda: bench_appendix2(rows, repeat=5 if quick else 50), _heyoka_missing),
         ("cd", lambda: bench_ensembles(rows, sizes=((10**3, 100), (10**4, 100)) if quick else
-                                       ((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=info), None),
+                                       ((10**3, 100), (10**5, 100), (10**5, 1000), (10**6, 100)), info=info,
+                                       processes_size=(10**4, 100) if quick else (10**5, 100)), None),
         ("e", lambda: bench_generic(rows, steps=10**4 if quick else 10**5, numpy_steps=50 if quick else 300), None),
         ("f", lambda: bench_fresh_process(rows), None),
         ("g", lambda: bench_memory(rows, steps=10**6 if quick else 10**8), None),
@@ -408,6 +454,8 @@ def run_benchmarks(parts=PARTS, quick=False, echo=print):
          _dask_missing),
         ("k", lambda: setup.bench_setup(rows, Row, orbits=10**4 if quick else 10**5, repeat=3 if quick else 15), None),
         ("l", lambda: setup.bench_compile_parts(rows, Row), None),
+        ("m", lambda: extra.bench_step_accuracy(rows, Row, steps=20 if quick else 200, states=1 if quick else 4),
+         None),
     ]
     for letters, run, missing in plan:
         if not set(letters) & set(parts):

@@ -20,21 +20,12 @@ import time
 import numpy as np
 
 
-def _median_cpu(fn, repeat: int) -> tuple[float, float]:
-    """Median and best CPU time of this thread (the kernels run on one thread here: see :func:`bench_setup`)."""
-    t = []
-    for _ in range(repeat):
-        t0 = time.thread_time()
-        fn()
-        t.append(time.thread_time() - t0)
-    return float(np.median(t)), float(np.min(t))
-
-
 def bench_setup(rows, Row, orbits=10**5, repeat=15):
     """(k) Per-orbit cost of the parts of a call of ``TwoPointBacklund.iterate`` on ``orbits`` N = 3 orbits: CPU
     time of one thread (Numba's threads set to 1 for the part, so the lanes run on the timed thread; robust to the
     other jobs of a shared machine), median and best of ``repeat``."""
     import numba
+    from jetgaudin_benchmarks_harness import timed  # the harness (registered under this name) loads this file
 
     import jetgaudin as jg
     from jetgaudin._validate import as_state
@@ -70,12 +61,12 @@ def bench_setup(rows, Row, orbits=10**5, repeat=15):
     try:
         for what, fn, note in parts:
             fn()
-            t[what], best = _median_cpu(fn, repeat)
-            t[what] *= us
+            cpu = timed(fn, repeat, time.thread_time)  # this thread's CPU time: the lanes run on it (1 thread)
+            t[what], best = np.median(cpu) * us, cpu.min()
             rows.append(Row("k", what, t[what], "µs/orbit", f"best {best * us:.3f}; {note}".rstrip("; ")))
         for what, fn, scale in base:
             fn()
-            t[what] = _median_cpu(fn, 3)[0] * us * scale
+            t[what] = np.median(timed(fn, 3, time.thread_time)) * us * scale
             rows.append(Row("k", what, t[what], "µs/orbit", f"baseline (measured on {orbits // scale} orbits)"))
     finally:
         numba.set_num_threads(threads)

@@ -1,5 +1,6 @@
-"""Parts (h) fixed cost of short calls, (i) first-use compile time and (j) Dask LocalCluster vs threads of the
-benchmark harness (``benchmarks/harness.py`` loads this file; it has no command line of its own)."""
+"""Parts (h) fixed cost of short calls, (i) first-use compile time, (j) Dask LocalCluster vs threads and (m) per-step
+accuracy of the compiled routes of the benchmark harness (``benchmarks/harness.py`` loads this file; it has no
+command line of its own)."""
 
 from __future__ import annotations
 
@@ -15,15 +16,6 @@ import numpy as np
 X0_APPENDIX2 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])
 
 
-def _median_wall(fn, repeat: int) -> tuple[float, float]:
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        t.append(time.perf_counter() - t0)
-    return float(np.median(t)), float(np.min(t))
-
-
 def _ensemble(orbits: int, seed: int = 2):
     from jetgaudin.ensemble import sample_on_leaf
 
@@ -34,6 +26,8 @@ def _ensemble(orbits: int, seed: int = 2):
 def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
     """(h) ``TwoPointBacklund.iterate(X, 10)`` on a batch of ``orbits`` N = 3 orbits: compiled vs NumPy-vectorised
     (the reference), and the per-orbit fixed cost of a call (``steps = 0``: branch rule, set-up, output)."""
+    from jetgaudin_benchmarks_harness import timed  # the harness (registered under this name) loads this file
+
     import jetgaudin as jg
     from jetgaudin.backlund import kernels
 
@@ -41,10 +35,12 @@ def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
     B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
     kernels.prepare(9, orbits, notify=lambda m: None)
     B.iterate(X[:300], 1, kernel="compiled")
-    tc, tcb = _median_wall(lambda: B.iterate(X, steps, kernel="compiled"), 5)
-    t0, _ = _median_wall(lambda: B.iterate(X, 0, kernel="compiled"), 5)
-    tnu, _ = _median_wall(lambda: kernels.nu_default(X, b, eta), 5)
-    tn, _ = _median_wall(lambda: B.iterate(X, steps, kernel="numpy"), 3)
+    wall = time.perf_counter  # all threads
+    t = timed(lambda: B.iterate(X, steps, kernel="compiled"), 5, wall)
+    tc, tcb = np.median(t), t.min()
+    t0 = np.median(timed(lambda: B.iterate(X, 0, kernel="compiled"), 5, wall))
+    tnu = np.median(timed(lambda: kernels.nu_default(X, b, eta), 5, wall))
+    tn = np.median(timed(lambda: B.iterate(X, steps, kernel="numpy"), 3, wall))
     work = orbits * steps
     rows.append(Row("h", f"iterate(X, {steps}), {orbits:.0e} orbits, compiled", work / tc, "orbit-steps/s",
                     f"best {work / tcb:.3g}; wall, all threads"))
@@ -96,6 +92,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
     (empty tasks), and the bits compared."""
     import numba
     from dask.distributed import Client, LocalCluster
+    from jetgaudin_benchmarks_harness import timed  # the harness (registered under this name) loads this file
 
     from jetgaudin.backlund import kernels
 
@@ -109,7 +106,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
         nonlocal ref
         ref = kernels.run_batch(X, b, eta, nu0, False, steps, steps)[1]
 
-    tt, _ = _median_wall(threaded, 3)
+    tt = np.median(timed(threaded, 3, time.perf_counter))
     rows.append(Row("j", f"threads (2): {orbits:.0e} × {steps}", orbits * steps / tt, "orbit-steps/s",
                     f"{tt:.2f} s wall"))
     old = os.environ.get("NUMBA_NUM_THREADS")
@@ -137,7 +134,7 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
                     return np.concatenate([r[1] for r in client.gather(futs)])
 
                 final = run()
-                td, _ = _median_wall(run, 3)
+                td = np.median(timed(run, 3, time.perf_counter))
                 same = bool(np.array_equal(final, ref))
                 rows.append(Row("j", f"Dask LocalCluster 2×1, chunk {c} ({len(starts)} tasks)",
                                 orbits * steps / td, "orbit-steps/s",
@@ -149,38 +146,128 @@ def bench_dask(rows, Row, orbits=10**5, steps=1000, chunks=(2500, 10**4, 25000))
             os.environ["NUMBA_NUM_THREADS"] = old
 
 
-def bench_step_accuracy(rows, Row, steps=200):
-    """Per-step error of the compiled N = 3 and generic routes against the NumPy reference route (relative to
-    ``max|X|``): after one step, and ``max_n err_n/n`` over ``steps`` steps, on Appendix 2 and 4 random leaf states
-    for each η (both division directions, two near the pole); and the NumPy route's own sensitivity (a 1e-16
-    relative perturbation of X0), which bounds what "round-off level" can mean.  Not a lettered part of the
-    harness yet; call it with the harness's ``Row``."""
+_PROCESS_RATE = r"""
+import json, sys, time
+sys.path[:] = json.loads(sys.argv[1])  # the parent's path: the same jetgaudin
+import numpy as np
+from jetgaudin.backlund import kernels
+d = np.load(sys.argv[2])
+X, b, eta, nu, steps = d["X"], d["b"], d["eta"], d["nu"], int(sys.argv[3])
+kernels.run_batch(X[:4], b[:4], eta[:4], nu[:4], False, 2, 1)  # load the cached kernel before the barrier
+print("ready", flush=True)
+sys.stdin.readline()  # the barrier: the parent releases every process at once
+out = []
+for _ in range(int(sys.argv[4])):
+    w, c = time.perf_counter(), time.thread_time()
+    kernels.run_batch(X, b, eta, nu, False, steps, steps)
+    out.append((w, time.perf_counter(), time.thread_time() - c))
+print(json.dumps(out), flush=True)
+"""
+
+
+def _steal_jiffies() -> tuple[int, int]:
+    """(steal, total) jiffies of all CPUs from ``/proc/stat`` (Linux; ``(0, 0)`` elsewhere): the time the
+    hypervisor ran something else on this VM's vCPUs."""
+    try:
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+    except (OSError, ValueError):
+        return 0, 0
+    return (v[7] if len(v) > 7 else 0), sum(v[:8])
+
+
+def process_rates(X, b, eta, nu, steps: int, processes: int, reps: int = 5) -> dict:
+    """``run_batch(X, b, eta, nu, False, steps, steps)`` in ``processes`` fresh processes at once (this interpreter,
+    this ``sys.path``, ``NUMBA_NUM_THREADS=1``): each loads the cached kernel, waits at a barrier (a line on its
+    stdin), then times ``reps`` calls (wall with :func:`time.perf_counter`, a system-wide monotonic clock on Linux,
+    and its thread's CPU time).  Only the calls that lie wholly inside the window where every process was calling
+    count (the overlap).  Returns ``{"wall": [orbit-steps/s per process], "cpu": [...], "kept": [calls],
+    "steal": fraction of CPU time stolen by the hypervisor meanwhile}`` (medians of the kept calls)."""
+    import json
+    import tempfile
+
+    work = X.shape[0] * steps
+    with tempfile.TemporaryDirectory() as d:
+        path = os.path.join(d, "batch.npz")
+        np.savez(path, X=X, b=b, eta=eta, nu=nu)
+        env = dict(os.environ, NUMBA_NUM_THREADS="1")
+        argv = [sys.executable, "-c", _PROCESS_RATE, json.dumps(sys.path), path, str(steps), str(reps)]
+        procs = [subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, env=env)
+                 for _ in range(processes)]
+        try:
+            for p in procs:
+                if p.stdout.readline().strip() != "ready":
+                    raise RuntimeError(f"a timing process failed before the barrier (exit {p.wait(60)})")
+            steal0 = _steal_jiffies()
+            for p in procs:
+                p.stdin.write("go\n")
+                p.stdin.flush()
+            runs = [json.loads(p.communicate(timeout=3600)[0].strip().splitlines()[-1]) for p in procs]
+            steal1 = _steal_jiffies()
+        finally:
+            for p in procs:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+    lo, hi = max(r[0][0] for r in runs), min(r[-1][1] for r in runs)
+    out: dict = {"wall": [], "cpu": [], "kept": []}
+    for r in runs:
+        inside = [c for c in r if c[0] >= lo and c[1] <= hi]
+        kept = inside or r  # every call if the start skew left none inside (then "kept" says 0)
+        out["wall"].append(work / float(np.median([c[1] - c[0] for c in kept])))
+        out["cpu"].append(work / float(np.median([c[2] for c in kept])))
+        out["kept"].append(len(inside))
+    total = steal1[1] - steal0[1]
+    out["steal"] = (steal1[0] - steal0[0]) / total if total > 0 else 0.0
+    return out
+
+
+def bench_step_accuracy(rows, Row, steps=200, states=4, etas=(5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j,
+                                                               0.3 + 0.5j, -3 + 2j)):
+    """(m) Per-step error of the compiled N = 3 and generic routes against the NumPy reference route, relative to
+    ``max|X|`` over the orbit: ``max_n err_n / n`` over ``steps`` steps (the row's value) and the error after one
+    step, on Appendix 2 and ``states`` random leaf states (``sample_on_leaf``, ``b = 1.3``) for each η of ``etas``
+    (both division directions; ``|η| < 1``: near the Lax pole λ = 0); and the NumPy route's own sensitivity (the same
+    measure for a 1e-16 relative perturbation of X0), which bounds what "round-off level" can mean.  One row per
+    route and case group, then one summary row per route: its value is the worst per-step error over all cases,
+    its note (and ``extra``) the max over the random cases with ``|η| ≥ 1``, over those with ``|η| < 1``, and
+    Appendix 2.  ``ν1`` comes from the NumPy branch rule, so the routes start from the same carry."""
     import jetgaudin as jg
     from jetgaudin.backlund import kernels
     from jetgaudin.ensemble import sample_on_leaf
 
     rng = np.random.default_rng(7)
     cases = [("Appendix 2", X0_APPENDIX2, 1.0, 5 + 0.1j)]
-    for eta in (5 + 0.1j, 2 - 1j, 1.2 + 0.7j, 0.6 - 0.2j, 0.3 + 0.5j, -3 + 2j):
+    for eta in etas:
         c = np.array([rng.uniform(-0.4, 0.4), rng.uniform(-0.4, 0.4), 1.0])
-        for x in sample_on_leaf(3, c, 4, seed=int(rng.integers(1 << 30)), scale=0.5):
+        for x in sample_on_leaf(3, c, states, seed=int(rng.integers(1 << 30)), scale=0.5):
             cases.append((f"η = {eta}", x, 1.3, eta))
     n = np.arange(1, steps + 1)
-    worst: dict[str, list[float]] = {}
+    routes = ("N = 3", "generic")
+    worst: dict[str, list[float]] = {}  # "route case": [after one step, per step, NumPy route's sensitivity]
+    groups = {r: {"|η| ≥ 1": [0.0, 0.0], "|η| < 1": [0.0, 0.0], "Appendix 2": [0.0, 0.0]} for r in routes}
     for name, x, b, eta in cases:
         B = jg.TwoPointBacklund(b, eta)
         ref = B.iterate(x, steps, kernel="numpy")
         moved = B.iterate(x * (1 + 1e-16 * rng.choice([-1, 1], 9)), steps, kernel="numpy")
         nu0 = B.nu1(x)
         s = np.max(np.abs(ref))
-        got = {r: kernels.iterate_single(x, b, eta, nu0, False, steps, 1, specialise=r == "N = 3")[0]
-               for r in ("N = 3", "generic")}
-        for r, orbit in got.items():
+        sens = float(np.max(np.max(np.abs(moved - ref), axis=1)[1:] / s / n))
+        group = "Appendix 2" if name == "Appendix 2" else ("|η| < 1" if abs(eta) < 1 else "|η| ≥ 1")
+        for r in routes:
+            orbit = kernels.iterate_single(x, b, eta, nu0, False, steps, 1, specialise=r == "N = 3")[0]
             d = np.max(np.abs(orbit - ref), axis=1) / s
+            one, per = float(d[1]), float(np.max(d[1:] / n))
             w = worst.setdefault(f"{r} {name}", [0.0, 0.0, 0.0])
-            w[0] = max(w[0], d[1])
-            w[1] = max(w[1], float(np.max(d[1:] / n)))
-            w[2] = max(w[2], float(np.max(np.max(np.abs(moved - ref), axis=1)[1:] / s / n)))
+            w[:] = max(w[0], one), max(w[1], per), max(w[2], sens)
+            g = groups[r][group]
+            g[:] = max(g[0], per), max(g[1], one)
     for key, (one, per, sens) in worst.items():
-        rows.append(Row("acc", f"{key}: per-step error vs NumPy", per, "relative",
+        rows.append(Row("m", f"{key}: per-step error vs NumPy", per, "relative",
                         f"after one step {one:.2g}; NumPy route moved by 1e-16 in X0: {sens:.2g} per step"))
+    for r in routes:
+        g = groups[r]
+        rows.append(Row("m", f"{r} route: worst per-step error vs NumPy", max(v[0] for v in g.values()), "relative",
+                        "; ".join(f"{k} {v[0]:.2g}" for k, v in g.items())
+                        + f"; after one step, all cases {max(v[1] for v in g.values()):.2g}; {len(cases)} cases, "
+                        f"{steps} steps", extra={k: v[0] for k, v in g.items()}))

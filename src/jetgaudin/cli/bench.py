@@ -16,7 +16,7 @@ from . import app
 
 __all__ = ["harness", "bench_command"]
 
-_PARTS = "abcdefghijkl"
+_PARTS = "abcdefghijklm"
 
 
 def harness() -> ModuleType:
@@ -51,8 +51,11 @@ def bench_command(
     markdown: Annotated[Path | None, typer.Option("--markdown", help="also write the table as Markdown")] = None,
 ) -> None:
     """Benchmarks: (a) one orbit, compiled vs NumPy; (b) Appendix 2 work vs heyoka; (c, d) ensembles on 1 and 2
-    threads and the flop rate; (e) N = 1..5; (f) the main job in a fresh process; (g) memory of a 10^8-step run;
-    (h) fixed cost of short calls; (i) first-use compile time; (j) Dask LocalCluster vs threads."""
+    threads (and 2 processes × 1 thread at once) and the flop rate; (e) N = 1..5; (f) the main job in a fresh
+    process; (g) memory of a 10^8-step run; (h) fixed cost of short calls; (i) first-use compile time; (j) Dask
+    LocalCluster vs threads; (k) the per-orbit set-up of a call; (l) cold compile kernel by kernel; (m) per-step
+    accuracy of the compiled N = 3 and generic routes against the NumPy route (summary row per route: |eta| >= 1,
+    |eta| < 1, Appendix 2)."""
     from ._common import fail
 
     bad = set(parts) - set(_PARTS)
