@@ -1,6 +1,7 @@
 """Compiled (Numba) kernels of the real two-point map against the NumPy reference route."""
 
 import os
+import tempfile
 
 import numpy as np
 import pytest
@@ -386,3 +387,33 @@ def test_lanes_redo_path_equals_the_single_orbit():
     for i in (0, 1, 3, 66, 69):
         single, _, _, nu_i = _kernels.iterate_single(X[i], 1.0, 5 + 0.1j, nu[i], True, 30, 1)
         assert np.array_equal(out[i], single) and nu_i == nu_last[i]
+
+
+_FMA_SCRIPT = """
+import numba
+from jetgaudin.backlund.kernels import _target
+_target.configure()
+from jetgaudin.backlund.kernels import _scalar
+f = numba.njit(lambda a, b, c: _scalar._fma(a, b, c))
+print(repr(f(0.1, 10.0, -1.0)), repr(f(1.0 + 2.0**-30, 1.0 - 2.0**-30, -1.0)))
+"""
+
+
+@pytest.mark.parametrize("cpu", ["host", "generic"])
+def test_fused_multiply_add_is_rounded_once_on_every_target(cpu):
+    # the N = 3 blocks' explicit a*b + c (llvm.fma): one rounding, so the exact values below (from fractions, not
+    # from the code); 0.1*10 - 1 and (1 + e)(1 - e) - 1 rounded twice give 0.0.  "generic" is a target without FMA
+    # instructions (Numba's NUMBA_CPU_NAME): LLVM then calls the C library's fma, which must give the same bits
+    import subprocess
+    import sys
+    from fractions import Fraction
+
+    src = os.path.dirname(os.path.dirname(jg.__file__))
+    env = dict(os.environ, NUMBA_CACHE_DIR=tempfile.mkdtemp(), PYTHONPATH=src)
+    if cpu == "generic":
+        env["NUMBA_CPU_NAME"] = "generic"
+    out = subprocess.run([sys.executable, "-c", _FMA_SCRIPT], capture_output=True, text=True, env=env, check=True,
+                         timeout=300).stdout.split()
+    exact = [float(Fraction(0.1) * 10 - 1), float(Fraction(1 + 2.0**-30) * Fraction(1 - 2.0**-30) - 1)]
+    assert [float(v) for v in out] == exact
+    assert exact[0] != 0.1 * 10.0 - 1.0 and exact[1] == -(2.0**-60)

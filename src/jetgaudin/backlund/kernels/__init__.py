@@ -19,8 +19,12 @@ Modules (each one concern):
 
 Importing this package imports neither Numba nor a kernel module; the drivers do at their first call.
 
-**Reproducibility.** Arithmetic is IEEE without ``fastmath`` (no reassociation, no FMA contraction), so a
-kernel gives the same bits in a single-orbit run and as a member of a parallel ensemble (:func:`run_ensemble`).
+**Reproducibility.** Arithmetic is IEEE without ``fastmath`` (no reassociation, no automatic FMA contraction);
+the N = 3 blocks write their fused multiply-adds explicitly (:func:`._scalar._fma`, LLVM's ``llvm.fma``, rounded
+once on every target: an FMA instruction, or the C library's correctly rounded ``fma`` where the processor has
+none), so a kernel gives the same bits in a single-orbit run and as a member of a parallel ensemble
+(:func:`run_ensemble`), and the same bits whether or not the processor has FMA instructions
+(``tests/test_kernels.py``).
 Kernels never raise: they return a status code (``STATUS_*``) and the failing step; the drivers raise
 :class:`jetgaudin.SingularStepError` / :class:`jetgaudin.BranchPointError`.  The claims each route makes about
 the others (bitwise equal, or equal to a stated tolerance per step) are listed and checked in

@@ -9,9 +9,10 @@ def flops_per_step(N: int, route: str = "auto") -> dict[str, int]:
     r"""Floating-point operations of one step, counted by hand from the kernel source (:func:`._n3._step3` for
     ``route="n3"``, :func:`._generic._step_generic` for ``route="generic"``; ``"auto"``: ``n3`` when ``N = 3``).
 
-    Counting rules: one real ``+ − × ÷ √`` = 1 flop (comparisons, ``max``, negations and
-    conjugations = 0); complex ``±`` = 2, complex × complex = 6, real × complex (:func:`_cr`) = 2,
-    ``|z|²`` = 3, complex ÷ (:func:`_cdiv`) = 14.  Returns the parts and the ``total``.
+    Counting rules: one real ``+ − × ÷ √`` = 1 flop, a fused multiply-add (:func:`._scalar._fma`) = 2
+    (comparisons, ``max``, negations and conjugations = 0); complex ``±`` = 2, complex × complex = 6, real ×
+    complex (:func:`_cr`) = 2, ``|z|²`` = 3, complex ÷ (:func:`_cdiv`) = 14.  Returns the parts and the
+    ``total``.
     """
     if route == "auto":
         route = "n3" if N == 3 else "generic"
@@ -19,12 +20,12 @@ def flops_per_step(N: int, route: str = "auto") -> dict[str, int]:
         if N != 3:
             raise ValueError("route 'n3' is the N = 3 kernel")
         parts = {  # the real form of the step (module docstring of _n3)
-            "ell_at_eta": 30 + 5,  # 6 components Σ y_m^a z^m (3 mul + 2 add each); u, v, w from them
-            "nu": 14 + 17 + 22,  # u² + vw; Newton update; ν_prev², 1/(2ν_prev) (previous step's ν)
+            "ell_at_eta": 31 + 4,  # 6 components Σ y_m^a z^m (1 mul + 2 fma; b in Y³'s first fma); v, w from them
+            "nu": 13 + 17 + 22,  # u² + vw; Newton update; ν_prev², 1/(2ν_prev) (previous step's ν)
             "eigenvector": 35,  # two |k|², the scale of the branch-point test
-            "axis": 19,  # n̂ from k: 1/|k|², k̄1 k2, |k2|² − |k1|²
-            "Z": 29 + 39 + 36,  # K y_0..K y_3 (2 + 3 cross products); v_0..v_3; Z_k = K v_k (4 cross products)
-            "division": 27 + 41,  # the recurrence f, g, h; residuals e_A, e_B and their two tests
+            "axis": 16,  # n' = |k|² n̂ from k: 1/|k|², k̄1 k2, |k2|² − |k1|²
+            "Z": 29 + 40 + 36,  # K'y_0..K'y_3 (2 + 3 cross products); c/|k|², v_0..v_3; Z'_k = K'v_k (4 cross products)
+            "division": 29 + 44,  # 1/|k|² in α, −2c; the recurrence f, g, h; residuals e_A, e_B and their two tests
             "checks_and_state": 17 + 9 + 9,  # |ℓ| scale of the residual test; ỹ = y − 2cW; finiteness
         }
     elif route == "generic":

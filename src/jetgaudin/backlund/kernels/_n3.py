@@ -31,14 +31,16 @@ recombined as the complex route's ``R_0 − Q_0``, ``R_1 − Q_1 − δ1 Q_0``; 
 relative tolerance.  ``tests/test_kernels.py`` checks ``T1``, ``T2`` and ``Z`` against the complex products of
 the generic route; ``tests/test_routes.py`` checks the route against the generic and the NumPy routes.
 
-The rest is as before: ``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` with ``z^m = η^{-m}`` precomputed (Estrin-like, on the
-real components), ``ν1`` continued by one Newton step ``ν ← ν + (ν² − ν_prev²)/(2ν_prev)`` (``ν²`` is an
-integral of the map, so the correction is at round-off level; the closest-root square root is used otherwise),
-and the eigenvector of :func:`._scalar._eigvec`.  The blocks are scalars only, so the lock-step lanes (:mod:`._lanes`)
-perform the same operations in the same order (no fastmath, no contraction: the same bits).  :func:`_dress3` and
-:func:`_step3` are inlined by Numba (left to LLVM, the lanes lose their vectorisation); the small blocks are left
-to LLVM's inliner, which cut the first-use compile time by ~2 s (CPU) at an unchanged or better stepping rate
-(docs/performance.md).  Import only after :func:`._target.configure`.
+The rest is as before: ``ℓ(η) = ℓ_0 + Σ ℓ_m z^m`` with ``z^m = η^{-m}`` precomputed (Horner-like fused multiply-adds
+on the real components), ``ν1`` continued by one Newton step ``ν ← ν + (ν² − ν_prev²)/(2ν_prev)`` (``ν²`` is an
+integral of the map, so the correction is at round-off level; the closest-root square root is used otherwise), and
+the eigenvector of :func:`._scalar._eigvec`. The blocks are scalars only, so the lock-step lanes (:mod:`._lanes`)
+perform the same operations in the same order (no fastmath, no automatic contraction; the fused multiply-adds ``F =
+_scalar._fma`` are written out: the same bits). The reciprocal ``r = 1/|k|²`` of the axis is folded into ``c`` and
+the recurrence coefficients (:func:`_axis`, :func:`_zed3`), so no division sits on the step's dependency chain.
+:func:`_dress3`, :func:`_zed3` and :func:`_step3` are inlined by Numba (left to LLVM, the lanes lose their
+vectorisation); the small blocks and :func:`_solve3` are left to LLVM's inliner, which keeps the first-use compile
+time down at an unchanged stepping rate (docs/performance.md). Import only after :func:`._target.configure`.
 """
 
 from __future__ import annotations

@@ -4,8 +4,9 @@ dressing, the products of ``R(λ)``, selects for the lock-step lanes, the integr
 The blocks are ``inline="always"`` (inlined by Numba, so that the loop bodies have no calls and LLVM vectorises
 the lanes), except the two selects ``_sel`` and ``_selc``, used only by the lanes and left to LLVM's inliner:
 inlining their hundreds of call sites at Numba's IR level doubled the compile time of the lanes kernel
-(docs/performance.md, part i).  Either way the single-orbit routes and the lanes perform the same IEEE operations
-in the same order (no fastmath, no contraction) and give the same bits (tests/test_routes.py).
+(docs/performance.md, part i); the fused multiply-add :func:`_fma` is an LLVM intrinsic (no call at all).
+Either way the single-orbit routes and the lanes perform the same IEEE operations in the same order (no fastmath,
+no automatic contraction, explicit fused multiply-adds) and give the same bits (tests/test_routes.py).
 Import only after :func:`._target.configure`.
 """
 
