@@ -120,7 +120,9 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
     ``nu0`` (B,); ``out`` (S, B, 3N) (step-major, C order), ``final`` (B, 3N), ``drift`` (B, 2N),
     ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  N = 3 (with ``specialise``): blocks of lock-stepped lanes
     (:func:`._lanes.run_lanes3`); other N: :func:`._generic.run_batch_generic`.  Either way every orbit gets the
-    bits of its single-orbit run.  Never raises on a singular step (see ``status``)."""
+    bits of its single-orbit run.  Never raises on a singular step (see ``status``).  ``final`` may be the view
+    ``out[S - 1]`` when the last step is saved (the kernels write the same values to both); with
+    ``want_drift=False`` the N = 3 kernel leaves ``drift`` as given (pass zeros)."""
     batch_kernel(X0.shape[1], specialise)(X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final,
                                           drift, status, fail, nu_last, bool(want_drift))
 
@@ -138,8 +140,11 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_dri
     B, n3 = X.shape
     S = check_counts(steps, save_every, B, n3)
     out = np.empty((S, B, n3))
-    final = np.empty((B, n3))
-    drift = np.empty((B, 2 * (n3 // 3)))
+    # the last saved row is the final state when the last step is saved: one array less to allocate and fault in
+    # (the kernels write the same values to both); ``drift`` from calloc's zero pages, which the kernels touch only
+    # for the drift pass
+    final = out[S - 1] if steps % save_every == 0 else np.empty((B, n3))
+    drift = np.zeros((B, 2 * (n3 // 3)))
     status = np.empty(B, np.int64)  # every entry is written by the kernel
     fail = np.empty(B, np.int64)
     nu_last = np.empty(B, np.complex128)

@@ -226,9 +226,9 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         for i in range(9):
             final[l, i] = buf[i * L + l]
         nu_last[l] = complex(buf[9 * L + l], buf[10 * L + l])
-        for k in range(6):
-            drift[l, k] = 0.0
-        if want_drift:
+        if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
+            for k in range(6):
+                drift[l, k] = 0.0
             S._integrals(X0[l], b[l], 3, I0)
             last = (fail[l] if status[l] != STATUS_OK else steps) // save_every
             S._drift_pass(out[:, l], final[l], last, b[l], 3, I0, Ib, drift[l])
