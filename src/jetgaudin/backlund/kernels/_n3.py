@@ -276,6 +276,8 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
     nu = nu0
     status = STATUS_OK
     n = 0
+    j = 0  # the last saved row
+    left = save_every  # steps to the next saved row (a countdown: no integer division per step)
     for n in range(steps):
         # quantities of the previous ν1, off the critical path of the step
         nu_sq = nu * nu
@@ -283,8 +285,10 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
         status, nu, x = _step3(x, b, cst, nu, nu_sq, inv_2nu, n > 0 or cont)
         if status != STATUS_OK:
             break
-        if (n + 1) % save_every == 0:
-            j = (n + 1) // save_every
+        left -= 1
+        if left == 0:
+            left = save_every
+            j += 1
             for i in range(9):
                 out[j, i] = x[i]
     else:
