@@ -65,7 +65,7 @@ _SAVED = _ALIVE + 3
 # tolerance
 _MID = _ALIVE + 4
 # the new values of the rows 0-10 and of the status, copied back by a loop of their own (a select stored in place
-# becomes a masked store, ~10× slower on AMD Zen than a plain one)
+# becomes a masked store, vmaskmovpd, slow on AMD Zen: writing elsewhere and copying was 15-20 % faster, one thread)
 _NEW = _MID + 10
 _ROWS = _NEW + 12
 
