@@ -421,3 +421,29 @@ def test_scheduler_that_cannot_be_used_is_refused_before_the_directory_exists(tm
     assert one_line_error(code, err), err
     assert "distributed" in err
     assert not out.exists()
+
+
+def test_slow_health_checks_take_a_bounded_share_of_the_run(tmp_path, monkeypatch):
+    # a large ensemble's health check (integrals of every orbit) can take longer than the 0.1 s between checks; the
+    # driver then spaces the checks so that they take about FLUSH_SHARE (10 %) of the time.  Here each check sleeps
+    # 0.1 s: at a fixed 0.1 s interval they would take half the run or more; bound 35 % (the first interval is
+    # 0.1 s, and a loaded machine slows the steps, not the sleeps).  The orbit is still the unchunked one.
+    from jetgaudin.run import health as health_mod
+
+    spent = []
+    original = health_mod.Health.check
+
+    def slow_check(self, steps, S):
+        t = time.monotonic()
+        time.sleep(0.1)
+        out = original(self, steps, S)
+        spent.append(time.monotonic() - t)
+        return out
+
+    monkeypatch.setattr(health_mod.Health, "check", slow_check)
+    t0 = time.monotonic()
+    res = rl.start(spec(3000, every=500), tmp_path / "slow")
+    total = time.monotonic() - t0
+    assert res.state is rl.RunStatus.COMPLETED
+    assert sum(spent) <= 0.35 * total, (sum(spent), total, len(spent))
+    assert np.array_equal(rl.load(tmp_path / "slow").X[-1], reference(3000)[-1])

@@ -53,9 +53,13 @@ def curve_coefficients(X, b, c=None) -> np.ndarray:
     xi = lax_coefficients(X, b, c)
     N = xi.shape[-2] - 1
     out = np.zeros(xi.shape[:-2] + (2 * N + 1,), dtype=xi.dtype)
+    comp = [np.ascontiguousarray(xi[..., :, a]) for a in range(3)]  # (..., N+1) per component
     for i in range(N + 1):
         for j in range(N + 1):
-            out[..., i + j] += np.sum(xi[..., i, :] * xi[..., j, :], axis=-1)
+            # ⟨ξ_i, ξ_j⟩ summed over the 3 components in order (as np.sum over a length-3 axis, ~5x faster on
+            # large batches, where a reduction over a short last axis is slow)
+            out[..., i + j] += (comp[0][..., i] * comp[0][..., j] + comp[1][..., i] * comp[1][..., j]) + \
+                comp[2][..., i] * comp[2][..., j]
     return finite_result(out, "the spectral invariants (integrals)")
 
 

@@ -28,8 +28,13 @@ from .store import Store
 
 #: target duration of one kernel call (signals are handled between calls)
 CALL_SECONDS = 0.05
-#: at most this long between two health checks / appends of the accumulated rows
+#: at most this long between two health checks / appends of the accumulated rows, or longer where the check and the
+#: append themselves take longer than :data:`FLUSH_SHARE` of it (large ensembles), at most :data:`FLUSH_MAX_SECONDS`
 FLUSH_SECONDS = 0.1
+#: the share of the time a health check and append may take (the interval grows to keep it)
+FLUSH_SHARE = 0.1
+#: the longest interval between two health checks (signals are still handled after every kernel call)
+FLUSH_MAX_SECONDS = 2.0
 
 
 class RunInterrupted(Exception):  # noqa: N818 - a normal outcome (not bad input), hence not a JetGaudinError
@@ -237,16 +242,19 @@ class Driver:
                        else 0)
 
     _L = 1
+    _overhead = 0.0  # seconds of the last chunk outside the kernel calls (health checks, append, reference step)
 
     def _chunk(self, sig: SignalFlag, fixed: int | None, sample_imag: bool, per_step: bool) -> str | None:
-        """Advance by kernel calls for about :data:`FLUSH_SECONDS` (or one fixed chunk), then check the health of
-        the rows and the end state and append the rows that passed.  Returns a failure reason or ``None``."""
+        """Advance by kernel calls for about :data:`FLUSH_SECONDS` (longer when the checks are slow: see
+        :data:`FLUSH_SHARE`; or one fixed chunk), then check the health of the rows and the end state and append the
+        rows that passed.  Returns a failure reason or ``None``."""
         spec, pos, health, m = self.spec, self.pos, self.health, self.spec.map
         steps, every = spec.steps, spec.save_every
         rows_n: list[int] = []
         rows: list[np.ndarray] = []
-        ends: list[tuple[int, np.ndarray, Any]] = []  # (step, X, carry) after each call
+        ends: list[tuple[int, np.ndarray, Any]] = []  # [(step, X, carry)] after the last call (only it is used)
         failure: str | None = None
+        t_enter = time.monotonic()
         if sample_imag:  # the compiled route does not compute the residue: one reference step per chunk
             Xs = pos.X if pos.X.ndim == 1 else pos.X[:64]
             cs = pos.carry if (pos.carry is None or pos.X.ndim == 1) else pos.carry[:64]
@@ -258,6 +266,8 @@ class Driver:
             if failure:
                 return failure
         t0 = time.monotonic()
+        t_calls = 0.0  # time inside the kernel calls; the rest of the chunk is the checks' overhead
+        flush = min(FLUSH_MAX_SECONDS, max(FLUSH_SECONDS, self._overhead / FLUSH_SHARE))
         n, X, carry = pos.n, pos.X, pos.carry
         while n < steps:
             L = fixed if fixed is not None else (1 if per_step else self._limit(self._L))
@@ -269,6 +279,7 @@ class Driver:
                 failure = f"{type(exc).__name__} after step {n}: {one_line(exc)}"
                 break
             dt = time.monotonic() - tc
+            t_calls += dt
             if fixed is None and not per_step:
                 self._L = self._adapt(self._L, k, dt)
             if se == every and k >= every:
@@ -286,13 +297,14 @@ class Driver:
                         rows.pop()
                     n, X, carry = ends[-1] if ends else (pos.n, pos.X, pos.carry)
                     break
-            ends.append((n, X, carry))
+            ends[:] = [(n, X, carry)]
             if self.progress is not None:  # after every kernel call (a display: the rows are checked below)
                 self.progress(n, steps)
-            if fixed is not None or sig.signum or time.monotonic() - t0 >= FLUSH_SECONDS or len(rows_n) >= \
-                    self.max_rows:
+            if fixed is not None or sig.signum or time.monotonic() - t0 >= flush or len(rows_n) >= self.max_rows:
                 break
-        return self._commit(rows_n, rows, ends, failure)
+        failure = self._commit(rows_n, rows, ends, failure)
+        self._overhead = max(0.0, time.monotonic() - t_enter - t_calls)
+        return failure
 
     def _commit(self, rows_n: list[int], rows: list[np.ndarray], ends: list[tuple[int, np.ndarray, Any]],
                 failure: str | None) -> str | None:
