@@ -27,7 +27,7 @@ from .spec import RunSpec, RunStatus
 from .store import Store
 
 #: target duration of one kernel call (signals are handled between calls)
-CALL_SECONDS = 0.05
+CALL_SECONDS = 0.1
 #: at most this long between two health checks / appends of the accumulated rows, or longer where the check and the
 #: append themselves take longer than :data:`FLUSH_SHARE` of it (large ensembles), at most :data:`FLUSH_MAX_SECONDS`
 FLUSH_SECONDS = 0.1
