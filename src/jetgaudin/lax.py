@@ -111,7 +111,7 @@ def lax_coefficients(X, b, c=None) -> np.ndarray:
     y = X.reshape(X.shape[:-1] + (N, 3))
     # T = I for the reduction (lax2): Y_n = y_n without the product (an einsum over 10^5 states costs ~30 ms)
     Y = y if c is None else np.einsum("in,...ia->...na", T, y)
-    b_b = np.broadcast_to(bvec, Y.shape[:-2] + (1, 3)).astype(np.result_type(Y, bvec))
+    b_b = np.broadcast_to(bvec, Y.shape[:-2] + (1, 3)).astype(Y.dtype)
     return np.concatenate([b_b, Y], axis=-2)
 
 
