@@ -335,7 +335,7 @@ def test_real_form_of_the_dressing_products(rng):
         ell = _sigma(y)
         T1 = _dressing.mm(M0, ell) + _dressing.mm(ell, _dressing.adj(M0))
         T2 = _dressing.mm(_dressing.mm(M0, ell), _dressing.adj(M0))
-        *n, r = n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2)  # unnormalised axis n' and r = 1/|k|^2
+        *n, r = n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2, 1.0)  # unnormalised axis n' and r = 1/|k|^2
         n = np.array(n) * r
         assert abs(n @ n - 1) <= 1e-15  # a few ulp
         m, c = -eta.real, eta.imag
@@ -368,8 +368,12 @@ def test_real_form_step_equals_the_complex_division(eta, rng):
             M0 = _dressing.real_two_point_M0(eta, k1 * scale, k2)
             new, res = _dressing.dress_two_point(ell, eta, np.conj(eta), M0)
             ref = lax.state_from_ell(new).real
-            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2)  # (n', r)
+            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, 1.0)  # (n', r)
             ok, *got = n3._dress3(*x, b, *n, cst)
+            # the power-of-two scale of the axis (_scale3) changes no bit: 2^-40 and the state's own scale
+            for q in (2.0**-40, n3._scale3(*x, b)):
+                nq = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, q)
+                assert n3._dress3(*x, b, *nq, cst) == (ok, *got)
             assert bool(ok) is exact and bool(res <= 1e-8 * (1 + np.max(np.abs(ell)))) is exact
             if exact:
                 assert np.max(np.abs(np.array(got) - ref)) <= 1e-14 * np.max(np.abs(ref))
@@ -417,3 +421,16 @@ def test_fused_multiply_add_is_rounded_once_on_every_target(cpu):
     exact = [float(Fraction(0.1) * 10 - 1), float(Fraction(1 + 2.0**-30) * Fraction(1 - 2.0**-30) - 1)]
     assert [float(v) for v in out] == exact
     assert exact[0] != 0.1 * 10.0 - 1.0 and exact[1] == -(2.0**-60)
+
+
+@pytest.mark.parametrize("size", [1e-100, 1e60, 1e120, 1e145])
+def test_n3_route_covers_huge_and_tiny_states(size):
+    # the unnormalised axis n' = q |k|^2 n-hat grows like |y|^2; the power of two q of _scale3 keeps the cross
+    # products n' x y of the size of y, so the compiled N = 3 route steps states up to ~1e150 like the NumPy route
+    # (without q it failed from ~1e102 on).  Appendix 2's state times `size`; 1e-13 of the state over 5 steps (the
+    # routes' 1e-14 per step, as tests/test_routes.py)
+    X = np.array(APPENDIX2_X0) * size
+    m = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    ref = m.iterate(X, 5, kernel="numpy")
+    got = m.iterate(X, 5, kernel="compiled")
+    assert np.max(np.abs(got - ref)) <= 1e-13 * np.max(np.abs(ref))

@@ -13,12 +13,12 @@ import numpy as np
 from numba import njit, prange
 
 from . import _scalar as S
-from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _solve3, _tol3, _zed3
+from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _scale3, _solve3, _tol3, _zed3
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, nu, newton):
+def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, q, nu, newton):
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``,
     the eigenvector and the unnormalised axis ``n'`` with ``r = 1/|k|²`` (:func:`._n3._axis`).  Returns
     ``(ν1, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
@@ -31,7 +31,7 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     need_root = S._sel(newton, not newton_ok, False)  # selects, no short-circuit control flow (vectorisation)
     nu = S._selc(newton, _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu)), nu)
     k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
-    n1, n2, n3, r = _axis(k1, k2, nk)
+    n1, n2, n3, r = _axis(k1, k2, nk, q)
     return nu, n1, n2, n3, r, need_root, bad_scale, branch
 
 
@@ -61,9 +61,11 @@ _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
 _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
+# the power of two q of _n3._scale3 (per orbit and call)
+_Q = _ALIVE + 4
 # scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch, the residual
 # tolerance
-_MID = _ALIVE + 4
+_MID = _ALIVE + 5
 # the new values of the rows 0-10 and of the status, copied back by a loop of their own (a select stored in place
 # becomes a masked store, vmaskmovpd, slow on AMD Zen: writing elsewhere and copying was 15-20 % faster, one thread)
 _NEW = _MID + 10
@@ -83,7 +85,7 @@ def _lanes_pass(buf, newton):
         r = _lane_axis(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l], buf[5 * L + l],
                        buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[12 * L + l],
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
-                       complex(buf[9 * L + l], buf[10 * L + l]), newton)
+                       buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
         buf[M + l] = r[0].real
         buf[M + L + l] = r[0].imag
         buf[M + 2 * L + l] = r[1]
@@ -199,6 +201,8 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         for i in range(NCONST):
             buf[(_C0 + i) * L + l] = cst[i]
         buf[11 * L + l] = b[src]
+        buf[_Q * L + l] = _scale3(X0[src, 0], X0[src, 1], X0[src, 2], X0[src, 3], X0[src, 4], X0[src, 5], X0[src, 6],
+                                  X0[src, 7], X0[src, 8], b[src])
         buf[_ALIVE * L + l] = 1.0
         buf[_STATUS * L + l] = 0.0
         buf[_REDO * L + l] = 0.0

@@ -114,15 +114,30 @@ def _newton_nu(nu, c, inv_2nu):
 
 
 @njit(cache=True, error_model="numpy")
-def _axis(k1, k2, nk):
+def _scale3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
+    """A power of two ``q = 2^(−2E)`` with ``2^(E−1) ≤ 1 + max_m |ℓ_m| < 2^E`` (per orbit and call, from the state
+    at the start): :func:`_axis` multiplies the axis by it, so the cross products ``n' × y`` stay of the size of
+    ``y`` (``|n'| = |k|²`` grows like ``|y|²``) and the step covers states up to ~1e150 as before the axis was
+    unnormalised.  Scaling by a power of two is exact, so the steps' bits do not depend on ``q``."""
+    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
+    sc = 1.0 + math.sqrt(e2)
+    if not (sc < 1e300):  # inf or NaN: no scaling (the step reports the non-finite state)
+        return 1.0
+    return math.ldexp(1.0, -2 * math.frexp(sc)[1])
+
+
+@njit(cache=True, error_model="numpy")
+def _axis(k1, k2, nk, q):
     """The axis of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``), unnormalised:
-    ``(n', r)`` with ``n' = |k|² n̂ = (−2 Re k̄1k2, −2 Im k̄1k2, |k2|² − |k1|²)`` and ``r = 1/|k|²``.  The step
-    multiplies by ``r`` only where it is needed (:func:`_dress3`), so the division is off the dependency chain."""
-    r = 1.0 / nk
+    ``(n', r)`` with ``n' = q |k|² n̂ = q (−2 Re k̄1k2, −2 Im k̄1k2, |k2|² − |k1|²)`` and ``r = 1/(q|k|²)`` (``q`` of
+    :func:`_scale3`, a power of two: exact).  The step multiplies by ``r`` only where it is needed
+    (:func:`_dress3`), so the division is off the dependency chain."""
+    r = 1.0 / (nk * q)
     pr = F(k1.real, k2.real, k1.imag * k2.imag)  # k̄1 k2
     pi = F(k1.real, k2.imag, -(k1.imag * k2.real))
     n3 = F(k2.real, k2.real, k2.imag * k2.imag) - F(k1.real, k1.real, k1.imag * k1.imag)
-    return -(pr + pr), -(pi + pi), n3, r
+    m2q = -(q + q)
+    return pr * m2q, pi * m2q, n3 * q, r
 
 
 @njit(cache=True, error_model="numpy")
@@ -235,7 +250,7 @@ def _finite9(y0, y1, y2, y3, y4, y5, y6, y7, y8):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _step3(x, b, cst, nu, nu_sq, inv_2nu, newton):
+def _step3(x, b, cst, q, nu, nu_sq, inv_2nu, newton):
     """One N = 3 step from the tuple ``x`` (9 floats) with the constants ``cst`` of :func:`_constants3`;
     returns ``(status, ν1, x_new)`` (``x`` itself on a failed step)."""
     x0, x1, x2, x3, x4, x5, x6, x7, x8 = x
@@ -250,7 +265,7 @@ def _step3(x, b, cst, nu, nu_sq, inv_2nu, newton):
     k1, k2, nk, st = S._eigvec(u, v, w, nu)
     if st != STATUS_OK:
         return st, nu, x
-    n1, n2, n3, rk = _axis(k1, k2, nk)
+    n1, n2, n3, rk = _axis(k1, k2, nk, q)
     r = _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, rk, cst)
     xn = (r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     if not r[0]:
@@ -273,6 +288,7 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
     for k in range(6):
         drift[k] = 0.0
     cst = _constants3(eta)
+    q = _scale3(x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8], b)
     nu = nu0
     status = STATUS_OK
     n = 0
@@ -282,7 +298,7 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
         # quantities of the previous ν1, off the critical path of the step
         nu_sq = nu * nu
         inv_2nu = S._cdiv(complex(1.0, 0.0), nu + nu)
-        status, nu, x = _step3(x, b, cst, nu, nu_sq, inv_2nu, n > 0 or cont)
+        status, nu, x = _step3(x, b, cst, q, nu, nu_sq, inv_2nu, n > 0 or cont)
         if status != STATUS_OK:
             break
         left -= 1
