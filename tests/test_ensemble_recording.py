@@ -189,10 +189,12 @@ def test_cli_sampler_streams_to_dir(tmp_path):
 
 def test_cli_sigkill_then_resume_is_bit_for_bit(tmp_path):
     """A run killed with SIGKILL at a random moment resumes to exactly the uninterrupted ensemble."""
-    B, steps = 2000, 4000
+    # 8e7 orbit-steps: a few seconds of stepping, so that the kill lands during the run (4000 steps took 0.3 s once
+    # the run layer's checks were made cheaper, and the test then skipped itself)
+    B, steps, every = 2000, 40000, 1000
     out = tmp_path / "k"
     args = ["--sample", "energy", "--energy", "2.0", "--orbits", B, "--seed", 7, "--steps", steps,
-            "--save-every", 100, "--checkpoint-seconds", 0.05, "--no-progress"]
+            "--save-every", every, "--checkpoint-seconds", 0.05, "--no-progress"]
     proc = subprocess.Popen([sys.executable, "-m", "jetgaudin", "ensemble", *map(str, args), "--out", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     t0 = time.monotonic()
@@ -215,7 +217,7 @@ def test_cli_sigkill_then_resume_is_bit_for_bit(tmp_path):
     r = _cli("--resume", out, "--no-progress")
     assert r.returncode == 0, r.stderr
     data = er.load_ensemble(out)
-    spec = er.EnsembleSpec(data.X0, 1.0, 5 + 0.1j, steps, 100)
+    spec = er.EnsembleSpec(data.X0, 1.0, 5 + 0.1j, steps, every)
     n, S = reference(spec)
     np.testing.assert_array_equal(data.n, n)
     assert np.array_equal(data.states, S)

@@ -20,7 +20,8 @@ from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 @njit(cache=True, error_model="numpy", inline="always")
 def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, q, nu, newton):
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``,
-    the eigenvector and the unnormalised axis ``n'`` with ``r = 1/|k|²`` (:func:`._n3._axis`).  Returns
+    the eigenvector and the unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of
+    two of :func:`._n3._scale3`).  Returns
     ``(ν1, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
     ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
