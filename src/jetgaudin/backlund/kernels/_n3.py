@@ -114,13 +114,20 @@ def _newton_nu(nu, c, inv_2nu):
 
 
 @njit(cache=True, error_model="numpy")
+def _size3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
+    """``1 + max_m |ℓ_m|`` with ``|ℓ_m|`` the largest entry of ``ℓ_m = y_m·σ`` (``|u| = |y³|``,
+    ``|v| = |w| = |y¹ + iy²|``; ``ℓ_0 = diag(b, −b)``): the size of the state for :func:`_tol3` and :func:`_scale3`."""
+    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
+    return 1.0 + math.sqrt(e2)
+
+
+@njit(cache=True, error_model="numpy")
 def _scale3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     """A power of two ``q = 2^(−2E)`` with ``2^(E−1) ≤ 1 + max_m |ℓ_m| < 2^E`` (per orbit and call, from the state
     at the start): :func:`_axis` multiplies the axis by it, so the cross products ``n' × y`` stay of the size of
     ``y`` (``|n'| = |k|²`` grows like ``|y|²``) and the step covers states up to ~1e150 as before the axis was
     unnormalised.  Scaling by a power of two is exact, so the steps' bits do not depend on ``q``."""
-    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
-    sc = 1.0 + math.sqrt(e2)
+    sc = _size3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b)
     if not (sc < 1e300):  # inf or NaN: no scaling (the step reports the non-finite state)
         return 1.0
     return math.ldexp(1.0, -2 * math.frexp(sc)[1])
@@ -166,11 +173,9 @@ def _norm_ok(e1, e2, e3, t):
 
 @njit(cache=True, error_model="numpy")
 def _tol3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
-    """The squared residual tolerance of the step, ``(1e-8 (1 + max_m |ℓ_m|))²`` with ``|ℓ_m|`` the largest entry
-    of ``ℓ_m = y_m·σ`` (``|u| = |y³|``, ``|v| = |w| = |y¹ + iy²|``; ``ℓ_0 = diag(b, −b)``), as the complex
+    """The squared residual tolerance of the step, ``(1e-8 (1 + max_m |ℓ_m|))²`` (:func:`_size3`), as the complex
     route's relative test."""
-    e2 = max(b * b, x2 * x2, F(x0, x0, x1 * x1), x5 * x5, F(x3, x3, x4 * x4), x8 * x8, F(x6, x6, x7 * x7))
-    sc = 1.0 + math.sqrt(e2)
+    sc = _size3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b)
     return S._RESIDUAL_TOL2 * sc * sc
 
 
