@@ -393,6 +393,37 @@ def test_lanes_redo_path_equals_the_single_orbit():
         assert np.array_equal(out[i], single) and nu_i == nu_last[i]
 
 
+def test_lanes_with_failed_members_equal_their_single_orbits():
+    # a block of lanes with a failed member takes the lane-by-lane path at every later step (the usual step copies
+    # the new values as they are): every member, failed or not, equals its single-orbit run bit for bit, and a
+    # failed member keeps its last good state.  40 orbits: a block of 32 lanes with failures and redone lanes, and
+    # a block of 8 without
+    from jetgaudin.backlund.kernels import _drivers
+
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 40, seed=4)
+    b = np.full(40, 1.0)
+    eta = np.full(40, 5 + 0.1j)
+    nu = _kernels.nu_default(X, b, eta)
+    nu[[3, 17]] *= 1 + 1e-3  # not the eigenvalue: used as given (cont=False) it fails; continued, it is redone
+    nu[5] *= -1  # the other sheet: a valid eigenvalue, stepped as given
+    X[20] *= 1e155  # overflows in the first step
+    nu[20] = 1.0
+    single = _drivers.single_kernel(9, True)
+    for cont, failing in ((False, {3, 17, 20}), (True, {20})):
+        out, final, _, nu_last, status, fail = _kernels.run_batch(X, b, eta, nu, cont, 30, 1)
+        assert set(np.flatnonzero(status)) == failing
+        for i in range(40):
+            ref = np.empty((31, 9))
+            ref_final = np.empty(9)
+            st, n, nu_i = single(X[i], 1.0, 5 + 0.1j, nu[i], cont, 30, 1, ref, ref_final, np.empty(6), False)
+            assert status[i] == st and fail[i] == n
+            assert np.array_equal(out[i, : n + 1], ref[: n + 1]) and np.array_equal(final[i], ref_final)
+            if st:
+                assert np.array_equal(out[i, n:], np.broadcast_to(ref_final, (31 - n, 9)))  # frozen
+            else:
+                assert nu_last[i] == nu_i
+
+
 _FMA_SCRIPT = """
 import numba
 from jetgaudin.backlund.kernels import _target

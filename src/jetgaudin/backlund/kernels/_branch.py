@@ -1,6 +1,7 @@
 r"""The default branch of ``ν(η)`` (the branch rule of :func:`jetgaudin.nu`), compiled, for the first step of a
-run (:func:`._drivers.nu_default` is the driver).  One kernel, serial: with the exact test below the rule costs a
-few tens of nanoseconds per orbit, less than starting a parallel region.  Import only after
+run (:func:`._drivers.nu_default` is the driver).  One kernel, serial, without the GIL: the driver runs parts of a
+large batch on threads of its own (the rule costs ~0.1 µs per orbit, so a parallel region of Numba's, compiled
+separately, would cost more compile time than it saves).  Import only after
 :func:`._target.configure`.
 """
 
@@ -120,7 +121,7 @@ def _nu_default_one(x, b, eta, sheet, kappa):
     return sheet * nu, True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def nu_default_kernel(X, b, eta, sheet, kappa, nu, ok):
     """:func:`_nu_default_one` for each orbit of ``X`` (B, 3N) with per-orbit ``b``, ``eta``; ``kappa`` (2N + 1,)
     is the work array (allocated once per call, not per orbit)."""
