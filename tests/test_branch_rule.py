@@ -61,9 +61,9 @@ def test_sheet_and_batches_of_any_size(rng):
 
 
 def test_a_batch_split_across_threads_gives_the_same_values(monkeypatch, rng):
-    # large batches run in contiguous parts on threads of the driver's own (the kernel releases the GIL): every
-    # split gives the bits of one part, and a failing orbit in a later part is named by its index in the batch.
-    # The split is forced (3 parts) so that it is exercised on a machine with one CPU too
+    # large batches run in pieces on threads of the driver's own (the kernel releases the GIL): every split gives
+    # the bits of one call, and a failing orbit in a later piece is named by its index in the batch.  The split is
+    # forced (3 threads) so that it is exercised on a machine with one CPU too
     from jetgaudin.backlund.kernels import _drivers
 
     n = 3 * 1000 + 7
@@ -71,26 +71,8 @@ def test_a_batch_split_across_threads_gives_the_same_values(monkeypatch, rng):
     b = rng.uniform(0.5, 2, n)
     eta = rng.uniform(1, 6, n) + 1j * rng.uniform(-2, 2, n)
     whole = K.nu_default(X, b, eta)
-    monkeypatch.setattr(_drivers, "_branch_threads", lambda B: 3)
+    monkeypatch.setattr(_drivers, "_threads", lambda n, per_thread: 3)
     assert np.array_equal(K.nu_default(X, b, eta), whole)
     eta[2500] = 1j  # Re(eta) = 0: the rule is undefined there
     with pytest.raises(jg.BranchPointError, match="orbit 2500:"):
         K.nu_default(X, b, eta)
-
-
-def test_branch_rule_threads_follow_numba():
-    # one thread per BRANCH_ORBITS_PER_THREAD orbits, at most Numba's thread count (1 after set_num_threads(1))
-    import numba
-
-    from jetgaudin.backlund.kernels import _drivers
-
-    per = _drivers.BRANCH_ORBITS_PER_THREAD
-    assert _drivers._branch_threads(per - 1) == 1
-    saved = numba.get_num_threads()
-    try:
-        numba.set_num_threads(1)
-        assert _drivers._branch_threads(100 * per) == 1
-    finally:
-        numba.set_num_threads(saved)
-    assert _drivers._branch_threads(100 * per) == saved
-    assert _drivers._branch_threads(2 * per) == min(2, saved)

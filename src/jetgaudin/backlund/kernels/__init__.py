@@ -9,11 +9,13 @@ Modules (each one concern):
   selects, integrals, drift);
 - :mod:`._generic`: the generic route (any N), one orbit and a batch in a ``prange`` loop;
 - :mod:`._n3`: the N = 3 route, unrolled in scalars (shorter dependency chain);
-- :mod:`._lanes`: N = 3 ensembles, ``LANES`` orbits in lock-step (SIMD across orbits);
+- :mod:`._lanes`: N = 3 ensembles, ``LANES`` orbits in lock-step (SIMD across orbits), ranges of blocks run on
+  threads by the driver (:func:`._drivers.in_threads`);
 - :mod:`._closed`: the Appendix 1 closed form, compiled, for benchmarks and cross-checks;
 - :mod:`._branch`: the default branch of ``ν(η)`` (the branch rule of :func:`jetgaudin.nu`) for the first step;
 - :mod:`._flops`: hand-counted operations per step;
-- :mod:`._drivers`: the Python drivers (validate counts, allocate, call, raise typed errors);
+- :mod:`._drivers`: the Python drivers (validate counts, allocate, call, split large batches across threads,
+  raise typed errors);
 - :mod:`._select`: which kernels a run needs, loaded / cached / cold, the ``kernel="auto"`` choice, and
   visible compilation (:func:`prepare`, :func:`warmup`).
 

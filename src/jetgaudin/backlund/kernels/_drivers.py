@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import importlib
 import os
+import threading
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from types import ModuleType
 from typing import Any
@@ -124,8 +126,16 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
     bits of its single-orbit run.  Never raises on a singular step (see ``status``).  ``final`` may be the view
     ``out[S - 1]`` when the last step is saved (the kernels write the same values to both); with
     ``want_drift=False`` the N = 3 kernel leaves ``drift`` as given (pass zeros)."""
-    batch_kernel(X0.shape[1], specialise)(X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final,
-                                          drift, status, fail, nu_last, bool(want_drift))
+    kernel = batch_kernel(X0.shape[1], specialise)
+    args = (X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final, drift, status, fail, nu_last,
+            bool(want_drift))
+    if not (specialise and X0.shape[1] == 9):
+        kernel(*args)
+        return
+    nblocks = -(-X0.shape[0] // kernel_module("_lanes").LANES)
+    # a block's set-up costs about 4 of its steps
+    in_threads(lambda k0, k1: kernel(*args, k0, k1), nblocks,
+               _threads(nblocks, -(-LANES_WORK_PER_THREAD // (min(int(steps), LANES_WORK_PER_THREAD) + 4))))
 
 
 def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_drift=True):
@@ -187,19 +197,61 @@ def iterate_single(x, b, eta, nu0, cont, steps, save_every, *, specialise=True, 
     return out, final, drift, nu
 
 
-#: orbits per thread below which the branch rule runs on the calling thread alone (starting a thread costs more
-#: than ~10^4 orbits of the rule, ~0.1 µs each)
+#: orbits per thread below which the branch rule stays on fewer threads (a thread costs ~10^4 orbits of the rule,
+#: ~0.1 µs each, to start)
 BRANCH_ORBITS_PER_THREAD = 16384
 
-_pool: list[ThreadPoolExecutor] = []
+#: block-steps (``LANES`` orbits × one step, ~0.5 µs) per thread below which the lanes stay on fewer threads
+LANES_WORK_PER_THREAD = 256
+
+_pool: list[tuple[int, ThreadPoolExecutor]] = []
 
 
-def _branch_threads(B: int) -> int:
-    """How many threads run the branch rule on ``B`` orbits: Numba's thread count (``numba.set_num_threads``, so
-    a run limited to one thread stays on one), at most one per :data:`BRANCH_ORBITS_PER_THREAD` orbits."""
+def _executor() -> ThreadPoolExecutor:
+    """The process's pool of helper threads (made anew in a forked child, where the parent's threads do not run)."""
+    if not _pool or _pool[0][0] != os.getpid():
+        _pool[:] = [(os.getpid(), ThreadPoolExecutor(thread_name_prefix="jetgaudin"))]
+    return _pool[0][1]
+
+
+def _threads(n: int, per_thread: int) -> int:
+    """How many threads share ``n`` items of work: Numba's thread count (``numba.set_num_threads``, so a run
+    limited to one thread stays on one), at most one per ``per_thread`` items."""
     import numba
 
-    return max(1, min(numba.get_num_threads(), B // BRANCH_ORBITS_PER_THREAD))
+    return max(1, min(numba.get_num_threads(), n // max(1, per_thread)))
+
+
+def in_threads(part: Callable[[int, int], None], n: int, threads: int) -> None:
+    """``part(i0, i1)`` over the ranges of a split of ``[0, n)``, on the calling thread and ``threads − 1`` helper
+    threads (``part`` is a compiled kernel that releases the GIL, writing disjoint parts of its outputs).  The
+    range is cut in ``8 × threads`` pieces taken in turn by whichever thread is free (a thread slowed by other jobs
+    of the machine takes fewer); an exception on the calling thread (``KeyboardInterrupt``) stops the helpers
+    after their current piece."""
+    if threads <= 1 or n <= 1:
+        part(0, n)
+        return
+    pieces = min(n, 8 * threads)
+    edges = [n * k // pieces for k in range(pieces + 1)]
+    todo = list(range(pieces - 1, -1, -1))
+    lock = threading.Lock()
+
+    def work() -> None:
+        while True:
+            with lock:
+                if not todo:
+                    return
+                k = todo.pop()
+            part(edges[k], edges[k + 1])
+
+    futures = [_executor().submit(work) for _ in range(threads - 1)]
+    try:
+        work()
+    finally:
+        with lock:
+            todo.clear()
+        for f in futures:
+            f.result()
 
 
 def nu_default(X, b, eta, sheet=1):
@@ -220,17 +272,7 @@ def nu_default(X, b, eta, sheet=1):
     def part(i0: int, i1: int) -> None:
         kernel(X[i0:i1], b[i0:i1], eta[i0:i1], float(sheet), np.empty(work), nu[i0:i1], ok[i0:i1])
 
-    threads = _branch_threads(B)
-    if threads == 1:
-        part(0, B)
-    else:
-        if not _pool:
-            _pool.append(ThreadPoolExecutor(thread_name_prefix="jetgaudin-branch"))
-        edges = [B * k // threads for k in range(threads + 1)]
-        futures = [_pool[0].submit(part, edges[k], edges[k + 1]) for k in range(1, threads)]
-        part(edges[0], edges[1])
-        for f in futures:
-            f.result()
+    in_threads(part, B, _threads(B, BRANCH_ORBITS_PER_THREAD))
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         raise BranchPointError(

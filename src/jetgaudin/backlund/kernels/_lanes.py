@@ -10,7 +10,7 @@ redone by a second pass with ``ν1`` continued by the closest root (:func:`_lane
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from . import _scalar as S
 from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _scale3, _solve3, _tol3, _zed3
@@ -273,16 +273,19 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
             S._drift_pass(out[:, l], final[l], last, b[l], 3, I0, Ib, drift[l])
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last, want_drift):
-    r"""A batch of independent N = 3 orbits: ``X0`` (B, 9), per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out``
-    (S, B, 9) (step-major: the layout of ``iterate()``'s result, no transposed copy), ``final`` (B, 9), ``drift``
-    (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.  Blocks of ``LANES`` orbits in lock-step
-    (:func:`_run_block3`, SIMD across orbits), in a ``prange`` loop over blocks; every orbit gets the bits of its
-    single-orbit run (:func:`._n3.run_orbit3`)."""
+@njit(cache=True, error_model="numpy", nogil=True)
+def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last, want_drift, k0,
+               k1):
+    r"""The blocks ``k0 <= k < k1`` (of ``LANES`` orbits each) of a batch of independent N = 3 orbits: ``X0`` (B, 9),
+    per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out`` (S, B, 9) (step-major: the layout of ``iterate()``'s result, no
+    transposed copy), ``final`` (B, 9), ``drift`` (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.
+    Each block in lock-step (:func:`_run_block3`, SIMD across orbits); every orbit gets the bits of its single-orbit
+    run (:func:`._n3.run_orbit3`).  Serial and without the GIL: the driver runs ranges of blocks on threads of its
+    own (:func:`._drivers.in_threads`), which scaled better than Numba's ``prange`` over the blocks (two threads:
+    1.18e8 against 9.2e7 orbit-steps/s in alternated runs, docs/performance.md) and compiles ~2 s faster (no
+    parallel region)."""
     B = X0.shape[0]
-    nblocks = (B + LANES - 1) // LANES
-    for k in prange(nblocks):
+    for k in range(k0, k1):
         i0 = k * LANES
         i1 = min(i0 + LANES, B)
         _run_block3(X0[i0:i1], b[i0:i1], eta[i0:i1], nu0[i0:i1], cont, steps, save_every, out[:, i0:i1],

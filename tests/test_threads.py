@@ -1,0 +1,112 @@
+"""The drivers' threads (``backlund/kernels/_drivers.py``: ``in_threads``, ``_threads``): large batches of the N = 3
+lanes and of the branch rule run in pieces on the calling thread and helper threads; the results do not depend on
+the split, Numba's thread count is honoured, an interruption stops the helpers, a forked child gets threads of
+its own."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from jetgaudin.backlund import kernels as K
+from jetgaudin.backlund.kernels import _drivers
+from jetgaudin.ensemble import sample_on_leaf
+
+
+def _batch(n, seed):
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], n, seed=seed)
+    b = np.full(n, 1.0)
+    eta = np.where(np.arange(n) % 2 == 0, 5 + 0.1j, 0.6 - 0.2j)  # both directions of the division in every block
+    nu = K.nu_default(X, b, eta)
+    nu[[3, 40, 97]] *= 1 + 1e-3  # used as given by the first step (cont=False): these orbits fail
+    return X, b, eta, nu
+
+
+@pytest.mark.parametrize("threads", [2, 3, 5])
+def test_lanes_split_across_threads_equal_one_call(monkeypatch, threads):
+    # 130 orbits = 5 blocks of 32 lanes (the last one partly used), split in pieces on `threads` threads (forced,
+    # so that a one-CPU machine runs the split too): every output equals the one-thread call bit for bit
+    X, b, eta, nu = _batch(130, 7)
+    monkeypatch.setattr(_drivers, "_threads", lambda n, per_thread: 1)
+    one = K.run_batch(X, b, eta, nu, False, 40, 3)
+    monkeypatch.setattr(_drivers, "_threads", lambda n, per_thread: threads)
+    split = K.run_batch(X, b, eta, nu, False, 40, 3)
+    assert set(np.flatnonzero(one[4])) == {3, 40, 97}
+    for a, c in zip(one, split, strict=True):
+        assert np.array_equal(a, c)
+
+
+def test_thread_count_follows_numba_and_the_work():
+    import numba
+
+    per = _drivers.BRANCH_ORBITS_PER_THREAD
+    saved = numba.get_num_threads()
+    assert _drivers._threads(per - 1, per) == 1  # too little work for a second thread
+    assert _drivers._threads(100 * per, per) == saved
+    assert _drivers._threads(2 * per, per) == min(2, saved)
+    try:
+        numba.set_num_threads(1)
+        assert _drivers._threads(100 * per, per) == 1
+    finally:
+        numba.set_num_threads(saved)
+
+
+def test_pieces_cover_the_range_once():
+    seen = []
+    lock = threading.Lock()
+
+    def part(i0, i1):
+        with lock:
+            seen.extend(range(i0, i1))
+
+    for n, threads in ((1, 3), (5, 3), (100, 2), (1000, 4)):
+        seen.clear()
+        _drivers.in_threads(part, n, threads)
+        assert sorted(seen) == list(range(n))
+
+
+def test_an_interruption_stops_the_helpers():
+    # the calling thread raises (as KeyboardInterrupt would) in its first piece: the helper finishes the piece it
+    # holds and takes no other; the exception reaches the caller
+    done = []
+    main = threading.main_thread()
+
+    def part(i0, i1):
+        if threading.current_thread() is main:
+            raise KeyboardInterrupt
+        time.sleep(0.05)
+        done.append(i0)
+
+    with pytest.raises(KeyboardInterrupt):
+        _drivers.in_threads(part, 64, 2)
+    assert len(done) <= 1  # of 16 pieces
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork")
+def test_a_forked_child_gets_threads_of_its_own():
+    # the pool's threads do not exist in a forked child: the driver makes a new pool there (a stale one would hang)
+    got = []
+    _drivers.in_threads(lambda i0, i1: got.append(i1 - i0), 16, 2)  # the parent's pool exists
+    pid = os.fork()
+    if pid == 0:  # the child: exit code 0 when the split ran
+        try:
+            seen = []
+            _drivers.in_threads(lambda i0, i1: seen.append((i0, i1)), 16, 2)
+            os._exit(0 if sum(i1 - i0 for i0, i1 in seen) == 16 else 1)
+        except BaseException:
+            os._exit(2)
+    deadline = time.monotonic() + 60
+    while True:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            break
+        if time.monotonic() > deadline:
+            os.kill(pid, 9)
+            os.waitpid(pid, 0)
+            pytest.fail("the forked child hung in in_threads")
+        time.sleep(0.02)
+    assert os.waitstatus_to_exitcode(status) == 0
