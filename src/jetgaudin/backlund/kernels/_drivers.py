@@ -217,9 +217,12 @@ def _executor() -> ThreadPoolExecutor:
 def _threads(n: int, per_thread: int) -> int:
     """How many threads share ``n`` items of work: Numba's thread count (``numba.set_num_threads``, so a run
     limited to one thread stays on one), at most one per ``per_thread`` items."""
+    most = n // max(1, per_thread)
+    if most < 2:  # one thread, without asking Numba (a few µs: this is on the path of every short call)
+        return 1
     import numba
 
-    return max(1, min(numba.get_num_threads(), n // max(1, per_thread)))
+    return max(1, min(numba.get_num_threads(), most))
 
 
 def in_threads(part: Callable[[int, int], None], n: int, threads: int) -> None:
