@@ -281,9 +281,9 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     transposed copy), ``final`` (B, 9), ``drift`` (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.
     Each block in lock-step (:func:`_run_block3`, SIMD across orbits); every orbit gets the bits of its single-orbit
     run (:func:`._n3.run_orbit3`).  Serial and without the GIL: the driver runs ranges of blocks on threads of its
-    own (:func:`._drivers.in_threads`), which scaled better than Numba's ``prange`` over the blocks (two threads:
-    1.18e8 against 9.2e7 orbit-steps/s in alternated runs, docs/performance.md) and compiles ~2 s faster (no
-    parallel region)."""
+    own (:func:`._drivers.in_threads`, pieces taken by whichever thread is free).  Against Numba's ``prange`` over
+    the blocks (a static split): as fast when the two vCPUs run at the same speed, faster when one is slowed by
+    other jobs, and ~2 s less first-use compile (no parallel region; docs/performance.md)."""
     B = X0.shape[0]
     for k in range(k0, k1):
         i0 = k * LANES
