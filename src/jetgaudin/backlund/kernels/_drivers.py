@@ -133,9 +133,9 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
         kernel(*args)
         return
     nblocks = -(-X0.shape[0] // kernel_module("_lanes").LANES)
-    # a block's set-up costs about 4 of its steps
-    in_threads(lambda k0, k1: kernel(*args, k0, k1), nblocks,
-               _threads(nblocks, -(-LANES_WORK_PER_THREAD // (min(int(steps), LANES_WORK_PER_THREAD) + 4))))
+    cost = min(int(steps), LANES_WORK_PER_PIECE) + 4  # a block's set-up costs about 4 of its steps
+    in_threads(lambda k0, k1: kernel(*args, k0, k1), nblocks, _threads(nblocks, -(-LANES_WORK_PER_THREAD // cost)),
+               -(-LANES_WORK_PER_PIECE // cost))
 
 
 def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_drift=True):
@@ -204,6 +204,9 @@ BRANCH_ORBITS_PER_THREAD = 16384
 #: block-steps (``LANES`` orbits × one step, ~0.5 µs) per thread below which the lanes stay on fewer threads
 LANES_WORK_PER_THREAD = 256
 
+#: block-steps of the smallest piece of work a thread takes (~1 ms)
+LANES_WORK_PER_PIECE = 2048
+
 _pool: list[tuple[int, ThreadPoolExecutor]] = []
 
 
@@ -225,16 +228,17 @@ def _threads(n: int, per_thread: int) -> int:
     return max(1, min(numba.get_num_threads(), most))
 
 
-def in_threads(part: Callable[[int, int], None], n: int, threads: int) -> None:
+def in_threads(part: Callable[[int, int], None], n: int, threads: int, min_piece: int = 1) -> None:
     """``part(i0, i1)`` over the ranges of a split of ``[0, n)``, on the calling thread and ``threads − 1`` helper
     threads (``part`` is a compiled kernel that releases the GIL, writing disjoint parts of its outputs).  The
-    range is cut in ``8 × threads`` pieces taken in turn by whichever thread is free (a thread slowed by other jobs
-    of the machine takes fewer); an exception on the calling thread (``KeyboardInterrupt``) stops the helpers
-    after their current piece."""
+    range is cut in up to ``8 × threads`` pieces of at least ``min_piece`` items (a piece should last ~1 ms, so
+    that the calls' Python overhead stays small), taken in turn by whichever thread is free (a thread slowed by
+    other jobs of the machine takes fewer); an exception on the calling thread (``KeyboardInterrupt``) stops the
+    helpers after their current piece."""
     if threads <= 1 or n <= 1:
         part(0, n)
         return
-    pieces = min(n, 8 * threads)
+    pieces = max(threads, min(n, 8 * threads, n // max(1, min_piece)))
     edges = [n * k // pieces for k in range(pieces + 1)]
     todo = list(range(pieces - 1, -1, -1))
     lock = threading.Lock()
@@ -275,7 +279,7 @@ def nu_default(X, b, eta, sheet=1):
     def part(i0: int, i1: int) -> None:
         kernel(X[i0:i1], b[i0:i1], eta[i0:i1], float(sheet), np.empty(work), nu[i0:i1], ok[i0:i1])
 
-    in_threads(part, B, _threads(B, BRANCH_ORBITS_PER_THREAD))
+    in_threads(part, B, _threads(B, BRANCH_ORBITS_PER_THREAD), BRANCH_ORBITS_PER_THREAD // 2)
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         raise BranchPointError(
