@@ -264,9 +264,9 @@ def in_threads(part: Callable[[int, int], None], n: int, threads: int, min_piece
 def nu_default(X, b, eta, sheet=1):
     r"""Compiled :func:`jetgaudin.nu` (default branch times ``sheet``) for states ``X`` (B, 3N) with per-orbit
     ``b``, ``eta`` (B,) (:func:`._branch.nu_default_kernel`); equal to the NumPy branch rule to round-off.  Raises
-    :class:`jetgaudin.BranchPointError` where the rule is undefined.  Large batches are split into contiguous
-    parts run by Numba's number of threads (the kernel releases the GIL; each orbit's value does not depend on
-    the split)."""
+    :class:`jetgaudin.BranchPointError` where the rule is undefined.  Large batches run in pieces on Numba's
+    number of threads (:func:`in_threads`; the kernel releases the GIL; each orbit's value does not depend on the
+    split)."""
     X = np.ascontiguousarray(X, dtype=np.float64)
     b = np.ascontiguousarray(b, dtype=np.float64)
     eta = np.ascontiguousarray(eta, dtype=np.complex128)
@@ -275,11 +275,15 @@ def nu_default(X, b, eta, sheet=1):
     ok = np.empty(B, np.bool_)
     kernel = kernel_module("_branch").nu_default_kernel
     work = 2 * (X.shape[1] // 3) + 1
+    threads = 1 if B < 2 * BRANCH_ORBITS_PER_THREAD else _threads(B, BRANCH_ORBITS_PER_THREAD)
+    if threads == 1:  # no slices (this is on the path of every short call)
+        kernel(X, b, eta, float(sheet), np.empty(work), nu, ok)
+    else:
 
-    def part(i0: int, i1: int) -> None:
-        kernel(X[i0:i1], b[i0:i1], eta[i0:i1], float(sheet), np.empty(work), nu[i0:i1], ok[i0:i1])
+        def part(i0: int, i1: int) -> None:
+            kernel(X[i0:i1], b[i0:i1], eta[i0:i1], float(sheet), np.empty(work), nu[i0:i1], ok[i0:i1])
 
-    in_threads(part, B, _threads(B, BRANCH_ORBITS_PER_THREAD), BRANCH_ORBITS_PER_THREAD // 2)
+        in_threads(part, B, threads, BRANCH_ORBITS_PER_THREAD // 2)
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         raise BranchPointError(
