@@ -42,7 +42,7 @@ def bench_setup(rows, Row, orbits=10**5, repeat=15):
     parts = [
         ("iterate(X, 0), first call (branch rule for ν1)", lambda: m.iterate(X, 0), "target: as low as possible"),
         ("iterate(X, 0, nu1=ν), continued call", lambda: m.iterate(X, 0, nu1=nu), "target < 0.1 µs"),
-        ("  branch rule (nu_default, one serial kernel)", lambda: kernels.nu_default(X, b, eta), ""),
+        ("  branch rule (nu_default; one thread here)", lambda: kernels.nu_default(X, b, eta), ""),
         ("  kernel call, 0 steps, first call (cont=False), no drift pass",
          lambda: kernels.run_batch(X, b, eta, nu, False, 0, 1, want_drift=False), ""),
         ("  kernel call, 0 steps, no drift pass (lanes' set-up)",

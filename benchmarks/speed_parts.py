@@ -64,8 +64,8 @@ print(json.dumps({n: [v.state, v.seconds, list(v.kernels)] for n, v in r.items()
 
 def bench_compile(rows, Row):
     """(i) First-use compile time (fresh process, empty ``NUMBA_CACHE_DIR``) of the kernels of the main job /
-    ``orbit --kernel compiled`` (N = 3 orbit + serial branch rule), of ``ensemble`` (lanes; the parallel branch
-    rule from 256 orbits on) and of the generic route; then the load time from the cache in a second process."""
+    ``orbit --kernel compiled`` (N = 3 orbit + the branch rule), of ``ensemble`` (lanes + the same branch rule) and
+    of the generic route; then the load time from the cache in a second process."""
     with tempfile.TemporaryDirectory() as d:
         env = dict(os.environ, NUMBA_CACHE_DIR=d)
         res = []

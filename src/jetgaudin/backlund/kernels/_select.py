@@ -63,8 +63,8 @@ EXPECTED_LOAD_S = 0.1
 
 def kernel_names(n_state: int, batch: bool, batch_size: int = 1, specialise: bool = True) -> tuple[str, ...]:
     """The compiled functions a run calls: the stepping kernel for ``n_state`` = 3N components (a batch or one
-    orbit) and the branch rule for ``ν1`` (one serial kernel for every batch size; ``batch_size`` is kept for
-    callers that name it)."""
+    orbit) and the branch rule for ``ν1`` (one kernel for every batch size, large batches on the driver's threads;
+    ``batch_size`` is kept for callers that name it)."""
     n3 = specialise and int(n_state) == 9
     step = ("run_lanes3" if n3 else "run_batch_generic") if batch else ("run_orbit3" if n3 else "run_orbit")
     return (step, "nu_default_kernel")
