@@ -465,3 +465,23 @@ def test_n3_route_covers_huge_and_tiny_states(size):
     ref = m.iterate(X, 5, kernel="numpy")
     got = m.iterate(X, 5, kernel="compiled")
     assert np.max(np.abs(got - ref)) <= 1e-13 * np.max(np.abs(ref))
+
+
+def test_scale_power_of_two_from_the_bits_equals_frexp_ldexp():
+    # _n3._scale3 builds q = 2^(-2E) (E: frexp's exponent of the state's size) from the bits of the size; the
+    # reference is the C library's frexp/ldexp, over the whole range: normal q, subnormal q (sizes > 2^511), zero
+    # (sizes > 2^537), and no scaling (1.0) for sizes >= 1e300, inf or NaN; at powers of two and just below them
+    import math
+
+    from jetgaudin.backlund.kernels import _drivers
+
+    n3 = _drivers.kernel_module("_n3")
+    rng = np.random.default_rng(11)
+    sizes = ([2.0**k for k in range(-1000, 997)] + [np.nextafter(2.0**k, 0) for k in range(1, 997)]
+             + list(rng.uniform(0, 1, 2000) * 10.0 ** rng.integers(-300, 300, 2000)) + [0.0, 9.9e299, 1e300, np.inf,
+                                                                                       np.nan])
+    for v in sizes:
+        sc = n3._size3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        ref = math.ldexp(1.0, -2 * math.frexp(sc)[1]) if sc < 1e300 else 1.0
+        got = n3._scale3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        assert got == ref and math.copysign(1.0, got) == 1.0, v

@@ -215,6 +215,14 @@ def _lanes3_step(buf, newton):
 
 
 @njit(cache=True, error_model="numpy")
+def _fill_constants(carr, eta):
+    """``carr[:] = _constants3(η)`` (:func:`._n3._constants3`)."""
+    c = _constants3(eta)
+    for i in range(NCONST):
+        carr[i] = c[i]
+
+
+@njit(cache=True, error_model="numpy")
 def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last, want_drift):
     """Up to ``LANES`` orbits ``X0`` (W, 9) in lock-step; outputs as in :func:`run_ensemble`.  Each orbit gives
     the bits of :func:`run_orbit3` (same operations per lane; a failed orbit is frozen at its last good
@@ -222,8 +230,9 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
     W = X0.shape[0]
     L = LANES
     buf = np.empty(_ROWS * L)
+    carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
     cur = eta[0]
-    cst = _constants3(cur)
+    _fill_constants(carr, cur)
     for l in range(L):
         src = l if l < W else 0
         for i in range(9):
@@ -232,9 +241,9 @@ def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, sta
         buf[10 * L + l] = nu0[src].imag
         if eta[src] != cur:  # the constants of one η are computed once
             cur = eta[src]
-            cst = _constants3(cur)
+            _fill_constants(carr, cur)
         for i in range(NCONST):
-            buf[(_C0 + i) * L + l] = cst[i]
+            buf[(_C0 + i) * L + l] = carr[i]
         buf[11 * L + l] = b[src]
         buf[_Q * L + l] = _scale3(X0[src, 0], X0[src, 1], X0[src, 2], X0[src, 3], X0[src, 4], X0[src, 5], X0[src, 6],
                                   X0[src, 7], X0[src, 8], b[src])

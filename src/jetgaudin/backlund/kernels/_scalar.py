@@ -50,6 +50,30 @@ def _fma(typingctx, a, b, c):
     return sig, codegen
 
 
+@intrinsic
+def _bits(typingctx, x):
+    """The IEEE 754 bits of a float64 as an int64 (LLVM ``bitcast``: no call, no memory)."""
+    if not isinstance(x, types.Float):
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(context.cast(builder, args[0], signature.args[0], types.float64), ir.IntType(64))
+
+    return types.int64(x), codegen
+
+
+@intrinsic
+def _from_bits(typingctx, n):
+    """The float64 whose IEEE 754 bits are the int64 ``n`` (LLVM ``bitcast``)."""
+    if not isinstance(n, types.Integer):
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(context.cast(builder, args[0], signature.args[0], types.int64), ir.DoubleType())
+
+    return types.float64(n), codegen
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _abs2(z):
     return z.real * z.real + z.imag * z.imag
