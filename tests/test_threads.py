@@ -110,3 +110,26 @@ def test_a_forked_child_gets_threads_of_its_own():
             pytest.fail("the forked child hung in in_threads")
         time.sleep(0.02)
     assert os.waitstatus_to_exitcode(status) == 0
+
+
+def test_an_invalid_numba_setting_is_one_line_naming_it(tmp_path):
+    # NUMBA_NUM_THREADS=0 makes Numba's import fail (ValueError); the kernels' set-up turns it into a
+    # KernelSetupError: in the library a typed error, in the CLI one line and exit code 2 naming the setting, not
+    # an option
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_NUM_THREADS="0")
+    lib = subprocess.run([sys.executable, "-c", (
+        "import numpy as np, jetgaudin as jg\n"
+        "try:\n"
+        "    jg.TwoPointBacklund(1.0, 5 + 0.1j).iterate(np.ones(9), 3, kernel='compiled')\n"
+        "except jg.KernelSetupError as e:\n"
+        "    print('typed:', e)\n")], env=env, capture_output=True, text=True, timeout=120)
+    assert lib.returncode == 0 and lib.stdout.startswith("typed: Numba cannot start")
+    assert "NUMBA_NUM_THREADS" in lib.stdout
+    cli = subprocess.run([sys.executable, "-m", "jetgaudin", "ensemble", "--orbits", "100", "--steps", "2", "--out",
+                          str(tmp_path / "run")], env=env, capture_output=True, text=True, timeout=120)
+    lines = cli.stderr.strip().splitlines()
+    assert cli.returncode == 2 and len(lines) == 1, cli.stderr
+    assert lines[0].startswith("jetgaudin ensemble: error: Numba cannot start") and "--eta" not in lines[0]

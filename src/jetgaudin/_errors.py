@@ -11,6 +11,7 @@ __all__ = [
     "JetGaudinError",
     "InvalidStateError",
     "InvalidParameterError",
+    "KernelSetupError",
     "SingularStepError",
     "BranchPointError",
     "OffLeafError",
@@ -32,6 +33,11 @@ class InvalidStateError(JetGaudinError):
 
 class InvalidParameterError(JetGaudinError):
     """A parameter (N, b, eta, c_k, tolerances, ...) is out of its domain."""
+
+
+class KernelSetupError(InvalidParameterError):
+    """The compiled kernels cannot start in this environment (Numba rejects a ``NUMBA_*`` setting): not a fault of
+    any argument (the CLI names no option for it)."""
 
 
 class SingularStepError(JetGaudinError):

@@ -105,7 +105,7 @@ class blame:  # noqa: N801 - a context manager: ``with blame("--b"): ...``
         import jetgaudin as jg
 
         if exc_type is not None and issubclass(exc_type, jg.JetGaudinError) and not isinstance(
-                exc, jg.RecordingError):
+                exc, (jg.RecordingError, jg.KernelSetupError)):
             raise CliInputError(f"{self.option}: {one_line(exc)}") from None
         return False
 

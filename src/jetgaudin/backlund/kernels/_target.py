@@ -7,6 +7,8 @@ import hashlib
 from pathlib import Path
 from typing import Any
 
+from ..._errors import KernelSetupError
+
 __all__ = ["configure", "prefer_256_bit", "refresh_stale_cache", "sources_digest", "clean_cache_dir"]
 
 #: the modules holding compiled code; a kernel inlines blocks of the others
@@ -89,6 +91,13 @@ def configure() -> bool:
     requested.  Must run before any kernel module (``_scalar``, ``_generic``, ``_n3``, ``_lanes``, ``_branch``)
     is imported: creating their dispatchers creates Numba's CPU target."""
     if "prefer_256_bit" not in _state:
+        try:
+            import numba  # noqa: F401  (Numba validates its NUMBA_* settings at import)
+        except ValueError as exc:  # e.g. NUMBA_NUM_THREADS=0: "Number of threads specified must be > 0."
+            raise KernelSetupError(
+                f"Numba cannot start: {exc} Check the NUMBA_* environment variables (NUMBA_NUM_THREADS: a positive "
+                "integer, or unset)"
+            ) from None
         _state["prefer_256_bit"] = _prefer_256_bit_vectors()
     return _state["prefer_256_bit"]
 
