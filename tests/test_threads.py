@@ -83,7 +83,9 @@ def test_an_interruption_stops_the_helpers():
 
     with pytest.raises(KeyboardInterrupt):
         _drivers.in_threads(part, 64, 2)
-    assert len(done) <= 1  # of 16 pieces
+    # of 16 pieces the helper takes 1 (at most a few if the calling thread is descheduled for a while); without the
+    # stop it would take the other 15 (0.75 s)
+    assert len(done) < 8
 
 
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork")
