@@ -12,8 +12,14 @@ from types import ModuleType
 __all__ = ["kernels"]
 
 
-def kernels() -> ModuleType:
-    """The compiled kernels' package (its drivers import Numba at their first call)."""
-    from . import kernels as _k
+_package: list[ModuleType] = []
 
-    return _k
+
+def kernels() -> ModuleType:
+    """The compiled kernels' package (its drivers import Numba at their first call); imported once, then kept (an
+    import statement costs a few µs on every short call)."""
+    if not _package:
+        from . import kernels as _k
+
+        _package.append(_k)
+    return _package[0]
