@@ -485,3 +485,18 @@ def test_scale_power_of_two_from_the_bits_equals_frexp_ldexp():
         ref = math.ldexp(1.0, -2 * math.frexp(sc)[1]) if sc < 1e300 else 1.0
         got = n3._scale3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         assert got == ref and math.copysign(1.0, got) == 1.0, v
+
+
+@pytest.mark.parametrize("rel", [0.0, 1e-15, 1e-11, 1e-9, 1e-6])
+def test_a_continued_nu1_off_by_rel_gives_the_accurate_orbit(rel):
+    # the N = 3 route uses the carried nu1 as it is when nu^2 changed by less than 1e-13 relative (its Newton
+    # update carried to the next step, off the dependency chain), applies the update first up to 1e-8, and takes the
+    # closest root above: for each case the orbit continued from a nu1 off by `rel` equals the NumPy route's to the
+    # round-off tolerance of this file (an update skipped wrongly would leave an error ~ rel in the first step)
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    ref = B.iterate(APPENDIX2_X0, 20, kernel="numpy")
+    nu = B.nu1(APPENDIX2_X0) * (1 + rel)
+    for spec in (True, False):
+        out, _, _, _ = _kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, nu, True, 20, 1,
+                                               specialise=spec)
+        assert np.max(np.abs(out - ref)) <= 20 * PER_STEP_RTOL * _scale(ref)

@@ -13,27 +13,44 @@ import numpy as np
 from numba import njit
 
 from . import _scalar as S
-from ._n3 import NCONST, _axis, _constants3, _ell3, _finite9, _newton_nu, _nu2, _scale3, _solve3, _tol3, _zed3
+from ._n3 import (
+    _CARRY_TOL2,
+    NCONST,
+    _axis,
+    _constants3,
+    _ell3,
+    _finite9,
+    _newton_nu,
+    _nu2,
+    _scale3,
+    _solve3,
+    _tol3,
+    _zed3,
+)
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, q, nu, newton):
-    """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``,
-    the eigenvector and the unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of
-    two of :func:`._n3._scale3`).  Returns
-    ``(ν1, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
+    """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``
+    (carried to the next step, or applied first: the selects of ``_step3``'s cases), the eigenvector and the
+    unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of two of
+    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
     ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
     nu2 = _nu2(u, v, w)
     c = nu2 - nu * nu
+    a2 = S._abs2(c)
+    n2 = S._abs2(nu2)
     # the closest-root fallback of _step3 is rare: flag the lane (redone by a second pass) instead of computing it
-    newton_ok = S._abs2(c) <= 1e-16 * S._abs2(nu2)
-    need_root = S._sel(newton, not newton_ok, False)  # selects, no short-circuit control flow (vectorisation)
-    nu = S._selc(newton, _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu)), nu)
+    need_root = S._sel(newton, not (a2 <= 1e-16 * n2), False)  # selects, no short-circuit control flow
+    nn = _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu))
+    carry = a2 <= _CARRY_TOL2 * n2  # ν1 used as is, its update carried (as _step3)
+    nu_next = S._selc(newton, nn, nu)
+    nu = S._selc(S._sel(newton, not carry, False), nn, nu)
     k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
     n1, n2, n3, r = _axis(k1, k2, nk, q)
-    return nu, n1, n2, n3, r, need_root, bad_scale, branch
+    return nu_next, n1, n2, n3, r, need_root, bad_scale, branch
 
 
 @njit(cache=True, error_model="numpy", inline="always")
