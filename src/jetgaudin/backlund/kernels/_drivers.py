@@ -211,9 +211,13 @@ _pool: list[tuple[int, ThreadPoolExecutor]] = []
 
 
 def _executor() -> ThreadPoolExecutor:
-    """The process's pool of helper threads (made anew in a forked child, where the parent's threads do not run)."""
+    """The process's pool of helper threads, one fewer than Numba's largest thread count (``NUMBA_NUM_THREADS``:
+    the calling thread is the other), made anew in a forked child, where the parent's threads do not run."""
     if not _pool or _pool[0][0] != os.getpid():
-        _pool[:] = [(os.getpid(), ThreadPoolExecutor(thread_name_prefix="jetgaudin"))]
+        import numba
+
+        helpers = max(1, int(numba.config.NUMBA_NUM_THREADS) - 1)
+        _pool[:] = [(os.getpid(), ThreadPoolExecutor(max_workers=helpers, thread_name_prefix="jetgaudin"))]
     return _pool[0][1]
 
 
