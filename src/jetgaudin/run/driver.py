@@ -252,7 +252,7 @@ class Driver:
         steps, every = spec.steps, spec.save_every
         rows_n: list[int] = []
         rows: list[np.ndarray] = []
-        ends: list[tuple[int, np.ndarray, Any]] = []  # [(step, X, carry)] after the last call (only it is used)
+        end: tuple[int, np.ndarray, Any] | None = None  # (step, X, carry) after the last call
         failure: str | None = None
         t_enter = time.monotonic()
         if sample_imag:  # the compiled route does not compute the residue: one reference step per chunk
@@ -295,18 +295,18 @@ class Driver:
                     if rows_n and rows_n[-1] == n:
                         rows_n.pop()
                         rows.pop()
-                    n, X, carry = ends[-1] if ends else (pos.n, pos.X, pos.carry)
+                    n, X, carry = end if end is not None else (pos.n, pos.X, pos.carry)
                     break
-            ends[:] = [(n, X, carry)]
+            end = (n, X, carry)
             if self.progress is not None:  # after every kernel call (a display: the rows are checked below)
                 self.progress(n, steps)
             if fixed is not None or sig.signum or time.monotonic() - t0 >= flush or len(rows_n) >= self.max_rows:
                 break
-        failure = self._commit(rows_n, rows, ends, failure)
+        failure = self._commit(rows_n, rows, end, failure)
         self._overhead = max(0.0, time.monotonic() - t_enter - t_calls)
         return failure
 
-    def _commit(self, rows_n: list[int], rows: list[np.ndarray], ends: list[tuple[int, np.ndarray, Any]],
+    def _commit(self, rows_n: list[int], rows: list[np.ndarray], end: tuple[int, np.ndarray, Any] | None,
                 failure: str | None) -> str | None:
         """Health-check the rows and the last end state; append the rows that passed; move the position to the last
         state that passed (the last step that passed is what ``last_safe_step`` reports)."""
@@ -319,8 +319,8 @@ class Driver:
             if keep:
                 pos.n, pos.X, pos.carry = rows_n[keep - 1], S[keep - 1], None
             return bad.reason
-        if ends:
-            n_end, X_end, c_end = ends[-1]
+        if end is not None:
+            n_end, X_end, c_end = end
             if not rows_n or rows_n[-1] != n_end:
                 bad = health.check([n_end], X_end[None])
                 if bad is not None:
@@ -329,8 +329,8 @@ class Driver:
                         pos.n, pos.X, pos.carry = rows_n[-1], S[-1], None
                     return bad.reason
         self.store.append(np.asarray(rows_n, dtype=np.int64), S)
-        if ends:
-            pos.n, pos.X, pos.carry = ends[-1]
+        if end is not None:
+            pos.n, pos.X, pos.carry = end
         return failure
 
     def _adapt(self, L: int, k: int, dt: float) -> int:

@@ -279,7 +279,7 @@ def nu_default(X, b, eta, sheet=1):
     ok = np.empty(B, np.bool_)
     kernel = kernel_module("_branch").nu_default_kernel
     work = 2 * (X.shape[1] // 3) + 1
-    threads = 1 if B < 2 * BRANCH_ORBITS_PER_THREAD else _threads(B, BRANCH_ORBITS_PER_THREAD)
+    threads = _threads(B, BRANCH_ORBITS_PER_THREAD)
     if threads == 1:  # no slices (this is on the path of every short call)
         kernel(X, b, eta, float(sheet), np.empty(work), nu, ok)
     else:

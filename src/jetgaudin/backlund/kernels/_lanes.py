@@ -15,6 +15,7 @@ from numba import njit
 from . import _scalar as S
 from ._n3 import (
     _CARRY_TOL2,
+    _NEWTON_TOL2,
     NCONST,
     _axis,
     _constants3,
@@ -41,11 +42,11 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     nu2 = _nu2(u, v, w)
     c = nu2 - nu * nu
     a2 = S._abs2(c)
-    n2 = S._abs2(nu2)
+    s2 = S._abs2(nu2)
     # the closest-root fallback of _step3 is rare: flag the lane (redone by a second pass) instead of computing it
-    need_root = S._sel(newton, not (a2 <= 1e-16 * n2), False)  # selects, no short-circuit control flow
+    need_root = S._sel(newton, not (a2 <= _NEWTON_TOL2 * s2), False)  # selects, no short-circuit control flow
     nn = _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu))
-    carry = a2 <= _CARRY_TOL2 * n2  # ν1 used as is, its update carried (as _step3)
+    carry = a2 <= _CARRY_TOL2 * s2  # ν1 used as is, its update carried (as _step3)
     nu_next = S._selc(newton, nn, nu)
     nu = S._selc(S._sel(newton, not carry, False), nn, nu)
     k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
@@ -94,8 +95,8 @@ def _lanes_pass(buf, newton):
     state rows.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
     are those of :func:`._n3._step3`.  A lane that is not alive, or is to be redone, keeps its values and status,
     and so does the state of a lane whose step failed: the usual step (every lane alive, none to redo, none failed:
-    three vectorised tests of whole rows) copies the new values as they are, any other step selects lane by lane
-    (no selects in the dressing loop: 12 fewer per lane, 4-7 % faster)."""
+    three vectorised tests of whole rows) copies the new values as they are, any other step keeps values lane by
+    lane (:func:`_keep_unstepped`; no selects in the dressing loop: 12 fewer per lane, 4-7 % faster)."""
     L = LANES
     M = _MID * L
     for l in range(L):

@@ -69,6 +69,10 @@ NCONST = 17
 #: root taken
 _CARRY_TOL2 = 1e-26
 
+#: ``|ν²(x_n) − ν_n²|² ≤ _NEWTON_TOL2 |ν²(x_n)|²`` (1e-8 relative): the Newton update of ``ν_n`` is accepted;
+#: above it the closest root is taken
+_NEWTON_TOL2 = 1e-16
+
 
 @njit(cache=True, error_model="numpy")
 def _constants3(eta):
@@ -285,10 +289,10 @@ def _step3(x, b, cst, q, nu, nu_sq, inv_2nu, newton):
         nu2 = _nu2(u, v, w)
         c = nu2 - nu_sq
         a2 = S._abs2(c)
-        n2 = S._abs2(nu2)
-        if a2 <= _CARRY_TOL2 * n2:  # the carried ν1 is exact to round-off: used as is, its update carried
+        s2 = S._abs2(nu2)
+        if a2 <= _CARRY_TOL2 * s2:  # the carried ν1 is exact to round-off: used as is, its update carried
             nu_next = _newton_nu(nu, c, inv_2nu)
-        elif a2 <= 1e-16 * n2:
+        elif a2 <= _NEWTON_TOL2 * s2:
             nu = _newton_nu(nu, c, inv_2nu)
             nu_next = nu
         else:
