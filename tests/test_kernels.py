@@ -314,6 +314,14 @@ def test_a_changed_kernel_source_invalidates_every_cached_kernel(tmp_path):
 _SIGMA = np.array([[[0, 1], [1, 0]], [[0, -1j], [1j, 0]], [[1, 0], [0, -1]]])
 
 
+def _from_python(block):
+    """A kernel block, compiled without Numba's CPython wrapper (callable from compiled code only: a call from Python
+    would crash), wrapped in a compiled function for the tests."""
+    import numba  # after the kernels' set-up (kernel_module), which configures Numba's target
+
+    return numba.njit(lambda *args: block(*args))
+
+
 def _sigma(y):
     """``y·σ`` for real or complex 3-vectors ``y`` (..., 3): the ``ℓ_m = [[u, v], [w, −u]]`` of lax.ell_coefficients."""
     return np.einsum("...a,aij->...ij", np.asarray(y, dtype=complex), _SIGMA)
@@ -326,7 +334,7 @@ def test_real_form_of_the_dressing_products(rng):
     from jetgaudin.backlund import _dressing
     from jetgaudin.backlund.kernels._drivers import kernel_module
 
-    n3 = kernel_module("_n3")
+    axis = _from_python(kernel_module("_n3")._axis)
     for _ in range(200):
         eta = complex(rng.uniform(-4, 4), rng.uniform(-3, 3)) * rng.choice([0.2, 1.0])
         k1, k2 = rng.normal(size=2) + 1j * rng.normal(size=2)
@@ -335,7 +343,7 @@ def test_real_form_of_the_dressing_products(rng):
         ell = _sigma(y)
         T1 = _dressing.mm(M0, ell) + _dressing.mm(ell, _dressing.adj(M0))
         T2 = _dressing.mm(_dressing.mm(M0, ell), _dressing.adj(M0))
-        *n, r = n3._axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2, 1.0)  # unnormalised axis n' and r = 1/|k|^2
+        *n, r = axis(k1, k2, abs(k1) ** 2 + abs(k2) ** 2, 1.0)  # unnormalised axis n' and r = 1/|k|^2
         n = np.array(n) * r
         assert abs(n @ n - 1) <= 1e-15  # a few ulp
         m, c = -eta.real, eta.imag
@@ -352,12 +360,18 @@ def test_real_form_step_equals_the_complex_division(eta, rng):
     # route's complex R(lambda) and Laurent division (_dressing.dress_two_point); and its residual test: exact for
     # the eigenvector of l(eta), refused (flag false) for a perturbed one, where the complex division leaves a
     # remainder.  Tolerance 1e-14 of the state (~50 ulp, as test_one_step_matches_numpy_to_few_ulp).
+    import numba
+
     from jetgaudin import lax
     from jetgaudin.backlund import _dressing
     from jetgaudin.backlund.kernels._drivers import kernel_module
 
     n3 = kernel_module("_n3")
-    cst = n3._constants3(eta)
+    axis, scale3 = _from_python(n3._axis), _from_python(n3._scale3)
+    d3 = n3._dress3  # inlined by Numba at its call sites, which takes no *args
+    dress3 = numba.njit(lambda x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst:
+                        d3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst))
+    cst = _from_python(n3._constants3)(eta)
     b = 1.3
     for x in sample_on_leaf(3, [0.3, -0.2, 1.0], 10, seed=int(rng.integers(1 << 30)), scale=0.5):
         ell = lax.ell_coefficients(x, b)
@@ -368,12 +382,12 @@ def test_real_form_step_equals_the_complex_division(eta, rng):
             M0 = _dressing.real_two_point_M0(eta, k1 * scale, k2)
             new, res = _dressing.dress_two_point(ell, eta, np.conj(eta), M0)
             ref = lax.state_from_ell(new).real
-            n = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, 1.0)  # (n', r)
-            ok, *got = n3._dress3(*x, b, *n, cst)
+            n = axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, 1.0)  # (n', r)
+            ok, *got = dress3(*x, b, *n, cst)
             # the power-of-two scale of the axis (_scale3) changes no bit: 2^-40 and the state's own scale
-            for q in (2.0**-40, n3._scale3(*x, b)):
-                nq = n3._axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, q)
-                assert n3._dress3(*x, b, *nq, cst) == (ok, *got)
+            for q in (2.0**-40, scale3(*x, b)):
+                nq = axis(k1 * scale, k2, abs(k1 * scale) ** 2 + abs(k2) ** 2, q)
+                assert dress3(*x, b, *nq, cst) == (ok, *got)
             assert bool(ok) is exact and bool(res <= 1e-8 * (1 + np.max(np.abs(ell)))) is exact
             if exact:
                 assert np.max(np.abs(np.array(got) - ref)) <= 1e-14 * np.max(np.abs(ref))
@@ -476,14 +490,15 @@ def test_scale_power_of_two_from_the_bits_equals_frexp_ldexp():
     from jetgaudin.backlund.kernels import _drivers
 
     n3 = _drivers.kernel_module("_n3")
+    size3, scale3 = _from_python(n3._size3), _from_python(n3._scale3)
     rng = np.random.default_rng(11)
     sizes = ([2.0**k for k in range(-1000, 997)] + [np.nextafter(2.0**k, 0) for k in range(1, 997)]
              + list(rng.uniform(0, 1, 2000) * 10.0 ** rng.integers(-300, 300, 2000)) + [0.0, 9.9e299, 1e300, np.inf,
                                                                                        np.nan])
     for v in sizes:
-        sc = n3._size3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        sc = size3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         ref = math.ldexp(1.0, -2 * math.frexp(sc)[1]) if sc < 1e300 else 1.0
-        got = n3._scale3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        got = scale3(v, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         assert got == ref and math.copysign(1.0, got) == 1.0, v
 
 

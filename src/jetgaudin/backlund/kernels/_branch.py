@@ -12,10 +12,10 @@ import math
 
 from numba import njit
 
-from ._scalar import _abs2, _cdiv, _integrals
+from ._scalar import _abs2, _cdiv, _integrals, block
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _nu2_and_derivative(kappa, lam):
     r"""``P = ν²(λ) = Σ κ_m λ^{-m}``, ``dP/dλ`` and ``Σ |κ_m| |λ|^{-m}`` (Horner in ``z = 1/λ``).  Only the
     stepping (the rare case) calls it: left to LLVM rather than inlined by Numba at its two call sites, which
@@ -32,7 +32,7 @@ def _nu2_and_derivative(kappa, lam):
     return p, -(dp * z * z), sc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _nu2_real(kappa, a):
     r"""At a real ``λ = a``, in real arithmetic: ``P(a) = Σ κ_m a^{-m}``, ``S = Σ |κ_m| |a|^{-m}`` and
     ``D = Σ_{m≥1} m |κ_m| |a|^{-m-1}``, a bound of ``|dν²/dλ|`` on the vertical line ``Re λ = a`` (there
@@ -49,7 +49,7 @@ def _nu2_real(kappa, a):
     return p * z + kappa[0], sc * w + abs(kappa[0]), d * w
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _nu2_only(kappa, lam):
     r"""``P = ν²(λ)`` and ``Σ |κ_m| |λ|^{-m}``: the same operations as :func:`_nu2_and_derivative` (same bits)
     without the derivative."""
@@ -63,7 +63,7 @@ def _nu2_only(kappa, lam):
     return p, sc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _nu_default_one(x, b, eta, sheet, kappa):
     r"""``ν(η)`` on the default branch (:func:`jetgaudin.nu`): the root positive at ``a = Re η``, continued along
     the vertical segment ``[a, η]``; ``kappa`` is a work array of ``2N + 1`` entries.

@@ -47,11 +47,12 @@ from ._scalar import (
     _m0_from_k,
     _products,
     _products0,
+    block,
 )
 from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _step_generic(x, N, b, eta, z, d1, d2, inv_d2, bottom_up, nu, cont, eu, ev, ew, Ru, Rv, Rw, Qu, Qv, Qw, xnew):
     """One step from ``x`` (3N); returns ``(status, ν1)``; writes ``xnew``."""
     # ---- ℓ_m, m = 1..N (u real)

@@ -3,7 +3,7 @@ r"""N = 3 ensembles: ``LANES`` orbits in lock-step (structure of arrays), branch
 :func:`_lane_axis` and :func:`_lane_dress` are the two halves of :func:`._n3._step3` with both sides of every
 choice computed and the same value selected, so each lane gives the bits of the single-orbit route (the same
 operations, fused multiply-adds included, in the same order); lanes whose Newton update of ``ν1`` is refused are
-redone by a second pass with ``ν1`` continued by the closest root (:func:`_lanes3_step`).  Import only after
+redone by a second pass with ``ν1`` continued by the closest root (:func:`run_lanes3`).  Import only after
 :func:`._target.configure`.
 """
 
@@ -28,10 +28,11 @@ from ._n3 import (
     _tol3,
     _zed3,
 )
+from ._scalar import block
 from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, q, nu, newton):
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``
     (carried to the next step, or applied first: the selects of ``_step3``'s cases), the eigenvector and the
@@ -54,7 +55,7 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     return nu_next, n1, n2, n3, r, need_root, bad_scale, branch
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, bad_scale, branch):
     """Second half of :func:`._n3._step3` without data-dependent branches: the dressing (:func:`._n3._solve3`) from
     the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``, the new state
@@ -88,7 +89,7 @@ _NEW = _MID + 10
 _ROWS = _NEW + 10
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _lanes_pass(buf, newton):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
     the lanes (the axis ``n'``, then the dressing) joined by scratch rows, then the new values copied into the
@@ -142,7 +143,7 @@ def _lanes_pass(buf, newton):
         buf[N + 8 * L + l] = r[9]
         buf[N + 9 * L + l] = float(r[0])
         buf[_REDO * L + l] = S._sel(redo, 1.0, 0.0)
-    if _all_row(buf, _ALIVE) and not _any_row(buf, _REDO) and not _any_row(buf, _NEW + 9):
+    if _all_row(buf, _ALIVE * L) and not _any_row(buf, _REDO * L) and not _any_row(buf, (_NEW + 9) * L):
         # every lane stepped and none failed (the usual step): the new values as they are, ν1 from the scratch rows
         for i in range(9):
             for l in range(L):
@@ -154,7 +155,7 @@ def _lanes_pass(buf, newton):
     _keep_unstepped(buf)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _keep_unstepped(buf):
     """The end of a step of :func:`_lanes_pass` other than the usual one: lane by lane, a lane that is alive and
     not to be redone takes its new ``ν1`` and status, and its new state if the step succeeded; any other lane keeps
@@ -172,13 +173,14 @@ def _keep_unstepped(buf):
                 buf[i * L + l] = buf[(_NEW + i) * L + l]
 
 
-@njit(cache=True, error_model="numpy")
-def _all_row(buf, row):
-    """Whether every entry of a row of ``buf`` holding 0.0 or 1.0 is 1.0: an AND of the bits, which vectorises
-    (as :func:`_any_row`)."""
+@block()
+def _all_row(buf, start):
+    """Whether every entry of the row ``buf[start : start + LANES]`` (holding 0.0 or 1.0) is 1.0: an AND of the
+    bits, which vectorises (as :func:`_any_row`).  The row is given by its offset, an ordinary integer (a row
+    number passed as a module constant is a literal type to Numba: one compile per row)."""
     bits = buf.view(np.int64)
     acc = -1
-    for l in range(row * LANES, (row + 1) * LANES):
+    for l in range(start, start + LANES):
         acc &= bits[l]
     return acc == _ONE_BITS
 
@@ -187,117 +189,24 @@ def _all_row(buf, row):
 _ONE_BITS = int(np.float64(1.0).view(np.int64))
 
 
-@njit(cache=True, error_model="numpy")
-def _any_row(buf, row):
-    """Whether a row of ``buf`` (holding 0.0 or a positive flag/status) has a nonzero entry: an OR of the bits,
-    which vectorises (a floating-point reduction would not), in place of a scalar loop with a branch per lane."""
+@block()
+def _any_row(buf, start):
+    """Whether the row ``buf[start : start + LANES]`` (holding 0.0 or a positive flag/status) has a nonzero entry:
+    an OR of the bits, which vectorises (a floating-point reduction would not), in place of a scalar loop with a
+    branch per lane."""
     bits = buf.view(np.int64)
     acc = 0
-    for l in range(row * LANES, (row + 1) * LANES):
+    for l in range(start, start + LANES):
         acc |= bits[l]
     return acc != 0
 
 
-@njit(cache=True, error_model="numpy")
-def _lanes3_step(buf, newton):
-    """One step of ``LANES`` lock-stepped N = 3 orbits stored by rows in ``buf`` (``_ROWS × LANES``).
-
-    Lanes whose Newton update of ``ν1`` is refused are left unchanged by the first pass; their ``ν1`` is then
-    continued by the closest root (as :func:`._n3._step3` does) and they alone are stepped by a second pass without
-    the Newton update: the same operations as :func:`._n3._step3`'s fallback, hence the same bits."""
-    L = LANES
-    redo = False
-    for second in (False, True):  # one call site of the pass (LLVM inlines it once)
-        if second:
-            if not _any_row(buf, _REDO):
-                break
-            for l in range(L):
-                if buf[_REDO * L + l] != 0.0:
-                    redo = True
-                    u, v, w = _ell3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
-                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l],
-                                    buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l],
-                                    buf[16 * L + l], buf[17 * L + l])
-                    nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
-                    buf[9 * L + l] = nu.real
-                    buf[10 * L + l] = nu.imag
-            if not redo:
-                break
-            for l in range(L):
-                buf[_SAVED * L + l] = buf[_ALIVE * L + l]
-                buf[_ALIVE * L + l] = buf[_REDO * L + l]
-        _lanes_pass(buf, newton and not second)
-    if redo:
-        for l in range(L):
-            buf[_ALIVE * L + l] = buf[_SAVED * L + l]
-
-
-@njit(cache=True, error_model="numpy")
+@block()
 def _fill_constants(carr, eta):
     """``carr[:] = _constants3(η)`` (:func:`._n3._constants3`)."""
     c = _constants3(eta)
     for i in range(NCONST):
         carr[i] = c[i]
-
-
-@njit(cache=True, error_model="numpy")
-def _run_block3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, status, fail, nu_last, want_drift):
-    """Up to ``LANES`` orbits ``X0`` (W, 9) in lock-step; outputs as in :func:`run_ensemble`.  Each orbit gives
-    the bits of :func:`run_orbit3` (same operations per lane; a failed orbit is frozen at its last good
-    state).  Unused lanes repeat orbit 0 and are discarded."""
-    W = X0.shape[0]
-    L = LANES
-    buf = np.empty(_ROWS * L)
-    carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
-    cur = eta[0]
-    _fill_constants(carr, cur)
-    for l in range(L):
-        src = l if l < W else 0
-        for i in range(9):
-            buf[i * L + l] = X0[src, i]
-        buf[9 * L + l] = nu0[src].real
-        buf[10 * L + l] = nu0[src].imag
-        if eta[src] != cur:  # the constants of one η are computed once
-            cur = eta[src]
-            _fill_constants(carr, cur)
-        for i in range(NCONST):
-            buf[(_C0 + i) * L + l] = carr[i]
-        buf[11 * L + l] = b[src]
-        buf[_Q * L + l] = _scale3(X0[src, 0], X0[src, 1], X0[src, 2], X0[src, 3], X0[src, 4], X0[src, 5], X0[src, 6],
-                                  X0[src, 7], X0[src, 8], b[src])
-        buf[_ALIVE * L + l] = 1.0
-        buf[_STATUS * L + l] = 0.0
-        buf[_REDO * L + l] = 0.0
-    for l in range(W):
-        for i in range(9):
-            out[0, l, i] = X0[l, i]
-        status[l] = STATUS_OK
-        fail[l] = steps
-    for n in range(steps):
-        _lanes3_step(buf, n > 0 or cont)
-        for l in range(L if _any_row(buf, _STATUS) else 0):
-            if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
-                buf[_ALIVE * L + l] = 0.0
-                if l < W:
-                    status[l] = int(buf[_STATUS * L + l])
-                    fail[l] = n
-        if (n + 1) % save_every == 0:
-            j = (n + 1) // save_every
-            for l in range(W):
-                for i in range(9):
-                    out[j, l, i] = buf[i * L + l]
-    I0 = np.empty(6)
-    Ib = np.empty(6)
-    for l in range(W):
-        for i in range(9):
-            final[l, i] = buf[i * L + l]
-        nu_last[l] = complex(buf[9 * L + l], buf[10 * L + l])
-        if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
-            for k in range(6):
-                drift[l, k] = 0.0
-            S._integrals(X0[l], b[l], 3, I0)
-            last = (fail[l] if status[l] != STATUS_OK else steps) // save_every
-            S._drift_pass(out[:, l], final[l], last, b[l], 3, I0, Ib, drift[l])
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -306,14 +215,98 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     r"""The blocks ``k0 <= k < k1`` (of ``LANES`` orbits each) of a batch of independent N = 3 orbits: ``X0`` (B, 9),
     per-orbit ``b``, ``eta``, ``nu0`` (B,); ``out`` (S, B, 9) (step-major: the layout of ``iterate()``'s result, no
     transposed copy), ``final`` (B, 9), ``drift`` (B, 6), ``status``/``fail`` (B,) int64, ``nu_last`` (B,) complex.
-    Each block in lock-step (:func:`_run_block3`, SIMD across orbits); every orbit gets the bits of its single-orbit
-    run (:func:`._n3.run_orbit3`).  Serial and without the GIL: the driver runs ranges of blocks on threads of its
-    own (:func:`._drivers.in_threads`, pieces taken by whichever thread is free).  Against Numba's ``prange`` over
+
+    Each block runs in lock-step, SIMD across its orbits (a partial last block repeats its first orbit in the
+    unused lanes, whose results are discarded); every orbit gets the bits of its single-orbit run
+    (:func:`._n3.run_orbit3`), and a failed orbit is frozen at its last good state.  A step is one pass of
+    :func:`_lanes_pass` over the block; lanes whose Newton update of ``ν1`` was refused are left unchanged by it,
+    their ``ν1`` continued by the closest root, and they alone are stepped by a second pass without the Newton
+    update: the operations of :func:`._n3._step3`'s fallback, hence the same bits.
+
+    One function from the blocks to the step loop (no intermediate compiled functions): Numba links the code of
+    every callee into each caller's module and optimises it again there, so each level above the lanes' pass
+    cost a full optimisation of it (merging two levels took ~2 s off the first-use compile, docs/performance.md).
+    Serial and without the GIL: the driver runs ranges of blocks on threads of its own
+    (:func:`._drivers.in_threads`, pieces taken by whichever thread is free).  Against Numba's ``prange`` over
     the blocks (a static split): as fast when the two vCPUs run at the same speed, faster when one is slowed by
     other jobs, and ~2 s less first-use compile (no parallel region; docs/performance.md)."""
     B = X0.shape[0]
+    L = LANES
+    buf = np.empty(_ROWS * L)
+    carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
+    I0 = np.empty(6)
+    Ib = np.empty(6)
     for k in range(k0, k1):
-        i0 = k * LANES
-        i1 = min(i0 + LANES, B)
-        _run_block3(X0[i0:i1], b[i0:i1], eta[i0:i1], nu0[i0:i1], cont, steps, save_every, out[:, i0:i1],
-                    final[i0:i1], drift[i0:i1], status[i0:i1], fail[i0:i1], nu_last[i0:i1], want_drift)
+        i0 = k * L
+        W = min(L, B - i0)  # orbits of this block
+        # the block's buffer: lane l holds orbit i0 + l (the first orbit again in unused lanes)
+        cur = eta[i0]
+        _fill_constants(carr, cur)
+        for l in range(L):
+            o = i0 + (l if l < W else 0)
+            for i in range(9):
+                buf[i * L + l] = X0[o, i]
+            buf[9 * L + l] = nu0[o].real
+            buf[10 * L + l] = nu0[o].imag
+            if eta[o] != cur:  # the constants of one η are computed once
+                cur = eta[o]
+                _fill_constants(carr, cur)
+            for i in range(NCONST):
+                buf[(_C0 + i) * L + l] = carr[i]
+            buf[11 * L + l] = b[o]
+            buf[_Q * L + l] = _scale3(X0[o, 0], X0[o, 1], X0[o, 2], X0[o, 3], X0[o, 4], X0[o, 5], X0[o, 6],
+                                      X0[o, 7], X0[o, 8], b[o])
+            buf[_ALIVE * L + l] = 1.0
+            buf[_STATUS * L + l] = 0.0
+            buf[_REDO * L + l] = 0.0
+        for o in range(i0, i0 + W):
+            for i in range(9):
+                out[0, o, i] = X0[o, i]
+            status[o] = STATUS_OK
+            fail[o] = steps
+        for n in range(steps):
+            newton = n > 0 or cont
+            redo = False
+            for second in (False, True):  # one call site of the pass (LLVM inlines it once)
+                if second:
+                    if not _any_row(buf, _REDO * L):
+                        break
+                    redo = True
+                    for l in range(L):  # ν1 of the lanes to redo continued by the closest root
+                        if buf[_REDO * L + l] != 0.0:
+                            u, v, w = _ell3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+                                            buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l],
+                                            buf[11 * L + l], buf[12 * L + l], buf[13 * L + l], buf[14 * L + l],
+                                            buf[15 * L + l], buf[16 * L + l], buf[17 * L + l])
+                            nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
+                            buf[9 * L + l] = nu.real
+                            buf[10 * L + l] = nu.imag
+                    for l in range(L):  # the second pass steps those lanes alone
+                        buf[_SAVED * L + l] = buf[_ALIVE * L + l]
+                        buf[_ALIVE * L + l] = buf[_REDO * L + l]
+                _lanes_pass(buf, newton and not second)
+            if redo:
+                for l in range(L):
+                    buf[_ALIVE * L + l] = buf[_SAVED * L + l]
+            for l in range(L if _any_row(buf, _STATUS * L) else 0):
+                if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
+                    buf[_ALIVE * L + l] = 0.0
+                    if l < W:
+                        status[i0 + l] = int(buf[_STATUS * L + l])
+                        fail[i0 + l] = n
+            if (n + 1) % save_every == 0:
+                j = (n + 1) // save_every
+                for l in range(W):
+                    for i in range(9):
+                        out[j, i0 + l, i] = buf[i * L + l]
+        for l in range(W):
+            o = i0 + l
+            for i in range(9):
+                final[o, i] = buf[i * L + l]
+            nu_last[o] = complex(buf[9 * L + l], buf[10 * L + l])
+            if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
+                for m in range(6):
+                    drift[o, m] = 0.0
+                S._integrals(X0[o], b[o], 3, I0)
+                last = (fail[o] if status[o] != STATUS_OK else steps) // save_every
+                S._drift_pass(out[:, o], final[o], last, b[o], 3, I0, Ib, drift[o])

@@ -56,6 +56,7 @@ import numpy as np
 from numba import njit
 
 from . import _scalar as S
+from ._scalar import block
 from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 
 F = S._fma
@@ -74,7 +75,7 @@ _CARRY_TOL2 = 1e-26
 _NEWTON_TOL2 = 1e-16
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _constants3(eta):
     r"""Per-run constants of the N = 3 step for ``η = a + ic`` (a tuple of ``NCONST`` floats):
     ``z^1, z^2, z^3`` (``z = 1/η``, real and imaginary parts), ``m = −a``, ``c``, ``bu`` (1.0: bottom-up,
@@ -99,7 +100,7 @@ def _constants3(eta):
             m2c, -d1, -d2, 1.0, d2, d1, 0.0, m2c)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
     """``ℓ(η) = ℓ_0 + Σ ℓ_m z^m``: components ``Y^a = Σ_m y_m^a z^m`` (fused, ``b`` added in the first fused
     operation of ``Y³``), then ``u = b + Y³``, ``v = Y¹ − iY²``, ``w = Y¹ + iY²``."""
@@ -112,7 +113,7 @@ def _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i):
     return (complex(Y3r, Y3i), complex(Y1r + Y2i, Y1i - Y2r), complex(Y1r - Y2i, Y1i + Y2r))
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _nu2(u, v, w):
     """``ν² = u² + vw`` (``ℓ(η)² = ν² I``), fused: ``Re = (Re u − Im u)(Re u + Im u) + Re(vw)``,
     ``Im = 2 Re u Im u + Im(vw)``."""
@@ -121,14 +122,14 @@ def _nu2(u, v, w):
     return complex(F(u.real - u.imag, u.real + u.imag, p), F(u.real + u.real, u.imag, q))
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _newton_nu(nu, c, inv_2nu):
     """``ν + c/(2ν)`` (``c = ν²(state) − ν²``, ``inv_2nu = 1/(2ν)``), fused."""
     return complex(F(c.real, inv_2nu.real, F(-c.imag, inv_2nu.imag, nu.real)),
                    F(c.real, inv_2nu.imag, F(c.imag, inv_2nu.real, nu.imag)))
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _size3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     """``1 + max_m |ℓ_m|`` with ``|ℓ_m|`` the largest entry of ``ℓ_m = y_m·σ`` (``|u| = |y³|``,
     ``|v| = |w| = |y¹ + iy²|``; ``ℓ_0 = diag(b, −b)``): the size of the state for :func:`_tol3` and :func:`_scale3`."""
@@ -136,7 +137,7 @@ def _size3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     return 1.0 + math.sqrt(e2)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _scale3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     """A power of two ``q = 2^(−2E)`` with ``2^(E−1) ≤ 1 + max_m |ℓ_m| < 2^E`` (per orbit and call, from the state
     at the start): :func:`_axis` multiplies the axis by it, so the cross products ``n' × y`` stay of the size of
@@ -155,7 +156,7 @@ def _scale3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     return 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _axis(k1, k2, nk, q):
     """The axis of ``M0 = −(Re η) I + i (Im η) n̂·σ`` from the eigenvector ``k`` (``nk = |k|²``), unnormalised:
     ``(n', r)`` with ``n' = q |k|² n̂ = q (−2 Re k̄1k2, −2 Im k̄1k2, |k2|² − |k1|²)`` and ``r = 1/(q|k|²)`` (``q`` of
@@ -169,31 +170,31 @@ def _axis(k1, k2, nk, q):
     return pr * m2q, pi * m2q, n3 * q, r
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _cross(n1, n2, n3, y1, y2, y3):
     """``K' y = n' × y``, fused."""
     return F(n2, y3, -(n3 * y2)), F(n3, y1, -(n1 * y3)), F(n1, y2, -(n2 * y1))
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _v3(p1, p2, p3, y1, y2, y3, a1, a2, a3, m, cr):
     """``v_k = (y_{k+1} + m y_k) − c K y_k`` (``p = y_{k+1}``, ``a = K' y_k``, ``cr = c/|k|²``), fused."""
     return F(-cr, a1, F(m, y1, p1)), F(-cr, a2, F(m, y2, p2)), F(-cr, a3, F(m, y3, p3))
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _sel3(c, a1, a2, a3, b1, b2, b3):
     return S._sel(c, a1, b1), S._sel(c, a2, b2), S._sel(c, a3, b3)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _norm_ok(e1, e2, e3, t):
     """The residual test of the complex route for the Hermitian residual ``e·σ``: ``|u|² = e3²`` and
     ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails)."""
     return (e3 * e3 <= t) & (F(e1, e1, e2 * e2) <= t)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _tol3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     """The squared residual tolerance of the step, ``(1e-8 (1 + max_m |ℓ_m|))²`` (:func:`_size3`), as the complex
     route's relative test."""
@@ -201,7 +202,7 @@ def _tol3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b):
     return S._RESIDUAL_TOL2 * sc * sc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     """First half of :func:`_dress3`: ``Z'_k = K' v_k`` (k = 0..3; 12 floats), ``v_k = (y_{k+1} + m y_k) − c K y_k``
     with ``K = r K'``, ``K' y = n' × y``."""
@@ -222,7 +223,7 @@ def _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     return Z0[0], Z0[1], Z0[2], Z1[0], Z1[1], Z1[2], Z2[0], Z2[1], Z2[2], Z3[0], Z3[1], Z3[2]
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
     """Second half of :func:`_dress3`: the recurrence for ``W`` on the selected equations, the residual of the
     other two (tested against ``t`` of :func:`_tol3`) and the new state, from ``Z = (Z'_0 … Z'_3)`` of
@@ -258,7 +259,7 @@ def _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t):
             x8 + w3[2])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     """The real form of the dressing (module docstring) from the unnormalised axis ``n' = n̂/r`` of
     :func:`_axis`: returns ``(residual_ok, ỹ_1 … ỹ_9)``.  ``K = r K'`` with ``K' y = n' × y``: ``Z_k = r K' v_k``,
@@ -270,13 +271,13 @@ def _dress3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, n3, r, cst):
     return _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, r, Z, cst, t)
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _finite9(y0, y1, y2, y3, y4, y5, y6, y7, y8):
     acc = ((y0 + y1) + (y2 + y3)) + ((y4 + y5) + (y6 + y7)) + y8
     return acc - acc == 0.0  # false for NaN or inf anywhere
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _step3(x, b, cst, q, nu, nu_sq, inv_2nu, newton):
     """One N = 3 step from the tuple ``x`` (9 floats) with the constants ``cst`` of :func:`_constants3` and the
     carried ``ν1`` (``nu``; ``nu_sq = ν1²``, ``inv_2nu = 1/(2ν1)``, computed off the chain); returns
@@ -348,5 +349,6 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
     for i in range(9):
         final[i] = x[i]
     if want_drift:
-        S._drift_pass(out, final, n // save_every, b, 3, I0, Ib, drift)
+        # out[:, :] has Numba's layout 'A', as the lanes' strided rows: one compiled drift pass serves both
+        S._drift_pass(out[:, :], final, n // save_every, b, 3, I0, Ib, drift)
     return status, n, nu

@@ -28,6 +28,14 @@ _EIG_TOL2 = 1e-30
 _RESIDUAL_TOL2 = 1e-16
 
 
+def block(**options):
+    """``numba.njit`` for a kernel block, a function called only from compiled code: cached, NumPy's error model
+    (division by zero gives inf/NaN, caught by the status tests), and without the CPython and C-function wrappers
+    that Numba otherwise compiles with every function, for calls from Python (about 10 % of the first-use compile
+    time of the three kernels, docs/performance.md).  The entry points called by the drivers keep ``njit``."""
+    return njit(cache=True, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True, **options)
+
+
 
 
 @intrinsic
@@ -74,12 +82,12 @@ def _from_bits(typingctx, n):
     return types.float64(n), codegen
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _abs2(z):
     return z.real * z.real + z.imag * z.imag
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _cdiv(a, b):
     r"""``a/b = a·conj(b)·(1/|b|²)``: one real division (shorter latency than Smith's algorithm, which
     the NumPy route uses; the two agree to a few ulp for ``1e-150 < |b| < 1e150``); never raises
@@ -90,7 +98,7 @@ def _cdiv(a, b):
     return complex((a.real * br + a.imag * bi) * r, (a.imag * br - a.real * bi) * r)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _csqrt(z):
     r"""A square root of ``z`` (principal; the sign is fixed by the caller): ``t = √((|z| + |a|)/2)``,
     no cancellation; ``|z|`` as ``√(a² + b²)`` (no overflow guard: fine for ``|z| < 1e150``)."""
@@ -104,7 +112,7 @@ def _csqrt(z):
     return complex(0.5 * abs(b) / t, math.copysign(t, b))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _continue_nu(u, v, w, nu_prev):
     r"""Root of ``u² + vw`` closest to ``nu_prev`` (``maps._continue_nu``)."""
     r = _csqrt(u * u + v * w)
@@ -113,7 +121,7 @@ def _continue_nu(u, v, w, nu_prev):
     return -r
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _division_constants(eta):
     """``d1 = −2 Re η``, ``d2 = |η|²`` of ``(λ − η)(λ − η̄) = λ² + d1 λ + d2`` (the divisor of the real two-point
     dressing), ``1/d2``, and ``bottom_up = d2 >= 1`` (the direction of the exact division)."""
@@ -122,7 +130,7 @@ def _division_constants(eta):
     return d1, d2, 1.0 / d2, d2 >= 1.0
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _eig_candidates(u, v, w, nu):
     """The two candidate eigenvectors of :func:`_eigvec`, ``a = (v, ν − u)`` and ``b = (u + ν, w)``, with their
     ``|a|²``, ``|b|²``."""
@@ -133,7 +141,7 @@ def _eig_candidates(u, v, w, nu):
     return a1, a2, b1, b2, _abs2(a1) + _abs2(a2), _abs2(b1) + _abs2(b2)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _eigvec(u, v, w, nu):
     r"""Eigenvector ``k`` of ``ℓ(η) = [[u, v], [w, −u]]`` for ``ν`` (:func:`jetgaudin.backlund._dressing.eigenvector`):
     ``(v, ν − u)`` or ``(u + ν, w)``, the one with the larger ``|k|²``; ``s = −k_2/k_1`` may be infinite.
@@ -153,7 +161,7 @@ def _eigvec(u, v, w, nu):
     return k1, k2, nk, STATUS_OK
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _eigvec_flags(u, v, w, nu):
     """:func:`_eigvec` without data-dependent branches (both candidates formed, one selected; for the
     lock-step lanes): returns ``(k1, k2, |k|², nonfinite, branch)``."""
@@ -170,7 +178,7 @@ def _eigvec_flags(u, v, w, nu):
     return k1, k2, nk, nonfinite, branch
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _m0_from_k(eta, k1, k2, nk):
     r"""``M0`` of the real two-point map from the eigenvector ``k``
     (:func:`jetgaudin.backlund._dressing.real_two_point_M0`):
@@ -188,7 +196,7 @@ def _m0_from_k(eta, k1, k2, nk):
     return m00, m01, m10, m11
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _integrals(x, b, N, out):
     r"""``κ_1..κ_2N`` (``H_1..H_N, C_1..C_N``) of a real state with field ``b e_3`` (:func:`jetgaudin.integrals`):
     ``κ_m = Σ_{i+j=m} ⟨ξ_i, ξ_j⟩`` with ``ξ_0 = b e_3``, ``ξ_i = y_{i-1}``."""
@@ -202,7 +210,7 @@ def _integrals(x, b, N, out):
             out[i + j - 1] += x[p] * x[q] + x[p + 1] * x[q + 1] + x[p + 2] * x[q + 2]
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _drift_pass(out, final, last, b, N, I0, Ibuf, drift):
     r"""``drift_k = max_n |I_k(x_n) − I_k(x_0)| / max(1, |I_k(x_0)|)`` over the saved rows ``out[1..last]`` and
     ``final`` (computed after the run, off the critical path of the steps)."""
@@ -223,20 +231,20 @@ def _drift_pass(out, final, last, b, N, I0, Ibuf, drift):
 # ---------------------------------------------------------------------------------------------
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _cr(c, r):
     """complex × real, as NumPy's product with ``r + 0i`` (identical for finite values)."""
     return complex(c.real * r, c.imag * r)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _horner_step_u(acc, z, u):
     """``acc·z + (u + 0i)`` with real ``u``."""
     p = acc * z
     return complex(p.real + u, p.imag)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _products(m00, m01, m10, m11, u, v, w):
     r"""``T1 = M0 ℓ_m + ℓ_m adj M0`` and ``T2 = M0 ℓ_m adj M0`` (entries 00, 01, 10) for
     ``ℓ_m = [[u, v], [w, −u]]``, ``u`` real (``m ≥ 1``)."""
@@ -257,7 +265,7 @@ def _products(m00, m01, m10, m11, u, v, w):
     return t1u, t1v, t1w, t2u, t2v, t2w
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@block(inline="always")
 def _products0(m00, m01, m10, m11, b):
     r""":func:`_products` for ``ℓ_0 = diag(b, −b)`` (the zero entries dropped: ``x + 0·y = x``)."""
     a00 = m11
@@ -276,12 +284,12 @@ def _products0(m00, m01, m10, m11, b):
     return t1u, t1v, t1w, t2u, t2v, t2w
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _sel(c, a, b):
     return a if c else b
 
 
-@njit(cache=True, error_model="numpy")
+@block()
 def _selc(c, a, b):
     """complex select by components (a select of a complex struct keeps LLVM from vectorising)."""
     return complex(_sel(c, a.real, b.real), _sel(c, a.imag, b.imag))

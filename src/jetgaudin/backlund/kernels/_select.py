@@ -51,10 +51,10 @@ _AUTO_MIN_WORK_COLD = 20000
 #: (benchmarks/setup_parts.py measures them, each in a fresh process with an empty cache; a loaded machine takes
 #: 2-3 times longer)
 EXPECTED_COMPILE_S = {
-    "run_orbit3": 5.0,
+    "run_orbit3": 4.0,
     "run_orbit": 6.0,
     "run_batch_generic": 5.0,
-    "run_lanes3": 7.0,
+    "run_lanes3": 6.5,
     "nu_default_kernel": 2.5,
 }
 #: expected time to load one cached kernel (seconds)
