@@ -12,7 +12,7 @@ import math
 
 from numba import njit
 
-from ._scalar import _abs2, _cdiv, _integrals, block
+from ._scalar import _abs2, _cdiv, block
 
 
 @block()
@@ -64,9 +64,9 @@ def _nu2_only(kappa, lam):
 
 
 @block(inline="always")
-def _nu_default_one(x, b, eta, sheet, kappa):
+def _nu_default_one(X, i, b, eta, sheet, kappa):
     r"""``ν(η)`` on the default branch (:func:`jetgaudin.nu`): the root positive at ``a = Re η``, continued along
-    the vertical segment ``[a, η]``; ``kappa`` is a work array of ``2N + 1`` entries.
+    the vertical segment ``[a, η]``, for the state ``X[i]``; ``kappa`` is a work array of ``2N + 1`` entries.
 
     **No stepping in the common case (exact test).**  Let ``P(λ) = ν²(λ)``, ``Y = Im η`` and
     ``D = Σ_{m≥1} m |κ_m| |a|^{-m-1}`` (:func:`_nu2_real`).  On the segment ``λ = a + iy``, ``|y| ≤ |Y|``,
@@ -85,9 +85,16 @@ def _nu_default_one(x, b, eta, sheet, kappa):
     Returns ``sheet · ν(η)`` and ``ok``; ``ok`` is false for ``Re η = 0``, ``ν(a) = 0`` or a branch point on the
     segment (``|ν²| ≤ 1e-13 Σ|κ_m λ^{-m}|``).  No roots are computed (the NumPy rule uses them), which keeps
     LAPACK out of the compiled code."""
-    N = x.shape[0] // 3
+    N = X.shape[1] // 3
     kappa[0] = b * b
-    _integrals(x, b, N, kappa[1:])
+    for m in range(1, 2 * N + 1):  # κ_1..κ_2N: the operations of _scalar._integrals, on the row i of X (no view)
+        kappa[m] = 0.0
+    for k in range(1, N + 1):
+        p = 3 * (k - 1)
+        kappa[k] += 2.0 * b * X[i, p + 2]
+        for j in range(1, N + 1):
+            q = 3 * (j - 1)
+            kappa[k + j] += X[i, p] * X[i, q] + X[i, p + 1] * X[i, q + 1] + X[i, p + 2] * X[i, q + 2]
     a = eta.real
     if a == 0.0:
         return complex(0.0, 0.0), False
@@ -126,4 +133,4 @@ def nu_default_kernel(X, b, eta, sheet, kappa, nu, ok):
     """:func:`_nu_default_one` for each orbit of ``X`` (B, 3N) with per-orbit ``b``, ``eta``; ``kappa`` (2N + 1,)
     is the work array (allocated once per call, not per orbit)."""
     for i in range(X.shape[0]):
-        nu[i], ok[i] = _nu_default_one(X[i], b[i], eta[i], sheet, kappa)
+        nu[i], ok[i] = _nu_default_one(X, i, b[i], eta[i], sheet, kappa)
