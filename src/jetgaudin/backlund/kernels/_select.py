@@ -54,7 +54,7 @@ EXPECTED_COMPILE_S = {
     "run_orbit3": 4.0,
     "run_orbit": 6.0,
     "run_batch_generic": 5.0,
-    "run_lanes3": 6.5,
+    "run_lanes3": 7.0,
     "nu_default_kernel": 2.5,
 }
 #: expected time to load one cached kernel (seconds)
