@@ -76,3 +76,22 @@ def test_a_batch_split_across_threads_gives_the_same_values(monkeypatch, rng):
     eta[2500] = 1j  # Re(eta) = 0: the rule is undefined there
     with pytest.raises(jg.BranchPointError, match="orbit 2500:"):
         K.nu_default(X, b, eta)
+
+
+def test_states_of_extreme_size_scale_exactly():
+    # nu is homogeneous of degree 1 in (X, b): nu(cX, cb) = c nu(X, b).  For c a power of 2 every operation of the
+    # rule (kappa, the Horner sums, the tests, the steps) scales exactly, and so does its square root, which takes
+    # p scaled into (1e-150, 1e150) by a power of 4 where |p| is outside that range: exact equality, for |nu^2| from
+    # ~1e-160 to ~1e160 (there sqrt(a^2 + b^2) of p under- or overflows: a root without the scaling gives inf/NaN)
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 50, seed=7)
+    b, eta = np.ones(50), np.full(50, 5 + 0.1j)
+    ref = K.nu_default(X, b, eta)
+    for e in (-265, -200, 200, 265):
+        c = 2.0**e
+        assert np.array_equal(K.nu_default(X * c, b * c, eta), ref * c), e
+    x = np.array([[1.0, 0.0, -2.0]])  # the stepping case of the test above (the exact test does not hold)
+    for eta1 in (2.01 + 3j, 1.0 + 5j):
+        ref1 = K.nu_default(x, [1.0], [eta1])
+        for e in (-100, 100):
+            c = 2.0**e
+            assert np.array_equal(K.nu_default(x * c, [c], [eta1]), ref1 * c), (eta1, e)

@@ -1,18 +1,17 @@
 r"""The default branch of ``ν(η)`` (the branch rule of :func:`jetgaudin.nu`), compiled, for the first step of a
 run (:func:`._drivers.nu_default` is the driver).  One kernel, serial, without the GIL: the driver runs parts of a
-large batch on threads of its own (the rule costs ~0.1 µs per orbit, so a parallel region of Numba's, compiled
+large batch on threads of its own (the rule costs ~0.08 µs per orbit, so a parallel region of Numba's, compiled
 separately, would cost more compile time than it saves).  Import only after
 :func:`._target.configure`.
 """
 
 from __future__ import annotations
 
-import cmath
 import math
 
 from numba import njit
 
-from ._scalar import _abs2, _cdiv, block
+from ._scalar import _abs2, _cdiv, _csqrt, block
 
 
 @block()
@@ -32,35 +31,20 @@ def _nu2_and_derivative(kappa, lam):
     return p, -(dp * z * z), sc
 
 
-@block(inline="always")
-def _nu2_real(kappa, a):
-    r"""At a real ``λ = a``, in real arithmetic: ``P(a) = Σ κ_m a^{-m}``, ``S = Σ |κ_m| |a|^{-m}`` and
-    ``D = Σ_{m≥1} m |κ_m| |a|^{-m-1}``, a bound of ``|dν²/dλ|`` on the vertical line ``Re λ = a`` (there
-    ``|λ| ≥ |a|``, and ``dν²/dλ = −Σ m κ_m λ^{-m-1}``)."""
-    z = 1.0 / a
-    w = abs(z)
-    p = 0.0
-    sc = 0.0
-    d = 0.0
-    for m in range(kappa.shape[0] - 1, 0, -1):
-        p = p * z + kappa[m]
-        sc = sc * w + abs(kappa[m])
-        d = (d + m * abs(kappa[m])) * w
-    return p * z + kappa[0], sc * w + abs(kappa[0]), d * w
-
-
-@block(inline="always")
-def _nu2_only(kappa, lam):
-    r"""``P = ν²(λ)`` and ``Σ |κ_m| |λ|^{-m}``: the same operations as :func:`_nu2_and_derivative` (same bits)
-    without the derivative."""
-    z = _cdiv(complex(1.0, 0.0), lam)
-    az = math.sqrt(_abs2(z))
-    p = complex(0.0, 0.0)
-    sc = 0.0
-    for m in range(kappa.shape[0] - 1, -1, -1):
-        p = p * z + kappa[m]
-        sc = sc * az + abs(kappa[m])
-    return p, sc
+@block()
+def _root_nu2(p, sc):
+    r"""The principal ``√p`` and the rule's test against a branch point, ``|p| > 10⁻¹³ sc``.  The root is
+    :func:`._scalar._csqrt` (the square root of the steps; ``|p|`` is its own ``√(a² + b²)``, shared by LLVM), on
+    ``p`` scaled by an exact power of 4 where that ``|p|`` is outside ``(1e-150, 1e150)`` (then ``|p|`` is
+    ``math.hypot``'s, which neither overflows nor underflows): ``√(cX) = √c·√X`` bit for bit for ``c = 4^k``."""
+    ap = math.sqrt(_abs2(p))
+    if 1e-150 < ap < 1e150:
+        return _csqrt(p), ap > 1e-13 * sc
+    ap = math.hypot(p.real, p.imag)
+    if not (ap > 1e-13 * sc):  # also for p not finite
+        return complex(0.0, 0.0), False
+    k = math.frexp(ap)[1] // 2
+    return _csqrt(p * math.ldexp(1.0, -2 * k)) * math.ldexp(1.0, k), True
 
 
 @block(inline="always")
@@ -69,7 +53,8 @@ def _nu_default_one(X, i, b, eta, sheet, kappa):
     the vertical segment ``[a, η]``, for the state ``X[i]``; ``kappa`` is a work array of ``2N + 1`` entries.
 
     **No stepping in the common case (exact test).**  Let ``P(λ) = ν²(λ)``, ``Y = Im η`` and
-    ``D = Σ_{m≥1} m |κ_m| |a|^{-m-1}`` (:func:`_nu2_real`).  On the segment ``λ = a + iy``, ``|y| ≤ |Y|``,
+    ``D = Σ_{m≥1} m |κ_m| |a|^{-m-1}``, a bound of ``|P'|`` on the vertical line ``Re λ = a``
+    (``P'(λ) = −Σ m κ_m λ^{-m-1}``, ``|λ| ≥ |a|`` there).  On the segment ``λ = a + iy``, ``|y| ≤ |Y|``,
     ``|λ| ≥ |a|``, so ``|P'(λ)| ≤ D`` and ``|P(λ) − P(a)| ≤ |Y| D``.  If ``|Y| D ≤ P(a)/2`` then
     ``Re P(λ) ≥ P(a)/2 > 0`` on the whole segment: ``P`` never meets the cut ``(−∞, 0]`` of the principal square
     root nor zero, so ``√P`` (principal) is continuous along the segment, equals the positive root at ``a``, and
@@ -78,6 +63,13 @@ def _nu_default_one(X, i, b, eta, sheet, kappa):
     so their relative errors are below ``10⁻²`` and the stepping would not have refused ``a``).  The value is the
     same bits as the stepping below, whose last step takes the same ``√P(η)`` (same operations).
 
+    **One pass over the row.**  ``κ_m`` (``m = 2N, …, 0``) is summed in a register in the order of
+    :func:`._scalar._integrals` (the same bits) and enters at once the three Horner sums in real arithmetic at
+    ``a`` (``P(a)``, ``Σ|κ_m||a|^{-m}``, ``D``) and the complex one at ``η`` (``P(η)``, ``Σ|κ_m||η|^{-m}``, the
+    operations of :func:`_nu2_and_derivative`): no stores and loads of ``κ`` between them (the stepping still
+    fills the work array).  With the root of :func:`_root_nu2` in place of ``cmath.sqrt`` the rule is ~1.2×
+    faster than in three passes (0.077 against 0.095 µs per orbit, one thread, AMD EPYC; the same compile time).
+
     **Otherwise: stepping** with the closest-root rule on steps ``h ≤ 0.1 |ν²|/|dν²/dλ|`` (``ν²`` changes by at
     most 10 % per step, so its square root turns by less than 0.06 rad and the closest root is the continued
     one; near a branch point at distance ``d`` the steps are ``≲ 0.1 d``).
@@ -85,26 +77,48 @@ def _nu_default_one(X, i, b, eta, sheet, kappa):
     Returns ``sheet · ν(η)`` and ``ok``; ``ok`` is false for ``Re η = 0``, ``ν(a) = 0`` or a branch point on the
     segment (``|ν²| ≤ 1e-13 Σ|κ_m λ^{-m}|``).  No roots are computed (the NumPy rule uses them), which keeps
     LAPACK out of the compiled code."""
-    N = X.shape[1] // 3
-    kappa[0] = b * b
-    for m in range(1, 2 * N + 1):  # κ_1..κ_2N: the operations of _scalar._integrals, on the row i of X (no view)
-        kappa[m] = 0.0
-    for k in range(1, N + 1):
-        p = 3 * (k - 1)
-        kappa[k] += 2.0 * b * X[i, p + 2]
-        for j in range(1, N + 1):
-            q = 3 * (j - 1)
-            kappa[k + j] += X[i, p] * X[i, q] + X[i, p + 1] * X[i, q + 1] + X[i, p + 2] * X[i, q + 2]
     a = eta.real
     if a == 0.0:
         return complex(0.0, 0.0), False
     Y = eta.imag
-    pa, sa, d = _nu2_real(kappa, a)
+    N = X.shape[1] // 3
+    # κ_m for m = 2N, ..., 1: dot products X_k·X_{m−k} for k = 1, 2, ..., then 2 b X_{m,z} (the order of
+    # _scalar._integrals); then κ_0 = b²
+    zr = 1.0 / a
+    wr = abs(zr)
+    zc = _cdiv(complex(1.0, 0.0), eta)
+    az = math.sqrt(_abs2(zc))
+    pa = 0.0
+    sa = 0.0
+    d = 0.0
+    p = complex(0.0, 0.0)
+    sc = 0.0
+    for m in range(2 * N, 0, -1):
+        km = 0.0
+        for k in range(max(1, m - N), min(N, m - 1) + 1):
+            u = 3 * (k - 1)
+            v = 3 * (m - k - 1)
+            km += X[i, u] * X[i, v] + X[i, u + 1] * X[i, v + 1] + X[i, u + 2] * X[i, v + 2]
+        if m <= N:
+            km += 2.0 * b * X[i, 3 * m - 1]
+        kappa[m] = km
+        pa = pa * zr + km
+        sa = sa * wr + abs(km)
+        d = (d + m * abs(km)) * wr
+        p = p * zc + km
+        sc = sc * az + abs(km)
+    k0 = b * b
+    kappa[0] = k0
+    pa = pa * zr + k0
+    sa = sa * wr + abs(k0)
+    d = d * wr
+    p = p * zc + k0
+    sc = sc * az + abs(k0)
     if Y != 0.0 and pa > 2e-13 * sa and abs(Y) * d <= 0.5 * pa:
-        p, sc = _nu2_only(kappa, eta)
-        if not (math.sqrt(_abs2(p)) > 1e-13 * sc):  # the stepping's test at its last point
+        r, ok = _root_nu2(p, sc)  # the stepping's test and root at its last point
+        if not ok:
             return complex(0.0, 0.0), False
-        return sheet * cmath.sqrt(p), True
+        return sheet * r, True
     p, dp, sc = _nu2_and_derivative(kappa, complex(a, 0.0))
     if not (p.real > 1e-13 * sc):
         return complex(0.0, 0.0), False
@@ -119,9 +133,9 @@ def _nu_default_one(X, i, b, eta, sheet, kappa):
         else:
             y = y + math.copysign(h, Y)
         p, dp, sc = _nu2_and_derivative(kappa, complex(a, y))
-        if not (math.sqrt(_abs2(p)) > 1e-13 * sc):
+        r, ok = _root_nu2(p, sc)
+        if not ok:
             return complex(0.0, 0.0), False
-        r = cmath.sqrt(p)
         nu = r if r.real * nu.real + r.imag * nu.imag >= 0.0 else -r
     else:
         return complex(0.0, 0.0), False

@@ -125,7 +125,8 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
     (:func:`._lanes.run_lanes3`); other N: :func:`._generic.run_batch_generic`.  Either way every orbit gets the
     bits of its single-orbit run.  Never raises on a singular step (see ``status``).  ``final`` may be the view
     ``out[S - 1]`` when the last step is saved (the kernels write the same values to both); with
-    ``want_drift=False`` the N = 3 kernel leaves ``drift`` as given (pass zeros)."""
+    ``want_drift=False`` the N = 3 kernel does not touch ``drift`` (it may have no rows), the generic kernel takes
+    a view of each row and leaves it as given."""
     kernel = batch_kernel(X0.shape[1], specialise)
     args = (X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final, drift, status, fail, nu_last,
             bool(want_drift))
@@ -140,9 +141,9 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
 
 def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_drift=True):
     r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,); never raises on a
-    singular step.  ``want_drift=False``: the drift pass is skipped (``drift`` is then zeros).
+    singular step.  ``want_drift=False``: the drift pass is skipped (``drift`` is then ``None``).
 
-    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,), status (B,), fail (B,))``
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N) or None, nu_last (B,), status (B,), fail (B,))``
     (``status`` and ``fail``: the ``STATUS_*`` code and the failing step of each orbit); ``out`` is a transposed
     view of a C-ordered ``(S, B, 3N)`` array (``np.moveaxis(out, 0, 1)`` is contiguous, no copy).  Raises
     :class:`jetgaudin.InvalidParameterError` for counts out of range (:func:`check_counts`).
@@ -152,23 +153,27 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_dri
     S = check_counts(steps, save_every, B, n3)
     out = np.empty((S, B, n3))
     # the last saved row is the final state when the last step is saved: one array less to allocate and fault in
-    # (the kernels write the same values to both); ``drift`` from calloc's zero pages, which the kernels touch only
-    # for the drift pass
+    # (the kernels write the same values to both).  Without the drift pass no ``drift`` rows for the lanes, which
+    # then never index it: 48 bytes of scratch per orbit less.  Scratch that glibc returns to the system at free
+    # (its trim threshold) is faulted in again by the next call: for 10^5 orbits, iterate(X, 0) re-faulted ~8 MB
+    # per call, half its fixed cost (docs/performance.md).  The generic kernel takes a view of each row: zeros
+    # from calloc, untouched without the pass
     final = out[S - 1] if steps % save_every == 0 else np.empty((B, n3))
-    drift = np.zeros((B, 2 * (n3 // 3)))
+    lanes = specialise and n3 == 9
+    drift = np.zeros((B if want_drift or not lanes else 0, 2 * (n3 // 3)))
     status = np.empty(B, np.int64)  # every entry is written by the kernel
     fail = np.empty(B, np.int64)
     nu_last = np.empty(B, np.complex128)
     run_ensemble(X, b, eta, nu0, cont, steps, save_every, specialise, out, final, drift, status, fail, nu_last,
                  want_drift)
-    return out.transpose(1, 0, 2), final, drift, nu_last, status, fail
+    return out.transpose(1, 0, 2), final, drift if want_drift else None, nu_last, status, fail
 
 
 def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
     r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,)
-    (``want_drift=False``: no drift pass, ``drift`` zeros).
+    (``want_drift=False``: no drift pass, ``drift`` is ``None``).
 
-    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N), nu_last (B,))``; raises
+    Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N) or None, nu_last (B,))``; raises
     :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
     """
     out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise,
