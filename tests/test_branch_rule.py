@@ -95,3 +95,17 @@ def test_states_of_extreme_size_scale_exactly():
         for e in (-100, 100):
             c = 2.0**e
             assert np.array_equal(K.nu_default(x * c, [c], [eta1]), ref1 * c), (eta1, e)
+
+
+def test_the_written_out_n3_kappa_equals_the_loops(rng):
+    # N = 3 computes kappa written out (_kappa3), other N by loops (_kappa).  A fourth site y_4 = 0 adds exact
+    # zeros to every kappa_m (and kappa_7 = kappa_8 = 0, leading zeros of the Horner sums): the padded N = 4 state
+    # runs the loops on the same numbers, so nu is the same bits, in the common case and in the stepping
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 200, seed=8)
+    X[:50] = rng.normal(size=(50, 9))
+    b = rng.uniform(0.5, 2, 200)
+    eta = rng.uniform(-3, 3, 200) + 1j * rng.uniform(-2, 2, 200)
+    ok = np.abs(eta.real) > 1e-3
+    X, b, eta = X[ok], b[ok], eta[ok]
+    X4 = np.concatenate([X, np.zeros((len(X), 3))], axis=1)
+    assert np.array_equal(K.nu_default(X4, b, eta), K.nu_default(X, b, eta))
