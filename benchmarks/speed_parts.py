@@ -39,6 +39,7 @@ def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
     t = timed(lambda: B.iterate(X, steps, kernel="compiled"), 5, wall)
     tc, tcb = np.median(t), t.min()
     t0 = np.median(timed(lambda: B.iterate(X, 0, kernel="compiled"), 5, wall))
+    faults = _minor_faults(lambda: B.iterate(X, 0, kernel="compiled"))
     tnu = np.median(timed(lambda: kernels.nu_default(X, b, eta), 5, wall))
     tn = np.median(timed(lambda: B.iterate(X, steps, kernel="numpy"), 3, wall))
     work = orbits * steps
@@ -48,7 +49,23 @@ def bench_fixed_cost(rows, Row, orbits=10**5, steps=10):
                     "the reference"))
     rows.append(Row("h", "ratio compiled / NumPy-vectorised (10-step call)", tn / tc, "x", "target >= 20"))
     rows.append(Row("h", "fixed cost per orbit per call (iterate(X, 0))", t0 / orbits * 1e6, "µs",
-                    f"of which the branch rule for ν1 {tnu / orbits * 1e6:.3f} µs; target < 0.1 µs"))
+                    f"of which the branch rule for ν1 {tnu / orbits * 1e6:.3f} µs; page faults per call {faults:.0f} "
+                    "(freed memory faulted in again); target < 0.1 µs"))
+
+
+def _minor_faults(fn, repeat=5) -> float:
+    """Median number of minor page faults of the process during one call of ``fn`` (``getrusage``; NaN where
+    the platform has no ``resource`` module)."""
+    try:
+        import resource
+    except ImportError:
+        return float("nan")
+    counts = []
+    for _ in range(repeat):
+        before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+        fn()
+        counts.append(resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before)
+    return float(np.median(counts))
 
 
 _COMPILE_CODE = r"""
