@@ -48,7 +48,7 @@ def bench_setup(rows, Row, orbits=10**5, repeat=15):
         ("  kernel call, 0 steps, no drift pass (lanes' set-up)",
          lambda: kernels.run_batch(X, b, eta, nu, True, 0, 1, want_drift=False), "run_lanes3's body (helper speed)"),
         ("  kernel call, 0 steps, with the drift pass", lambda: kernels.run_batch(X, b, eta, nu, True, 0, 1),
-         "what iterate() paid before this round"),
+         "the drift pass that iterate() skips"),
         ("  input checks (as_state: shape, finiteness)", lambda: as_state(X), ""),
         ("iterate(X, 10, nu1=ν), continued call", lambda: m.iterate(X, 10, nu1=nu), ""),
     ]

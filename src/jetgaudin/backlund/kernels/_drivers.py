@@ -102,17 +102,22 @@ def _batch_args(X: Any, b: Any, eta: Any, nu0: Any) -> tuple[np.ndarray, np.ndar
             np.ascontiguousarray(eta, dtype=np.complex128), np.ascontiguousarray(nu0, dtype=np.complex128))
 
 
+def _n3_route(n_state: int, specialise: bool) -> bool:
+    """Whether states of ``n_state`` components run the N = 3 kernels (``specialise``) rather than the generic ones."""
+    return bool(specialise) and n_state == 9
+
+
 def batch_kernel(n_state: int, specialise: bool = True) -> Any:
     """The compiled batch kernel for states of ``n_state`` components: the lock-step lanes for N = 3
     (``specialise``), else the ``prange`` loop over the generic single-orbit route."""
-    if specialise and n_state == 9:
+    if _n3_route(n_state, specialise):
         return kernel_module("_lanes").run_lanes3
     return kernel_module("_generic").run_batch_generic
 
 
 def single_kernel(n_state: int, specialise: bool = True) -> Any:
     """The compiled single-orbit kernel: the N = 3 route (``specialise``) or the generic route."""
-    if specialise and n_state == 9:
+    if _n3_route(n_state, specialise):
         return kernel_module("_n3").run_orbit3
     return kernel_module("_generic").run_orbit
 
@@ -130,7 +135,7 @@ def run_ensemble(X0, b, eta, nu0, cont, steps, save_every, specialise, out, fina
     kernel = batch_kernel(X0.shape[1], specialise)
     args = (X0, b, eta, nu0, bool(cont), int(steps), int(save_every), out, final, drift, status, fail, nu_last,
             bool(want_drift))
-    if not (specialise and X0.shape[1] == 9):
+    if not _n3_route(X0.shape[1], specialise):
         kernel(*args)
         return
     nblocks = -(-X0.shape[0] // kernel_module("_lanes").LANES)
@@ -159,8 +164,7 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_dri
     # per call, half its fixed cost (docs/performance.md).  The generic kernel takes a view of each row: zeros
     # from calloc, untouched without the pass
     final = out[S - 1] if steps % save_every == 0 else np.empty((B, n3))
-    lanes = specialise and n3 == 9
-    drift = np.zeros((B if want_drift or not lanes else 0, 2 * (n3 // 3)))
+    drift = np.zeros((B if want_drift or not _n3_route(n3, specialise) else 0, 2 * (n3 // 3)))
     status = np.empty(B, np.int64)  # every entry is written by the kernel
     fail = np.empty(B, np.int64)
     nu_last = np.empty(B, np.complex128)
