@@ -37,6 +37,7 @@ from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectr
 from ..lax import ell_coefficients, state_from_ell
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ._curve import _component_poles, nu_with_roots
+from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
 __all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
@@ -63,11 +64,13 @@ def _check_model(model) -> None:
 
 def _check_eta(model: GaudinModel, eta) -> complex:
     eta = spectral_parameter(eta)
+    T = model.family.period
     for p, _ in model.sites:
-        if eta.real == p:
+        if (eta.real == p if T is None else abs((r := (eta.real - p) / T) - round(r)) < 1e-14):
             raise InvalidParameterError(
-                f"Re(eta) = {p} is a site: the branch rule of nu starts at the real point Re(eta), a pole of the "
-                "Lax matrix there; choose Re(eta) off the sites"
+                f"Re(eta) = {eta.real} is a site" + ("" if T is None else f" ({p} modulo the period {T:.6g})") +
+                ": the branch rule of nu starts at the real point Re(eta), a pole of the Lax matrix there; choose "
+                "Re(eta) off the sites"
             )
     return eta
 
@@ -91,26 +94,46 @@ def dress_parts(model, parts, K0, E, A0, Ea, zeros):
     r"""Principal parts of ``K ℓ adj(K)/Π_r(λ − ζ_r)`` at every site (module docstring), ``(B, M, 2, 2)``.
 
     ``K = λE + K0``, ``adj K = λE_a + A0`` (``K0``, ``A0``: ``(B, 2, 2)``), ``zeros``: the scalars ``ζ_r``."""
-    out = np.empty_like(parts)
-    for i, (lam_i, N) in enumerate(model.sites):
-        o = model.offsets[i]
-        Ka = (K0 + lam_i * E, np.broadcast_to(E, K0.shape))
-        Aa = (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape))
+    series = []
+    for lam_i, N in model.sites:
         g = np.zeros(N, dtype=complex)
         g[0] = 1.0
         for z in zeros:
             g = np.convolve(g, _inv_series(lam_i - z, N))[:N]
+        series.append(((K0 + lam_i * E, np.broadcast_to(E, K0.shape)),
+                       (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape)), g))
+    return dress_sites(model, parts, series)
+
+
+def dress_sites(model, parts, series):
+    r"""Principal parts of ``D ℓ adj(D) / det D`` at every site, ``(B, M, 2, 2)``, from ``series[i] = (Ka, Aa, g)``:
+    the Taylor coefficients at ``λ_i`` of ``D`` and ``adj D`` (sequences of ``(B, 2, 2)``) and of ``1/det D``
+    (``(N_i,)`` or ``(N_i, B)``): ``ℓ̆_k = Σ_{j ≥ k} Σ_{a+c+e = j−k} D_a ℓ_j A_c g_e`` (module docstring)."""
+    out = np.empty_like(parts)
+    for i, (_, N) in enumerate(model.sites):
+        o = model.offsets[i]
+        Ka, Aa, g = series[i]
+        g = np.asarray(g)[..., None, None] if np.ndim(g) > 1 else g  # (N, B): one series per batch member
         for k in range(N):
             acc = np.zeros(parts.shape[:-3] + (2, 2), dtype=complex)
             for j in range(k, N):
                 Pj = parts[..., o + j, :, :]
-                for a in (0, 1):
+                for a in range(min(len(Ka), j - k + 1)):
                     KP = mm(Ka[a], Pj)
-                    for c in (0, 1):
+                    for c in range(min(len(Aa), j - k - a + 1)):
                         e = j - k - a - c
-                        if e >= 0:
-                            acc = acc + g[e] * mm(KP, Aa[c])
+                        acc = acc + g[e] * mm(KP, Aa[c])
             out[..., o + k, :, :] = acc
+    return out
+
+
+def _matrix(xi):
+    """``ℓ = [[ξ^3, ξ^1 − iξ^2], [ξ^1 + iξ^2, −ξ^3]]`` from ``ξ`` ``(..., 3)``."""
+    out = np.empty(xi.shape[:-1] + (2, 2), dtype=complex)
+    out[..., 0, 0] = xi[..., 2]
+    out[..., 1, 1] = -xi[..., 2]
+    out[..., 0, 1] = xi[..., 0] - 1j * xi[..., 1]
+    out[..., 1, 0] = xi[..., 0] + 1j * xi[..., 1]
     return out
 
 
@@ -204,8 +227,8 @@ class _ChainMap(Map):
         return step_loop(self, X, carry, steps, save_every)
 
     def describe(self) -> dict:
-        return {"kind": self.kind, "b": self.model.b, "eta": [self.eta.real, self.eta.imag],
-                "branch": self.branch.value, "sites": [[p, N] for p, N in self.model.sites]}
+        return {"kind": self.kind, **self.model.describe(), "eta": [self.eta.real, self.eta.imag],
+                "branch": self.branch.value}
 
 
 @dataclass(frozen=True)
@@ -315,20 +338,28 @@ class ChainTwoPointBacklund(_ChainMap):
                        carry=last.reshape(shape[:-1]), imag_max=np.zeros(shape[:-1]))
 
     def _setup(self, X, carry):
-        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X``."""
+        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X`` (other families: the dressing coefficients ``c``
+        ``(B, P)`` of :mod:`jetgaudin.gaudin._dressing` in place of ``M0``)."""
         ell = ell_coefficients(X, self.model.b)
-        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta)
+        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta) if self.model.family.uniform else \
+            _matrix(self.model.xi(X, self.eta))
         # the root of ν(η)² (from ℓ(η)) closest to the carry, or to the branch rule's value: step(X) and
         # step(X, start(X)) are the same bits
         ref = self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1)
         nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], ref)
+        if not self.model.family.uniform:
+            return ell, L, nu1, real_coefficients(self.model, self.eta, L, nu1)
         k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
         return ell, L, nu1, real_two_point_M0(self.eta, k1, k2)
 
     def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
-        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``."""
+        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``
+        (other families: ``D(λ) = Σ_p c_p B_p(λ)``, scalar ``λ``)."""
         X = self.model.check_state(X)
-        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3].reshape(X.shape[:-1] + (2, 2))
+        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3]
+        if not self.model.family.uniform:
+            return dressing_at(self.model, M0, lam).reshape(X.shape[:-1] + (2, 2))
+        M0 = M0.reshape(X.shape[:-1] + (2, 2))
         return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
 
     def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -339,15 +370,24 @@ class ChainTwoPointBacklund(_ChainMap):
         shape = X.shape
         X = X.reshape(-1, shape[-1])  # 2-D batch: a single orbit equals its ensemble member bit for bit
         ell, L, nu1, M0 = self._setup(X, carry)
-        A0 = adj(M0)
         scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
-        res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
+        if self.model.family.uniform:
+            A0 = adj(M0)
+            res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
+            series = None
+        else:  # the family's dressing: residual relative to |D(η)|², principal parts from its Taylor series
+            D1 = dressing_at(self.model, M0, self.eta)
+            res = _residual(D1, L, adj(D1), scale) / np.max(np.abs(D1), axis=(-2, -1)) ** 2
+            series = site_series(self.model, M0)
         if np.any(res > _RESIDUAL_TOL):
             raise SingularStepError(
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
-        new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        if series is None:
+            new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        else:
+            new = dress_sites(self.model, ell[..., 1:, :, :], series)
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
         Xr = Xc.real
         if not np.all(np.isfinite(Xr)):
@@ -449,7 +489,7 @@ class ChainOnePointBacklund(_ChainMap):
 
 
 def _sites(d: dict) -> GaudinModel:
-    return GaudinModel(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]))
+    return GaudinModel.from_description(d)
 
 
 def _two_point_from(d: dict) -> ChainTwoPointBacklund:
