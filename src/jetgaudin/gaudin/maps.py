@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import glob
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -55,6 +55,19 @@ _ID = np.eye(2, dtype=complex)
 _AUTO_MIN_WORK = 20000
 #: expected first-use compile time of the chain kernel (seconds, idle core of docs/performance.md's machine)
 _CHAIN_COMPILE_S = 10.0
+
+
+def resolve_backend(backend: Backend, has_compiled: bool, steps: int, X, kind: str = "map") -> Backend:
+    """The one rule of the chain maps (every family): ``NUMPY`` as given; ``COMPILED`` needs a compiled route
+    (:class:`InvalidParameterError` otherwise); ``AUTO`` is the compiled route from ``_AUTO_MIN_WORK`` orbit-steps
+    on where the map has one, NumPy otherwise."""
+    if backend is Backend.COMPILED and not has_compiled:
+        raise InvalidParameterError(f"the {kind} map of this family has no compiled route; use backend='numpy' or "
+                                    "'auto'")
+    if backend is not Backend.AUTO:
+        return backend
+    work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
+    return Backend.COMPILED if has_compiled and work >= _AUTO_MIN_WORK else Backend.NUMPY
 
 
 def _check_model(model) -> None:
@@ -165,6 +178,28 @@ class _ChainMap(Map):
         _check_model(self.model)
         object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
+        backend = Backend.parse(self.backend if self.kernel is None else self.kernel)  # kernel=: an alias
+        object.__setattr__(self, "backend", backend)
+        object.__setattr__(self, "kernel", backend)
+
+    #: whether the map has a compiled route; the one backend rule (:func:`resolve_backend`) reads it
+    has_compiled: bool = False
+
+    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
+        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
+        (:func:`resolve_backend`)."""
+        return resolve_backend(self.backend, self.has_compiled, steps, X, self.kind)
+
+    def with_backend(self, backend=None, kernel=None):
+        """This map on another route (``kernel`` an alias of ``backend``; both ``None``: itself)."""
+        pick = backend if kernel is None else kernel
+        return self if pick is None else replace(self, backend=Backend.parse(pick), kernel=None)
+
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry: Any = None, return_carry: bool = False,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None):
+        """:meth:`jetgaudin.maps.Map.iterate`, on the route ``backend`` (alias ``kernel``; default the map's)."""
+        m = self.with_backend(backend, kernel)
+        return Map.iterate(m, X0, steps, save_every=save_every, carry=carry, return_carry=return_carry)
 
     @property
     def b(self) -> float:
@@ -220,9 +255,12 @@ class _ChainMap(Map):
                 raise InvalidParameterError("carry (nu1) must be finite")
         return X, carry, steps, save_every
 
-    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Advance:
         """``steps`` steps from ``X`` ``(..., 3M)`` continuing from ``carry = ν1`` (``None``: the branch rule at
-        ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`)."""
+        ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`);
+        ``backend`` / ``kernel``: checked by the backend rule (NumPy is this map's only route)."""
+        self.with_backend(backend, kernel).resolved_backend(steps, X)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
 
@@ -242,8 +280,9 @@ class ChainTwoPointBacklund(_ChainMap):
         ``Re η`` off the sites, ``Im η ≠ 0``.
     branch : Branch or {"default", "opposite"}
         ``ν1 = ±ν(η)`` by the branch rule; ``"opposite"`` is the inverse map.
-    backend : Backend or {"numpy", "compiled", "auto"}
-        Route of :meth:`advance` / :meth:`iterate` (default NumPy, the reference route).
+    backend, kernel : Backend or {"numpy", "compiled", "auto"}
+        Route of :meth:`advance` / :meth:`iterate` (``kernel`` is an alias; default ``"auto"``, the rule of
+        :func:`resolve_backend`).
 
     Raises
     ------
@@ -254,7 +293,8 @@ class ChainTwoPointBacklund(_ChainMap):
     model: GaudinModel
     eta: complex
     branch: Branch = Branch.DEFAULT
-    backend: Backend = field(default=Backend.NUMPY, compare=False)
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_two_point"
     properties: MapProperties = field(
         default=MapProperties(
@@ -267,7 +307,6 @@ class ChainTwoPointBacklund(_ChainMap):
 
     def __post_init__(self) -> None:
         self._init_common()
-        object.__setattr__(self, "backend", Backend.parse(self.backend))
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 f"Im(eta) = 0 (eta = {self.eta.real}): the real two-point map needs eta1 = eta != eta2 = conj(eta) "
@@ -282,13 +321,10 @@ class ChainTwoPointBacklund(_ChainMap):
     def describe(self) -> dict:
         return {**super().describe(), "backend": self.backend.value}
 
-    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
-        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``: ``AUTO`` is the
-        compiled kernel from ``_AUTO_MIN_WORK`` orbit-steps on, NumPy below."""
-        if self.backend is not Backend.AUTO:
-            return self.backend
-        work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
-        return Backend.COMPILED if work >= _AUTO_MIN_WORK else Backend.NUMPY
+    @property
+    def has_compiled(self) -> bool:
+        """The rational family's map runs in :mod:`jetgaudin.gaudin._kernels`."""
+        return self.model.family.uniform
 
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
         """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
@@ -308,12 +344,15 @@ class ChainTwoPointBacklund(_ChainMap):
         return kernels().prepare_call(("gaudin.run_orbit",), loaded, _CHAIN_COMPILE_S,
                                       lambda: compiled.advance(x0, None, 0), notify, cached)
 
-    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        """As :meth:`_ChainMap.advance`; on the compiled route (``backend``, :meth:`resolved_backend`) the steps run
-        in the Numba kernel of :mod:`jetgaudin.gaudin._kernels` (the same orbits to round-off; ``ν1`` at ``X`` by the
-        NumPy branch rule; the residual check is not made and ``imag_max`` is zeros: the imaginary residue is not
-        computed).  A batch member equals its single run, and a split run the unsplit one, bit for bit (both
-        routes)."""
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Advance:
+        """As :meth:`_ChainMap.advance` (``backend`` / ``kernel``: this call's route); on the compiled route
+        (``backend``, :meth:`resolved_backend`) the steps run in the Numba kernel of :mod:`jetgaudin.gaudin._kernels`
+        (the same orbits to round-off; ``ν1`` at ``X`` by the NumPy branch rule; the residual check is not made and
+        ``imag_max`` is zeros: the imaginary residue is not computed).  A batch member equals its single run, and a
+        split run the unsplit one, bit for bit (both routes)."""
+        if backend is not None or kernel is not None:
+            return self.with_backend(backend, kernel).advance(X, carry, steps, save_every)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         if self.resolved_backend(steps, X) is not Backend.COMPILED or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
@@ -410,6 +449,8 @@ class ChainOnePointBacklund(_ChainMap):
     eta: complex
     branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_one_point"
     properties: MapProperties = field(
         default=MapProperties(
@@ -422,6 +463,10 @@ class ChainOnePointBacklund(_ChainMap):
 
     def __post_init__(self) -> None:
         _check_model(self.model)
+        if not self.model.family.uniform:
+            raise InvalidParameterError(
+                f"the one-point map is implemented for the rational family only (not {self.model.family.name}); "
+                "use the real two-point map two_point_backlund(eta)")
         if self.model.b == 0.0:
             raise InvalidParameterError(
                 "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "

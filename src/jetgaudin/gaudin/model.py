@@ -401,21 +401,23 @@ class GaudinModel:
 
     # ---- maps ---------------------------------------------------------------------------------
 
-    def two_point_backlund(self, eta, branch: Branch | str = "default",
-                           backend: Backend | str = "numpy") -> ChainTwoPointBacklund:
+    def two_point_backlund(self, eta, branch: Branch | str = "default", backend: Backend | str = "auto",
+                           kernel: Backend | str | None = None) -> ChainTwoPointBacklund:
         """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
-        ``backend="compiled"``: ``advance`` / ``iterate`` run in the Numba kernel)."""
+        ``backend`` / its alias ``kernel``: the route of ``advance`` / ``iterate``, default ``"auto"``)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend))
+        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), backend, kernel)
 
     def one_point_backlund(
-        self, eta, branch: Branch | str = "default", inverse_map: bool = False
+        self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
+        kernel: Backend | str | None = None,
     ) -> ChainOnePointBacklund:
-        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0``."""
+        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0`` and
+        the rational family."""
         from .maps import ChainOnePointBacklund
 
-        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map)
+        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, backend, kernel)
 
 
 @dataclass(frozen=True)
