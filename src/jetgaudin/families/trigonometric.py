@@ -63,6 +63,7 @@ class TrigonometricFamily(Family):
     name = "trigonometric"
     uniform = False
     n_dressing = 6  # E11 e^{iγλ}, E11 e^{−iγλ}, E12, E21, E22 e^{iγλ}, E22 e^{−iγλ}
+    kernel_rule = 1
 
     def __init__(self, gamma: float = 1.0):
         self.gamma = _check_gamma(gamma)
@@ -144,6 +145,11 @@ class TrigonometricFamily(Family):
 
     def real_dressing(self, xi, k1, k2):
         return gauge_rule(self.gamma, xi, k1, k2)
+
+    def kernel_constants(self, xi):
+        g, xb = self.gamma, np.conj(xi)
+        return np.array([np.exp(-1j * g * xi), np.exp(-1j * g * xb), np.exp(1j * g * xi), np.exp(1j * g * xb),
+                         np.sin(g * (xi - xb))])
 
 
 def spectral_rows(gamma, xi, k1, k2):
