@@ -35,6 +35,7 @@ from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
 from ..lax import ell_coefficients, state_from_ell
+from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ._curve import _component_poles, nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
@@ -140,16 +141,6 @@ def dress_sites(model, parts, series):
     return out
 
 
-def _matrix(xi):
-    """``ℓ = [[ξ^3, ξ^1 − iξ^2], [ξ^1 + iξ^2, −ξ^3]]`` from ``ξ`` ``(..., 3)``."""
-    out = np.empty(xi.shape[:-1] + (2, 2), dtype=complex)
-    out[..., 0, 0] = xi[..., 2]
-    out[..., 1, 1] = -xi[..., 2]
-    out[..., 0, 1] = xi[..., 0] - 1j * xi[..., 1]
-    out[..., 1, 0] = xi[..., 0] + 1j * xi[..., 1]
-    return out
-
-
 def _residual(K, L, A, scale):
     """``max |K ℓ adj K|`` at a zero of ``det K``, relative to ``1 + max|ℓ coefficients|`` (zero if exact)."""
     R = mm(mm(K, L), A)
@@ -170,6 +161,7 @@ class _ChainMap(Map):
     branch: Branch
     properties: MapProperties
     kind: str
+    kernel: Any  # the alias of backend given to the constructor (then equal to backend)
 
     def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
@@ -182,8 +174,10 @@ class _ChainMap(Map):
         object.__setattr__(self, "backend", backend)
         object.__setattr__(self, "kernel", backend)
 
-    #: whether the map has a compiled route; the one backend rule (:func:`resolve_backend`) reads it
-    has_compiled: bool = False
+    @property
+    def has_compiled(self) -> bool:
+        """Whether the map has a compiled route (the one backend rule, :func:`resolve_backend`, reads it)."""
+        return False
 
     def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
         """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
