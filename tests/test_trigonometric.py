@@ -268,3 +268,19 @@ def test_description_round_trip():
     assert m.describe() == {"b": 0.5, "sites": [[0.0, 1], [1.0, 2]], "family": "trigonometric", "gamma": 0.8}
     assert GaudinModel.from_description(m.describe()) == m
     assert GaudinModel(0.5, [(0.0, 1)]).describe() == {"b": 0.5, "sites": [[0.0, 1]]}  # rational: as today
+
+
+def test_symbolic_trigonometric_checks_can_fail(monkeypatch):
+    """The verify section's checks are not vacuous: the rational r-matrix in place of the trigonometric one breaks
+    Trig-r's identity, and the other sign of the gauge (rho = -1) breaks Trig-gauge."""
+    import jetgaudin.verify.trigonometric as vt
+    from jetgaudin.verify import run_checks
+
+    w = vt._w
+    monkeypatch.setattr(vt, "_w", lambda x, p, a: w(x, p, 0))  # cot -> 1/sin everywhere: not the XXZ r-matrix
+    assert not vt._r_matrix_holds((1, 1))
+    monkeypatch.setattr(vt, "_w", w)
+    d = vt._dressing
+    monkeypatch.setattr(vt, "_dressing", lambda k, xi, lam: vt.mp.matrix([[-1, 0], [0, 1]]) * d(k, xi, lam))
+    (r,) = run_checks(only=["Trig-gauge"])
+    assert r.status != "holds"
