@@ -284,3 +284,22 @@ def test_symbolic_trigonometric_checks_can_fail(monkeypatch):
     monkeypatch.setattr(vt, "_dressing", lambda k, xi, lam: vt.mp.matrix([[-1, 0], [0, 1]]) * d(k, xi, lam))
     (r,) = run_checks(only=["Trig-gauge"])
     assert r.status != "holds"
+
+
+def test_numerical_branch_rule_of_families_without_uniformizer(rng):
+    """A family that declares no uniformizer (as an elliptic one may) gets the core's numerical continuation of nu
+    along the segment: on trigonometric models (the uniformizer hidden) it gives the exact rule's nu (1e-12: the same
+    square root, the sign decided), and the map through it is the same map (1e-12)."""
+    from jetgaudin.families import TrigonometricFamily
+
+    class Hidden(TrigonometricFamily):
+        def uniformizer(self, lam):
+            return None
+
+    m = random_trig(rng)
+    h = GaudinModel(m.b, m.sites, family=Hidden(m.gamma))
+    X = rng.normal(size=(3, m.n_state))
+    xi = float(np.mean(m.positions[:2])) + 0.7j
+    assert np.abs(h.nu(X, xi) - m.nu(X, xi)).max() <= 1e-12 * np.abs(m.nu(X, xi)).max()
+    assert h.branch_points(X).shape == (3, 0)
+    assert np.abs(h.two_point_backlund(xi)(X) - m.two_point_backlund(xi)(X)).max() <= 1e-12 * (1 + np.abs(X).max())

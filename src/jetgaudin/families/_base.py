@@ -144,6 +144,11 @@ class Family(abc.ABC):
         along the segment instead of by its exact root product."""
         return None
 
+    def uniformizer_inverse(self, z) -> np.ndarray:
+        """``λ(z)``, one preimage of :meth:`uniformizer` (for the branch points; needed when ``uniformizer`` is not
+        ``None``); a family without a uniformizer has no exact branch points: ``z`` (empty) is returned."""
+        return np.asarray(z, dtype=complex)
+
     # ---- the dressing -----------------------------------------------------------------------------------
 
     @abc.abstractmethod

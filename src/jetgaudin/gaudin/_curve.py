@@ -133,6 +133,8 @@ def branch_points(model, X) -> np.ndarray:
     the zeros of ``ν²`` as roots ``z_k`` of :func:`_uniform_polynomial` (in the uniformizer ``z``)."""
     if model.family.uniform:
         return _roots(curve_polynomial(model, X))
+    if model.family.uniformizer(0.0) is None:  # no exact rule: the continuation is numerical (no roots needed)
+        return np.zeros(np.shape(X)[:-1] + (0,), dtype=complex)
     Q = _uniform_polynomial(model, X)[..., ::-1]
     if np.any(np.abs(Q[..., 0]) <= 1e-13 * np.max(np.abs(Q), axis=-1)):
         raise BranchPointError(
@@ -172,10 +174,38 @@ def _nu_uniformized(model, X, lam, roots, sheet):
     return sheet * np.where(test >= 0, 1.0, -1.0) * direct
 
 
+def _nu_numerical(model, X, lam, sheet, n0: int = 64, n_max: int = 2**16):
+    """The branch rule by numerical continuation (families without a uniformizer): ``±√ν²`` at ``n`` equally spaced
+    points of the segment from ``Re λ`` (``ν > 0`` there for a real state), each time the root nearer to the
+    previous one; ``n`` doubles until no step moves ``ν`` by more than a quarter of its size (then the nearer
+    root is unambiguous), else :class:`BranchPointError` (a branch point on or near the segment)."""
+    a = lam.real
+    n = n0
+    while n <= n_max:
+        t = np.linspace(0.0, 1.0, n + 1)
+        pts = a[..., None] + 1j * lam.imag[..., None] * t
+        nu2 = np.sum(lax_vector(model, X[..., None, :], pts) ** 2, axis=-1)
+        r = np.sqrt(nu2)
+        v = r[..., 0]
+        ok = np.ones(lam.shape, dtype=bool)
+        for k in range(1, n + 1):
+            rk = r[..., k]
+            rk = np.where(np.abs(rk - v) <= np.abs(rk + v), rk, -rk)
+            ok &= np.abs(rk - v) <= 0.25 * np.maximum(np.abs(rk), np.abs(v))
+            v = rk
+        if np.all(ok) and np.all(v != 0):
+            return sheet * v
+        n *= 2
+    raise BranchPointError("nu could not be continued along the vertical segment from Re(eta) (a branch point on or "
+                           "near it); move eta")
+
+
 def nu_with_roots(model, X, lam, roots, sheet: int = 1):
     """``ν(λ)`` on the default branch given the roots of ``Q`` (``X``, ``lam``, ``roots`` broadcast)."""
     if not model.family.uniform:
         _check_start(model, lam)
+        if model.family.uniformizer(0.0) is None:
+            return _nu_numerical(model, X, lam, sheet)
         return _nu_uniformized(model, X, lam, roots, sheet)
     a = lam.real
     for p, _ in model.sites:
