@@ -27,6 +27,7 @@ from __future__ import annotations
 import glob
 import os
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -69,6 +70,17 @@ def resolve_backend(backend: Backend, has_compiled: bool, steps: int, X, kind: s
         return backend
     work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
     return Backend.COMPILED if has_compiled and work >= _AUTO_MIN_WORK else Backend.NUMPY
+
+
+@lru_cache(maxsize=64)
+def _orbit_constants(model: GaudinModel, eta: complex) -> tuple:
+    """The compiled kernels' per-orbit constants, computed once per ``(model, η)`` (a run calls ``advance`` chunk by
+    chunk; the kernels only read them)."""
+    if model.family.uniform:
+        from ._kernels import orbit_constants
+    else:
+        from ._family_kernel import orbit_constants
+    return orbit_constants(model, eta)
 
 
 def _check_model(model) -> None:
@@ -324,14 +336,13 @@ class ChainTwoPointBacklund(_ChainMap):
     def _kernel(self):
         """``(module name, dispatcher, run(x, ν, steps, save_every))`` of the compiled route."""
         b = float(self.model.b)
+        c = _orbit_constants(self.model, self.eta)
         if self.model.family.uniform:  # the rational chain kernel (its speed and bits kept)
             from . import _kernels as K
 
-            c = K.orbit_constants(self.model, self.eta)
             return "_kernels", K.run_orbit, lambda x, nu, n, se: K.run_orbit(x, b, self.eta, nu, *c, n, se)
         from . import _family_kernel as F
 
-        c = F.orbit_constants(self.model, self.eta)
         return "_family_kernel", F.run_orbit, lambda x, nu, n, se: F.run_orbit(x, b, nu, *c, n, se)
 
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
