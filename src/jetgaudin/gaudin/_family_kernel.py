@@ -31,7 +31,8 @@ from ._kernels import _abs2
 
 @njit(cache=True)
 def _coefficients(rule, gk, a1, a2, c):
-    """The dressing coefficients ``c`` (6,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)``."""
+    """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
+    and 1: P = 6; a new family adds its rule here)."""
     p = _abs2(a1)
     q = _abs2(a2)
     n = p + q
@@ -138,7 +139,7 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
 
 
 @njit(cache=True)
-def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_every):
+def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
     """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
     n = x0.shape[0]
     rows = np.empty((steps // save_every + 1, n))
@@ -146,7 +147,7 @@ def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_ev
     x = x0.copy()
     y = np.empty(n)
     Nmax = T.shape[1]
-    c = np.empty(6, dtype=np.complex128)
+    c = np.zeros(n_basis, dtype=np.complex128)
     Dt = np.empty((Nmax, 4), dtype=np.complex128)
     At = np.empty((Nmax, 4), dtype=np.complex128)
     det = np.empty(Nmax, dtype=np.complex128)
@@ -162,7 +163,8 @@ def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_ev
 
 
 def orbit_constants(model, xi):
-    """``(f, rule, gk, T, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module docstring)."""
+    """``(f, rule, gk, T, pidx, P, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module
+    docstring)."""
     fam = model.family
     f = np.zeros((3, model.M), dtype=complex)
     for i, (p, N) in enumerate(model.sites):
@@ -170,10 +172,11 @@ def orbit_constants(model, xi):
         for a in range(3):
             f[a, o:o + N] = fam.phi(a + 1, complex(xi) - p, N)
     Nmax = max(model.orders)
-    full = np.zeros((len(model.sites), Nmax, 6, 4), dtype=complex)
+    P = fam.n_dressing
+    full = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
     for i, (p, N) in enumerate(model.sites):
-        full[i, :N] = fam.dressing_taylor(p, N).reshape(N, 6, 4)
-    used = np.any(full != 0, axis=(0, 1))  # (6, 4): which basis matrices feed which entry
+        full[i, :N] = fam.dressing_taylor(p, N).reshape(N, P, 4)
+    used = np.any(full != 0, axis=(0, 1))  # (P, 4): which basis matrices feed which entry
     K = max(1, int(used.sum(axis=0).max()))
     pidx = np.zeros((4, K), dtype=np.int64)
     T = np.zeros((len(model.sites), Nmax, 4, K), dtype=complex)
@@ -181,5 +184,5 @@ def orbit_constants(model, xi):
         for t, p in enumerate(np.flatnonzero(used[:, e])):
             pidx[e, t] = p
             T[:, :, e, t] = full[:, :, p, e]
-    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx,
+    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx, P,
             np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))
