@@ -10,6 +10,8 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
 (b) the trigonometric map, compiled (the one family kernel, :mod:`jetgaudin.gaudin._family_kernel`) and NumPy, for
     M = 2, 3, 4 order-1 sites and a chain with jet sites, and the rational kernel on the same sites beside it;
 (c) the rational family run through the family kernel (the one kernel every family can use) against its own kernel;
+(e) an ensemble (trig magnet M = 4, 64 orbits): the batch on all cores (``prange``) against the orbits one by one
+    (wall time, median of 3; orbit-steps/s);
 (d) the same work two ways (trigonometric, M = 4): ``--work-steps`` steps of the compiled map against heyoka
     integrating the flow of ``G_ξ`` over the same time sampled at integer times (wall, whole calls, median of 3).
 """
@@ -130,18 +132,31 @@ def same_work(args, rng):
               f"{np.abs(out[-1].X - orbit).max():.2e}")
 
 
+def ensemble(args, rng):
+    m = GaudinModel(0.8, TRIG["trig magnet M=4"], family="trigonometric", gamma=0.7)
+    X = rng.normal(size=(64, m.n_state))
+    B = m.two_point_backlund(XI, kernel="compiled")
+    B.iterate(X[:2], 10)
+    n = args.steps // 64
+    tb = float(np.median(timed(lambda: B.iterate(X, n, save_every=n), 3, time.perf_counter)))
+    ts = float(np.median(timed(lambda: [B.iterate(x, n, save_every=n) for x in X], 3, time.perf_counter)))
+    print(f"(e) ensemble, trig magnet M=4, 64 orbits x {n} steps (wall, {os.cpu_count()} cores): batch "
+          f"{64 * n / tb:.3g} orbit-steps/s, one by one {64 * n / ts:.3g} ({ts / tb:.2f}x)")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=1_000_000)
     p.add_argument("--numpy-steps", type=int, default=1000)
     p.add_argument("--work-steps", type=int, default=1000)
     p.add_argument("--baseline-src", default=None, help="a source tree (its src/) for the rational baseline")
-    p.add_argument("--parts", default="abcd")
+    p.add_argument("--parts", default="abcde")
     a = p.parse_args()
     print("machine:", machine())
     rng = np.random.default_rng(1)
     for part, fn in (("a", lambda: rational_kernel(a)), ("b", lambda: trigonometric(a, rng)),
-                     ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng))):
+                     ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng)),
+                     ("e", lambda: ensemble(a, rng))):
         if part in a.parts:
             fn()
 

@@ -24,7 +24,7 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._kernels import _abs2
 
@@ -160,6 +160,24 @@ def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps
         if (s + 1) % save_every == 0:
             rows[(s + 1) // save_every] = x
     return rows, x, nu
+
+
+@njit(cache=True, parallel=True)
+def run_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
+    """A batch of independent orbits ``X0`` (B, 3M), one :func:`run_orbit` per iteration of a ``prange`` loop (all
+    cores): ``(rows (steps//save_every, B, 3M) without the start states, final (B, 3M), last ν1 (B,))``; every
+    orbit gets the bits of its single run."""
+    B, n = X0.shape
+    rows = np.empty((steps // save_every, B, n))
+    final = np.empty((B, n))
+    last = np.empty(B, dtype=np.complex128)
+    for i in prange(B):
+        r, x, nu = run_orbit(X0[i].copy(), b, nu0[i], f, rule, gk, T, pidx, n_basis, site_off, site_n, steps,
+                             save_every)
+        rows[:, i] = r[1:]
+        final[i] = x
+        last[i] = nu
+    return rows, final, last
 
 
 def orbit_constants(model, xi):

@@ -379,13 +379,23 @@ class ChainTwoPointBacklund(_ChainMap):
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
-        run_orbit = self._kernel()[2]
+        name, _, run_orbit = self._kernel()
+        if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
+            from ._family_kernel import run_batch
+
+            rows, final, last = run_batch(np.ascontiguousarray(Xb), float(self.model.b), nu.astype(complex),
+                                          *_orbit_constants(self.model, self.eta), steps, save_every)
+            return self._finish(rows, final, last, shape)
         rows = np.empty((steps // save_every,) + Xb.shape)
         final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
             out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
+        return self._finish(rows, final, last, shape)
+
+    @staticmethod
+    def _finish(rows, final, last, shape) -> Advance:
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")
         return Advance(rows=rows.reshape((rows.shape[0],) + shape), X=final.reshape(shape),
