@@ -381,8 +381,9 @@ class ChainTwoPointBacklund(_ChainMap):
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
         name, _, run_orbit = self._kernel()
         if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
-            from ._family_kernel import run_batch
+            from . import _family_kernel
 
+            run_batch: Any = _family_kernel.run_batch  # a Numba dispatcher
             rows, final, last = run_batch(np.ascontiguousarray(Xb), float(self.model.b), nu.astype(complex),
                                           *_orbit_constants(self.model, self.eta), steps, save_every)
             return self._finish(rows, final, last, shape)
