@@ -5,6 +5,7 @@ from . import _errors, hamiltonians
 from ._errors import *  # noqa: F403  (the exception hierarchy: all of _errors.__all__ is public)
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
+from .exact import ExactFlow, exact_parameters
 from .flows import FlowMap, Trajectory, integrate
 from .gaudin import (
     ChainHamiltonian,
@@ -59,6 +60,8 @@ __all__ = [
     "Branch",
     "map_from_description",
     "FlowMap",
+    "ExactFlow",
+    "exact_parameters",
     "OnePointBacklund",
     "TwoPointBacklund",
     "Trajectory",
