@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cache
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -48,7 +48,7 @@ from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .spectral import _nu_from_kappa, _roots, curve_coefficients, integrals
 
-__all__ = ["ExactFlow", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR"]
+__all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR"]
 
 #: ``c`` of ``ρ_j = c R / t_j`` (module doc): the segments stay ``(c − 1) R`` away from the branch points
 RHO_FACTOR = 1.5
@@ -121,13 +121,12 @@ def _field_strength(H: IntegralHamiltonian) -> float:
     return float(bvec[2])
 
 
-def _setup(H: IntegralHamiltonian, X: np.ndarray, rho_factor: float):
-    """``(kappa, roots, ρ (..., N−1))`` of the orbits ``X`` (from the integrals only)."""
-    N = H.N
+def _setup(H: IntegralHamiltonian, X: np.ndarray, rho_factor: float, k: int):
+    """``(kappa, roots, ρ (..., k))`` of the orbits ``X`` (from the integrals only)."""
     kappa = curve_coefficients(X, _field_strength(H))
     roots = _roots(kappa)
     R = np.maximum(np.max(np.abs(roots), axis=-1), 1e-6)  # floor: X = 0 has every branch point at 0
-    rho = rho_factor * R[..., None] / _node_scales(N - 1)
+    rho = rho_factor * R[..., None] / _node_scales(k)
     return kappa, roots, rho
 
 
@@ -186,11 +185,13 @@ def _solve_h(kappa, roots, rho, target):
     return h, ok
 
 
-def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float):
-    """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok)``."""
-    N, b = H.N, _field_strength(H)
+def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float, k: int | None = None):
+    """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok)``; ``k`` maps
+    (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow)."""
+    b = _field_strength(H)
+    N = H.N if k is None else k + 1
     w = np.asarray(H.weights, dtype=float)
-    kappa, roots, rho = _setup(H, X, rho_factor)
+    kappa, roots, rho = _setup(H, X, rho_factor, N - 1)
     target = np.broadcast_to(dt * w[1:N], X.shape[:-1] + (N - 1,))
     h, ok = _solve_h(kappa, roots, rho, target)
     om, _ = _weights(kappa, roots, rho, h)
@@ -203,21 +204,25 @@ def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: fl
     return rho + 1j * h, theta, residual, quad, ok
 
 
-def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: float, rel: float = 1e-3) -> float:
+def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: float, rel: float = 1e-3,
+                k: int | None = None) -> float:
     """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x`` (3N,), by bisection to ``rel``."""
     lo, hi = 0.0, abs(dt)
     while hi - lo > rel * hi:
         mid = 0.5 * (lo + hi)
-        if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor)[-1][0]:
+        if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor, k)[-1][0]:
             lo = mid
         else:
             hi = mid
     return math.copysign(lo, dt)
 
 
-def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float = RHO_FACTOR) -> ExactParameters:
+def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float = RHO_FACTOR,
+                     maps: int | None = None) -> ExactParameters:
     r"""Solve the parameters of the exact time-``dt`` step of ``H`` for every orbit of ``X`` ``(..., 3N)`` (module
-    doc).  Raises :class:`jetgaudin.StepTooLargeError` (with ``dt_max``) when an orbit has no solution."""
+    doc).  Raises :class:`jetgaudin.StepTooLargeError` (with ``dt_max``) when an orbit has no solution.
+    ``maps``: use fewer than ``N − 1`` maps (matching ``H_2..H_{maps+1}`` only: the plain map of
+    :class:`MatchedBacklund`, not the exact flow)."""
     X, N = as_state(X)
     if not isinstance(H, IntegralHamiltonian) or np.ndim(H.weights) != 1:
         raise InvalidParameterError("H must be an IntegralHamiltonian with one set of weights (shape (2N,))")
@@ -229,10 +234,10 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
     if dt == 0:
         raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.1")
     Xf = X.reshape(-1, 3 * N)
-    eta, theta, res, quad, ok = _solve_flat(H, dt, Xf, rho_factor)
+    eta, theta, res, quad, ok = _solve_flat(H, dt, Xf, rho_factor, maps)
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
-        dmax = _largest_dt(H, dt, Xf[i], rho_factor)
+        dmax = _largest_dt(H, dt, Xf[i], rho_factor, k=maps)
         raise StepTooLargeError(
             f"dt = {dt:g} is too large for orbit {i} (its leaf): no well-conditioned Bäcklund parameters give the "
             f"exact time-dt step there; the largest feasible time step is dt = {dmax:.4g}. Give |dt| <= "
@@ -240,7 +245,7 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
             dt_max=dmax,
         )
     lead = X.shape[:-1]
-    return ExactParameters(eta.reshape(lead + (N - 1,)), theta.reshape(lead), dt, res.reshape(lead),
+    return ExactParameters(eta.reshape(lead + (eta.shape[-1],)), theta.reshape(lead), dt, res.reshape(lead),
                            quad.reshape(lead))
 
 
@@ -296,7 +301,9 @@ class ExactFlow(Map):
     backend: Backend = Backend.AUTO  # type: ignore[assignment]
     rho_factor: float = RHO_FACTOR
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
-    chunk_invariant = False
+    chunk_invariant: ClassVar[bool] = False
+    _maps: ClassVar[int | None] = None  # the number of two-point maps per (sub-)step; None: N − 1 (the exact flow)
+    _kind: ClassVar[str] = "exact"
 
     def __post_init__(self) -> None:
         if not isinstance(self.H, IntegralHamiltonian):
@@ -332,14 +339,14 @@ class ExactFlow(Map):
 
     def parameters(self, X) -> ExactParameters:
         """The parameters of one sub-step (``dt/substeps``) for the orbits ``X``."""
-        return exact_parameters(self.H, self.dt / self.substeps, X, rho_factor=self.rho_factor)
+        return exact_parameters(self.H, self.dt / self.substeps, X, rho_factor=self.rho_factor, maps=self._maps)
 
     def max_dt(self, X) -> np.ndarray:
         """The largest feasible ``|dt|`` of one sub-step for each orbit of ``X`` ``(..., 3N)`` (bisection to 1e-3,
         searched up to 100), so one step of this map is feasible iff ``|dt|/substeps`` is below it."""
         X, _ = as_state(X)
         flat = X.reshape(-1, X.shape[-1])
-        out = [abs(_largest_dt(self.H, 100.0, x, self.rho_factor)) for x in flat]
+        out = [abs(_largest_dt(self.H, 100.0, x, self.rho_factor, k=self._maps)) for x in flat]
         return np.array(out).reshape(X.shape[:-1])
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
@@ -411,17 +418,31 @@ class ExactFlow(Map):
 
     def inverse(self) -> ExactFlow:
         """The flow backwards: ``dt → −dt``."""
-        return ExactFlow(self.H, -self.dt, self.substeps, self.backend, self.rho_factor)
+        return type(self)(self.H, -self.dt, self.substeps, self.backend, self.rho_factor)
 
     def describe(self) -> dict:
-        return {"kind": "exact", "b": self.b, "weights": np.asarray(self.H.weights).tolist(), "dt": self.dt,
+        return {"kind": self._kind, "b": self.b, "weights": np.asarray(self.H.weights).tolist(), "dt": self.dt,
                 "substeps": self.substeps, "backend": self.backend.value, "rho_factor": self.rho_factor}
+
+
+@dataclass(frozen=True, eq=False)
+class MatchedBacklund(ExactFlow):
+    r"""The plain Bäcklund map as a time step of ``H`` (the baseline of ``docs/integrators.md``): **one** two-point
+    map per step, ``Re η = c R``, ``Im η`` solved so that its ``H_2`` weight is ``dt w_2``, and the ``H_1`` rotation
+    undone exactly.  For N = 2 this is :class:`ExactFlow`; for N ≥ 3 it is the exact time-``dt`` flow of
+    ``H + Σ_{m ≥ 3} (ω_m/dt − w_m) H_m`` (``ω_3/ω_2 ≈ 1/Re η``): not a consistent integrator of ``H`` at fixed
+    ``Re η`` (its error per unit time does not shrink with ``dt``).  Same interface as :class:`ExactFlow`."""
+
+    _maps = 1
+    _kind = "matched_backlund"
 
 
 def _exact_from(d: dict) -> ExactFlow:
     H = IntegralHamiltonian(float(d["b"]), np.asarray(d["weights"], dtype=float))
-    return ExactFlow(H, float(d["dt"]), int(d.get("substeps", 1)), d.get("backend", "auto"),
-                     float(d.get("rho_factor", RHO_FACTOR)))
+    cls = MatchedBacklund if d["kind"] == "matched_backlund" else ExactFlow
+    return cls(H, float(d["dt"]), int(d.get("substeps", 1)), d.get("backend", "auto"),
+               float(d.get("rho_factor", RHO_FACTOR)))
 
 
 register_map("exact", _exact_from)
+register_map("matched_backlund", _exact_from)
