@@ -92,6 +92,16 @@ def test_quadrature_matches_adaptive_weights():
         e = 1e-5
         fd = (_weights(kappa, roots, a, h + e)[0][j] - _weights(kappa, roots, a, h - e)[0][j]) / (2 * e)
         assert np.max(np.abs(fd - dom[j])) <= 1e-7 * np.max(np.abs(dom[j]))
+        # the compiled twin (node-by-node continuation of ν) gives the same weights to round-off (1e-14 relative)
+        from jetgaudin._exact_kernels import _weights_one
+        from jetgaudin.exact import _gauss_legendre
+
+        x, w = _gauss_legendre(64)
+        omc, domc, nuc = np.zeros(6), np.zeros(6), np.zeros(1, complex)
+        _weights_one(kappa, a[j], h[j], x, w, omc, domc, nuc)
+        assert np.max(np.abs(omc - om[j])) <= 1e-14 * np.max(np.abs(om[j]))
+        assert np.max(np.abs(domc - dom[j])) <= 1e-14 * np.max(np.abs(dom[j]))
+        assert abs(nuc[0] - jg.nu(a[j] + 1j * h[j], X3, 1.0)) <= 1e-14 * abs(nuc[0])
 
 
 def test_dt_and_minus_dt_invert_each_other():

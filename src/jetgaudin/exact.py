@@ -65,6 +65,8 @@ _RES_TOL = 1e-12
 _FOLD = 2.0
 _NEWTON_ITERATIONS = 40
 _CONTINUATION_STAGES = (1, 4, 16)
+#: batches of at least this many orbits solve on all threads (below, a thread start costs more than the work)
+_PARALLEL_FROM = 256
 
 
 @cache
@@ -130,61 +132,6 @@ def _setup(H: IntegralHamiltonian, X: np.ndarray, rho_factor: float, k: int):
     return kappa, roots, rho
 
 
-def _newton(kappa, roots, rho, target, h):
-    """Newton's method for ``Σ_j ω_m(ρ_j + i h_j) = target_m`` (``m = 2..N``), orbit by orbit (an orbit's iterates
-    do not depend on the others': batch members equal single solves bit for bit).  Returns ``(h, ok)``."""
-    N = target.shape[-1] + 1
-    active = np.ones(h.shape[:-1], dtype=bool)
-    ok = np.zeros(h.shape[:-1], dtype=bool)
-    for _ in range(_NEWTON_ITERATIONS):
-        if not active.any():
-            break
-        om, dom = _weights(kappa[active], roots[active], rho[active], h[active])
-        F = np.sum(om[..., 1:N], axis=-2) - target[active]
-        J = np.swapaxes(dom[..., 1:N], -1, -2)  # (.., m, j)
-        try:
-            dh = np.linalg.solve(J, F[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            break
-        hn = h[active] - dh
-        good = np.all(np.isfinite(hn), axis=-1) & np.all(np.abs(hn) <= _FOLD * np.abs(rho[active]), axis=-1)
-        done = good & np.all(np.abs(dh) <= _STEP_TOL * np.abs(hn), axis=-1)
-        idx = np.flatnonzero(active)
-        h[idx[good]] = hn[good]
-        ok[idx[done]] = True
-        active[idx[done | ~good]] = False
-    return h, ok
-
-
-def _solve_h(kappa, roots, rho, target):
-    """The imaginary parts ``h`` ``(..., N−1)`` and a success flag per orbit: Newton from the linearised
-    solution, then, for the orbits that failed, continuation in ``dt`` over 4 and 16 stages."""
-    N = target.shape[-1] + 1
-    shape = rho.shape[:-1]
-    h = np.zeros(rho.shape)
-    ok = np.zeros(shape, dtype=bool)
-    m = np.arange(2, N + 1)
-    nu_rho = _nu_from_kappa(np.broadcast_to(kappa[..., None, :], rho.shape + kappa.shape[-1:]), rho.astype(complex),
-                            1, roots=np.broadcast_to(roots[..., None, :], rho.shape + roots.shape[-1:])).real
-    V = -(rho[..., None, :] ** -m[:, None]) / nu_rho[..., None, :]  # (..., m, j): ω_m ≈ Σ_j V_mj h_j
-    for stages in _CONTINUATION_STAGES:
-        todo = ~ok
-        if not todo.any():
-            break
-        hk = np.zeros(rho[todo].shape)
-        good = np.ones(hk.shape[:-1], dtype=bool)
-        for s in range(1, stages + 1):
-            tg = target[todo] * (s / stages)
-            if s == 1:
-                hk = np.linalg.solve(V[todo], tg[..., None])[..., 0]
-            hk, conv = _newton(kappa[todo], roots[todo], rho[todo], tg, hk)
-            good &= conv
-        idx = np.flatnonzero(todo)
-        h[idx[good]] = hk[good]
-        ok[idx[good]] = True
-    return h, ok
-
-
 def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float, k: int | None = None):
     """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok)``; ``k`` maps
     (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow)."""
@@ -192,15 +139,27 @@ def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: fl
     N = H.N if k is None else k + 1
     w = np.asarray(H.weights, dtype=float)
     kappa, roots, rho = _setup(H, X, rho_factor, N - 1)
-    target = np.broadcast_to(dt * w[1:N], X.shape[:-1] + (N - 1,))
-    h, ok = _solve_h(kappa, roots, rho, target)
-    om, _ = _weights(kappa, roots, rho, h)
-    om_half, _ = _weights(kappa, roots, rho, h, _NODES // 2)
-    scale = np.sum(np.abs(om[..., 1:N]), axis=-2) + np.abs(target) + 1e-300
-    residual = np.max(np.abs(np.sum(om[..., 1:N], axis=-2) - target) / scale, axis=-1)
-    quad = np.max(np.abs(om - om_half)[..., :N] / (np.abs(om[..., :N]) + np.abs(dt * w[:N]) + 1e-300), axis=(-2, -1))
-    ok &= (residual <= _RES_TOL) & (quad <= _QUAD_TOL) & np.all(h != 0, axis=-1)
-    theta = 2.0 * b * (dt * w[0] - np.sum(om[..., 0], axis=-1))
+    k = N - 1
+    target = np.ascontiguousarray(np.broadcast_to(dt * w[1:N], X.shape[:-1] + (k,)))
+    h = np.zeros(rho.shape)
+    nu_end = np.zeros(rho.shape[:-1] + (2 * k,), dtype=complex)
+    info = np.zeros(rho.shape[:-1] + (4,))
+    x, wq = _gauss_legendre(_NODES)
+    x2, w2 = _gauss_legendre(_NODES // 2)
+    from ._exact_kernels import solve_batch, solve_serial
+
+    solve = solve_batch if len(X) >= _PARALLEL_FROM else solve_serial
+    solve(np.ascontiguousarray(kappa), np.ascontiguousarray(rho), target, x, wq, x2, w2,
+                np.array(_CONTINUATION_STAGES, dtype=np.int64), _STEP_TOL, _FOLD, _NEWTON_ITERATIONS, h, nu_end, info)
+    residual, quad = info[:, 1], info[:, 2]
+    ok = (info[:, 0] == 1) & (residual <= _RES_TOL) & (quad <= _QUAD_TOL) & np.all(h != 0, axis=-1)
+    if ok.any():  # the continued ν at η equals the branch rule's (the maps' own ν): no branch point near a segment
+        eta = rho[ok] + 1j * h[ok]
+        kk = np.broadcast_to(kappa[ok][:, None, :], eta.shape + kappa.shape[-1:])
+        rule = _nu_from_kappa(kk, eta, 1, roots=np.broadcast_to(roots[ok][:, None, :], eta.shape + roots.shape[-1:]))
+        same = np.all(np.abs(rule - nu_end[ok, :k]) <= 1e-8 * np.abs(rule), axis=-1)
+        ok[np.flatnonzero(ok)[~same]] = False
+    theta = 2.0 * b * (dt * w[0] - info[:, 3])
     return rho + 1j * h, theta, residual, quad, ok
 
 
@@ -372,7 +331,10 @@ class ExactFlow(Map):
         for j in range(eta.shape[-1]):
             ee = np.ascontiguousarray(eta[:, j])
             nu0 = K.nu_default(X, bb, ee, 1)
-            X = np.ascontiguousarray(K.iterate_batch(X, bb, ee, nu0, False, k, k, want_drift=False)[1])
+            if X.shape[0] == 1:  # the single-orbit kernel (the same bits as a batch member, ~20x faster for one)
+                X = K.iterate_single(X[0], self.b, ee[0], nu0[0], False, k, k, want_drift=False)[1][None]
+            else:
+                X = np.ascontiguousarray(K.iterate_batch(X, bb, ee, nu0, False, k, k, want_drift=False)[1])
         return X
 
     def _run(self, X: np.ndarray, p: ExactParameters, steps: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
