@@ -127,3 +127,36 @@ def test_solve_and_events_refuse_bad_input():
         jg.find_events(H3, X3, lambda X: X, (0, 1), 0.1)
     with pytest.raises(jg.InvalidParameterError, match="direction"):
         jg.poincare_section(H3, X3, lambda X: X[0], (0, 1), 0.1, direction=0)
+
+
+def _cli(capsys, *args):
+    from jetgaudin.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main([str(a) for a in args])
+    out = capsys.readouterr()
+    return (0 if exc.value.code is None else exc.value.code), out.out, out.err
+
+
+def test_cli_flow_method_exact(capsys, tmp_path):
+    """`jetgaudin flow --hamiltonian physical --method exact --dt H`: flow.csv has the t column t = n dt and the rows
+    of ExactFlow (1e-12 vs DOP853 at t = 1: ten exact steps); a dt beyond the leaf's largest step is one line on
+    stderr naming --dt and the largest feasible dt, exit 2; --substeps makes it run."""
+    from jetgaudin import run as rl
+
+    code, _, err = _cli(capsys, "flow", "--hamiltonian", "physical", "--method", "exact", "--dt", "0.1", "--steps",
+                        10, "--no-plots", "--out", tmp_path / "a")
+    assert code == 0, err
+    t, X = rl.read_csv(tmp_path / "a" / "flow.csv")
+    assert np.allclose(t, 0.1 * np.arange(11), rtol=1e-15, atol=0)
+    assert np.max(np.abs(X[-1] - _ref(H3, X3, 1.0))) < 1e-12
+    code, _, err = _cli(capsys, "flow", "--hamiltonian", "physical", "--method", "exact", "--dt", "2", "--steps", 2,
+                        "--no-plots", "--out", tmp_path / "b")
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert "--dt" in err and "largest feasible time step" in err
+    code, _, err = _cli(capsys, "flow", "--hamiltonian", "physical", "--method", "exact", "--dt", "2", "--steps", 2,
+                        "--substeps", 10, "--no-plots", "--out", tmp_path / "c")
+    assert code == 0, err
+    code, _, err = _cli(capsys, "flow", "--hamiltonian", "physical", "--method", "midpoint", "--dt", "0.1",
+                        "--steps", 3, "--no-plots", "--out", tmp_path / "d")
+    assert code == 0, err
