@@ -189,9 +189,7 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
         raise InvalidParameterError(f"ExactFlow needs N >= 2 and states of 3N = {3 * H.N} components, got {3 * N}")
     if H.c is not None:
         raise InvalidParameterError("ExactFlow supports the reduction (lax2) only (c = None)")
-    dt = real_number(dt, "dt")
-    if dt == 0:
-        raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.1")
+    dt = nonzero_step(dt)
     Xf = X.reshape(-1, 3 * N)
     eta, theta, res, quad, ok = _solve_flat(H, dt, Xf, rho_factor, maps)
     if not ok.all():
@@ -221,13 +219,38 @@ def rotate_about_field(X, theta):
     return out.reshape(X.shape)
 
 
+def nonzero_step(dt) -> float:
+    """A finite, nonzero time step ``dt`` (:class:`InvalidParameterError` otherwise)."""
+    dt = real_number(dt, "dt")
+    if dt == 0:
+        raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.1")
+    return dt
+
+
+class FixedStep:
+    """What every fixed-step map of a Hamiltonian ``H`` (attributes ``H``, ``dt``) shares: the state length and the
+    ``time_step`` (the run layer writes ``t = n · time_step``)."""
+
+    H: IntegralHamiltonian
+    dt: float
+
+    @property
+    def n_state(self) -> int:
+        return 3 * self.H.N
+
+    @property
+    def time_step(self) -> float:
+        """The time one step advances (``dt``)."""
+        return self.dt
+
+
 _EXACT_PROPERTIES = MapProperties(
     preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True, interpolates_flow=False
 )
 
 
 @dataclass(frozen=True, eq=False)
-class ExactFlow(Map):
+class ExactFlow(FixedStep, Map):
     r"""The exact time-``dt`` flow of ``H`` as a :class:`~jetgaudin.maps.Map` (module doc): one step is
     ``substeps`` times ``R_θ ∘ B_{η_1} ∘ … ∘ B_{η_{N−1}}`` with the parameters of :func:`exact_parameters` for
     ``dt/substeps``.
@@ -272,10 +295,7 @@ class ExactFlow(Map):
         if self.H.c is not None:
             raise InvalidParameterError("ExactFlow supports the reduction (lax2) only (c = None)")
         _field_strength(self.H)
-        dt = real_number(self.dt, "dt")
-        if dt == 0:
-            raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.1")
-        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "dt", nonzero_step(self.dt))
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
         object.__setattr__(self, "backend", Backend.parse(self.backend))
         rf = real_number(self.rho_factor, "rho_factor")
@@ -284,17 +304,8 @@ class ExactFlow(Map):
         object.__setattr__(self, "rho_factor", rf)
 
     @property
-    def n_state(self) -> int:
-        return 3 * self.H.N
-
-    @property
     def b(self) -> float:
         return _field_strength(self.H)
-
-    @property
-    def time_step(self) -> float:
-        """The time one step advances (``dt``); the run layer writes ``t = n · time_step``."""
-        return self.dt
 
     def parameters(self, X) -> ExactParameters:
         """The parameters of one sub-step (``dt/substeps``) for the orbits ``X``."""

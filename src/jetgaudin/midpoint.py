@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from ._errors import IntegrationError, InvalidParameterError
-from ._validate import as_state, real_number
+from ._validate import as_state
+from .exact import FixedStep, nonzero_step
 from .hamiltonians import IntegralHamiltonian
 from .maps import Map, MapProperties, register_map
 from .spectral import integrals
@@ -33,7 +34,7 @@ _MIDPOINT_PROPERTIES = MapProperties(
 
 
 @dataclass(frozen=True, eq=False)
-class ImplicitMidpoint(Map):
+class ImplicitMidpoint(FixedStep, Map):
     """One step of the implicit midpoint rule for ``H`` (an :class:`~jetgaudin.IntegralHamiltonian`) with time step
     ``dt`` (either sign; ``−dt`` is :meth:`inverse`).  States ``(3N,)`` or ``(..., 3N)``; no carry."""
 
@@ -44,18 +45,7 @@ class ImplicitMidpoint(Map):
     def __post_init__(self) -> None:
         if not isinstance(self.H, IntegralHamiltonian) or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("H must be an IntegralHamiltonian with one set of weights (shape (2N,))")
-        dt = real_number(self.dt, "dt")
-        if dt == 0:
-            raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.01")
-        object.__setattr__(self, "dt", dt)
-
-    @property
-    def n_state(self) -> int:
-        return 3 * self.H.N
-
-    @property
-    def time_step(self) -> float:
-        return self.dt
+        object.__setattr__(self, "dt", nonzero_step(self.dt))
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return np.asarray(integrals(X, self.H.b, self.H.c), dtype=float)
