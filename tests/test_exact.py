@@ -19,7 +19,7 @@ import pytest
 import jetgaudin as jg
 from jetgaudin import run as rl
 from jetgaudin.ensemble import sample_on_leaf
-from jetgaudin.exact import _weights, rotate_about_field
+from jetgaudin.exact import MatchedBacklund, _weights, rotate_about_field
 
 from conftest import APPENDIX2_X0
 
@@ -135,19 +135,23 @@ def test_batch_members_equal_single_runs(backend):
     assert len(set(np.round(p.eta[:, 0].imag, 12))) == len(X0)  # the members do have their own parameters
 
 
-def test_declared_properties():
-    """Every claim of ExactFlow.properties: integrals preserved (drift over 2000 steps <= 1e-12 relative: the maps'
-    round-off), real (float output), symmetric (inverse, above), Poisson (the Jacobian J of one step satisfies
-    J Π(X) Jᵀ = Π(E(X)) to 1e-7: central differences with h = 1e-6, error ~h² + ε/h ~ 1e-10 × |X|²)."""
+@pytest.mark.parametrize("cls", [jg.ExactFlow, MatchedBacklund])
+def test_declared_properties(cls):
+    """Every claim of the properties of ExactFlow and of the plain map: integrals preserved (drift over 2000 steps
+    <= 1e-12 relative: the maps' round-off), real (float output), symmetric (−dt inverts to 1e-13), Poisson (the
+    Jacobian J of one step satisfies J Π(X) Jᵀ = Π(E(X)) to 1e-7: central differences with h = 1e-6, error
+    ~h² + ε/h ~ 1e-10 × |X|²)."""
     H = jg.physical_hamiltonian(3, 1.0)
-    E = jg.ExactFlow(H, 0.1)
+    E = cls(H, 0.1)
     P = E.properties
     assert P.preserves_integrals and P.real and P.poisson and P.symmetric and P.order is None
+    assert not P.interpolates_flow
+    assert np.max(np.abs(E.inverse()(E(X3)) - X3)) < 1e-13
     orbit = E.iterate(X3, 2000, save_every=100)
     I = jg.integrals(orbit, 1.0)
     assert np.max(np.abs(I - I[0]) / np.maximum(1, np.abs(I[0]))) < 1e-12
     assert orbit.dtype == np.float64
-    En = jg.ExactFlow(H, 0.1, backend="numpy")
+    En = cls(H, 0.1, backend="numpy")
     p = En.parameters(X3)  # fixed parameters: the map of one orbit's leaf (the weights are functions of integrals)
     flat = np.array([p.eta])
 
