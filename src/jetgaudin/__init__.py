@@ -7,6 +7,7 @@ from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
 from .events import find_events, poincare_section
 from .exact import ExactFlow, exact_parameters
+from .exact_chain import ChainExactFlow
 from .flows import FlowMap, Trajectory, integrate
 from .gaudin import (
     ChainHamiltonian,
@@ -64,6 +65,7 @@ __all__ = [
     "FlowMap",
     "ExactFlow",
     "exact_parameters",
+    "ChainExactFlow",
     "solve",
     "find_events",
     "poincare_section",
