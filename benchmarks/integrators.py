@@ -8,7 +8,7 @@ integrator is built once per tolerance), ExactFlow's parameter solve is inside. 
 docs/figures/integrators_work_precision.png, integrators_energy.png, integrators_step_error.png and prints the
 tables of docs/integrators.md.
 
-    python benchmarks/integrators.py            # full run (a few minutes on 2 vCPU)
+    python benchmarks/integrators.py            # full run (~10 minutes on 2 vCPU, most in the midpoint rule)
     python benchmarks/integrators.py --quick    # smaller, for a smoke test
 """
 

@@ -65,6 +65,12 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
 
 
 def _map(method: SolveMethod, H: IntegralHamiltonian, dt: float, substeps: int, backend: str):
+    if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
+        from .exact_chain import ChainExactFlow
+
+        if substeps != 1:
+            raise InvalidParameterError("a chain's exact flow takes no substeps: give a smaller dt")
+        return ChainExactFlow(H, dt)
     if method is SolveMethod.MIDPOINT:
         return ImplicitMidpoint(H, dt)
     cls = ExactFlow if method is SolveMethod.EXACT else MatchedBacklund
@@ -85,7 +91,9 @@ def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarra
 def solve(H: IntegralHamiltonian, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
           rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
           backend: str = "auto") -> Trajectory:
-    r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
+    r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
+    ``model.hamiltonian(weights)`` (methods ``"exact"``: :class:`jetgaudin.ChainExactFlow`, ``"dop853"``,
+    ``"heyoka"``) from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
     over ``t_span = (t0, t1)`` (either direction), sampled every ``save_every`` steps of ``dt`` (module doc).
 
     ``dt``: the time step (required by ``"exact"``, ``"bt"``, ``"midpoint"``; for ``"dop853"``/``"heyoka"`` the
@@ -101,10 +109,18 @@ def solve(H: IntegralHamiltonian, X0, t_span, *, dt=None, method: SolveMethod | 
     ([0.0, 0.25, 0.5, 0.75, 1.0], True)
     """
     method = SolveMethod.parse(method)
-    if not isinstance(H, IntegralHamiltonian):
-        raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b))")
-    X0, _ = as_state(X0)
-    H._check(X0)
+    chain = getattr(H, "model", None) is not None and callable(getattr(H, "record_integrals", None))
+    if not isinstance(H, IntegralHamiltonian) and not chain:
+        raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b)) or a chain "
+                                    "Hamiltonian model.hamiltonian(weights)")
+    if chain:
+        if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA):
+            raise InvalidParameterError(f"method={method.value!r} is for the tops; a chain Hamiltonian takes "
+                                        "'exact', 'dop853' or 'heyoka'")
+        X0 = np.asarray(H.model.check_state(X0), dtype=float)
+    else:
+        X0, _ = as_state(X0)
+        H._check(X0)
     every = check_count(save_every, "save_every", 1)
     if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
         t0, t1 = (real_number(v, "t_span") for v in t_span)
@@ -134,4 +150,5 @@ def solve(H: IntegralHamiltonian, X0, t_span, *, dt=None, method: SolveMethod | 
             s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
     if method is not SolveMethod.MIDPOINT:
         info["substeps"] = s
-    return Trajectory(t0 + idx * h, Xs, np.asarray(integrals(Xs, H.b, H.c), dtype=float), method.value, info)
+    recorded = H.record_integrals(Xs) if chain else integrals(Xs, H.b, H.c)
+    return Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
