@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
@@ -64,7 +65,7 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
     return t0, T / n, n
 
 
-def _map(method: SolveMethod, H: IntegralHamiltonian, dt: float, substeps: int, backend: str):
+def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
     if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
         from .exact_chain import ChainExactFlow
 
@@ -88,7 +89,7 @@ def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarra
     return np.array(idx), np.concatenate(rows, axis=0)
 
 
-def solve(H: IntegralHamiltonian, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
+def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
           rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
           backend: str = "auto") -> Trajectory:
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
