@@ -51,7 +51,7 @@ CheckpointOption = Annotated[
     float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
 ]
 SaveEveryOption = Annotated[
-    str | None, typer.Option("--save-every", help="save every k-th step (and the last) [default: 1]")
+    str | None, typer.Option("--save-every", metavar="INTEGER", help="save every k-th step (and the last) [default: 1]")
 ]
 InitFromOption = Annotated[
     str | None,
