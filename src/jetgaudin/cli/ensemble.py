@@ -322,4 +322,26 @@ def _report(res, show):
         f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}" if B else
         f"{B} orbits: nothing to iterate"
     )
+    if B:
+        _report_quantiles(con, res.drift, names, res.out_dir)
     con.print(f"status: {res.status}; {res.rows} saved rows of {B} states in {res.out_dir / 'ensemble.h5'}")
+
+
+def _report_quantiles(con, drift, names, out_dir) -> None:
+    """The drift's quantiles over the orbits, per integral (:func:`jetgaudin.ensemble.drift_quantiles`), and the
+    histogram figure ``drift_hist.png`` beside the run's files."""
+    from rich.table import Table
+
+    from jetgaudin import ensemble as ens
+    from jetgaudin.plotting._ensemble import save_drift_histogram
+
+    q = ens.DRIFT_QUANTILES
+    table = ens.drift_quantiles(drift, q)
+    t = Table(title=f"relative drift over the {drift.shape[0]} orbits: quantiles per integral", title_justify="left")
+    t.add_column("quantile", justify="right")
+    for name in names:
+        t.add_column(name, justify="right")
+    for qq, row in zip(q, table, strict=True):
+        t.add_row("max" if qq == 1 else f"{100 * qq:g} %", *[f"{d:.2e}" for d in row])
+    con.print(t)
+    con.print(f"drift histogram: {save_drift_histogram(out_dir, drift, names)}")
