@@ -60,7 +60,8 @@ def figure_drift_histogram(drift, names=None, *, title: str = "", q=DRIFT_QUANTI
                            label=f"{lab}: {val:.1e}")
         zeros = int(np.sum(col == 0))
         ax.set_title(names[m] + (f" ({zeros} orbits with drift 0)" if zeros else ""), fontsize=9)
-        ax.legend(fontsize=6.5, loc="upper left", frameon=False)
+        if ax.lines:
+            ax.legend(fontsize=6.5, loc="upper left", frameon=False)
         if m % cols == 0:
             ax.set_ylabel("orbits")
         if m // cols == rows - 1 or m + cols >= K:
