@@ -78,6 +78,9 @@ html_theme_options = {
     "show_toc_level": 2,
     "secondary_sidebar_items": ["page-toc"],
 }
+# no left sidebar: the sections are in the header (the "Section Navigation" column was empty and narrowed the
+# pages, cutting code cells)
+html_sidebars = {"**": []}
 html_static_path: list[str] = []
 
 
