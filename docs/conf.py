@@ -97,6 +97,7 @@ MODULES = {
     "jetgaudin.ensemble": "Ensembles: batches of orbits, samplers",
     "jetgaudin.ensemble_recording": "Ensembles recorded to disk",
     "jetgaudin.recording": "Single orbits recorded to disk",
+    "jetgaudin.plotting": "Figures and animations",
 }
 
 

@@ -67,7 +67,8 @@ def test_api_lists_methods_and_the_public_modules(site):
     for method in ("TwoPointBacklund.iterate", "TwoPointBacklund.advance", "TwoPointBacklund.prepare_kernels",
                    "ChainTwoPointBacklund.iterate", "GaudinModel.integrals"):
         assert f'id="jetgaudin.{method}"' in api, method
-    for module in ("jetgaudin.run", "jetgaudin.ensemble", "jetgaudin.ensemble_recording", "jetgaudin.recording"):
+    for module in ("jetgaudin.run", "jetgaudin.ensemble", "jetgaudin.ensemble_recording", "jetgaudin.recording",
+                   "jetgaudin.plotting"):
         page = (site / "site" / "_generated" / f"{module}.html").read_text(encoding="utf-8")
         assert f'id="module-{module}"' in page, module
     ens = (site / "site" / "_generated" / "jetgaudin.ensemble.html").read_text(encoding="utf-8")
