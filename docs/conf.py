@@ -133,7 +133,12 @@ def _api_lines(title: str, module: str, names, seen: dict) -> list[str]:
         if inspect.isclass(obj) and issubclass(obj, BaseException):
             lines += [f".. autoexception:: {name}", "   :no-members:", ""]
         elif inspect.isclass(obj):
-            lines += [f".. autoclass:: {name}", "   :members:", "   :undoc-members:", ""]
+            lines += [f".. autoclass:: {name}", "   :members:", "   :undoc-members:"]
+            # the methods a class inherits from a jetgaudin base (a chain map's iterate, from Map) are its methods
+            # too; not those of builtins (an Enum's str methods)
+            if any(c.__module__.startswith("jetgaudin") for c in obj.__mro__[1:]):
+                lines += ["   :inherited-members:"]
+            lines += [""]
         elif callable(obj):
             lines += [f".. autofunction:: {name}", ""]
         else:
