@@ -32,10 +32,14 @@ class Method(StrEnum):
 
 @app.command()
 def flow(
-    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = str(cm.APPENDIX2_B),
-    eta: Annotated[str, typer.Option("--eta", help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
-    steps: Annotated[str, typer.Option("--steps", help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
-    init: Annotated[str, typer.Option("--init", help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
+    b: Annotated[str, typer.Option("--b", metavar="FLOAT",
+            help="field strength b (field b e_3), real, nonzero")] = str(cm.APPENDIX2_B),
+    eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX",
+            help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
+    steps: Annotated[str, typer.Option("--steps", metavar="INTEGER",
+            help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
+    init: Annotated[str, typer.Option("--init", metavar="X1,...,X3N",
+            help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
     hamiltonian: Annotated[
         Hamiltonian,
         typer.Option(
