@@ -310,3 +310,13 @@ def test_numerical_branch_rule_of_families_without_uniformizer(rng):
     assert np.abs(h.nu(X, xi) - m.nu(X, xi)).max() <= 1e-12 * np.abs(m.nu(X, xi)).max()
     assert h.branch_points(X).shape == (3, 0)
     assert np.abs(h.two_point_backlund(xi)(X) - m.two_point_backlund(xi)(X)).max() <= 1e-12 * (1 + np.abs(X).max())
+
+
+def test_exact_chain_flow_refuses_the_trigonometric_family():
+    """ChainExactFlow (issue 25) matches rational weights (lambda - lambda_i)^-m: a trigonometric Hamiltonian is
+    refused with a message, not integrated wrongly."""
+    from jetgaudin.exact_chain import ChainExactFlow
+
+    m = GaudinModel(0.8, [(0.0, 1), (1.0, 1)], family="trigonometric", gamma=0.7)
+    with pytest.raises(jg.InvalidParameterError, match="rational family"):
+        ChainExactFlow(m.hamiltonian(np.ones(m.n_integrals)), 0.1)
