@@ -26,7 +26,8 @@ from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
 from .spectral import integrals as _jg_integrals
 
 __all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
-           "sample_on_energy_shell", "DEFAULT_CASIMIRS", "DRIFT_QUANTILES", "drift_quantiles"]
+           "sample_on_energy_shell", "sample_chain_on_leaf", "default_chain_casimirs", "DEFAULT_CASIMIRS",
+           "DRIFT_QUANTILES", "drift_quantiles"]
 
 #: the leaf ``ensemble`` samples when given neither ``--input`` nor ``--sample`` (N = 3): the Casimirs of the
 #: Appendix 2 initial state rounded, ``C = (0.4, -0.3, 1.5)`` (any leaf with ``C_N > 0`` works)
@@ -401,3 +402,45 @@ def sample_on_energy_shell(N: int, b: float, energy: float, size: int, *, seed=N
         )
     y[:, 0] = np.sqrt(r2)[:, None] * _unit(rng, (size,))
     return y.reshape(size, 3 * N)
+
+
+def default_chain_casimirs(orders) -> list[float]:
+    r"""The leaf a chain ensemble samples by default: per site of order ``N``, the one-body default
+    :data:`DEFAULT_CASIMIRS` ``(C_{N-2}, C_{N-1}, C_N) = (0.4, −0.3, 1.5)`` right-aligned (its last ``N`` entries for
+    ``N < 3``, zeros before it for ``N > 3``); so a site of order 3 gets the one-body default and a spin
+    (``N = 1``) ``|s|² = 1.5``.  Flat, site by site, in the order of the state (``M = Σ N_i`` numbers)."""
+    out: list[float] = []
+    for N in orders:
+        N = check_N(N)
+        out += [0.0] * max(0, N - 3) + list(DEFAULT_CASIMIRS[max(0, 3 - N):])
+    return out
+
+
+def sample_chain_on_leaf(model, casimirs=None, size: int = 1, *, seed=None, scale: float = 1.0) -> np.ndarray:
+    r"""``size`` random states (``(size, 3M)``) of the chain ``model`` (a :class:`jetgaudin.GaudinModel` of any
+    family) on the symplectic leaf given site by site.
+
+    The Poisson structure of a chain is per site that of ``g^(N_i)`` (the same for every family), so its leaves are
+    products of the sites' leaves: site ``i`` has the Casimirs ``C^{(i)}_1..C^{(i)}_{N_i}`` of Prop. 2, which are
+    the integrals ``h_{i,N_i+k} = C^{(i)}_k`` the model marks in :meth:`~jetgaudin.GaudinModel.casimir_mask`.
+    Each site is drawn by :func:`sample_on_leaf` (its rule and ``scale``), the sites one after the other from one
+    generator (``seed``), so one site at 0 of order ``N`` gives exactly ``sample_on_leaf(N, casimirs, size,
+    seed=seed)``.  ``casimirs``: ``M`` numbers, site by site ``C_1..C_{N_i}`` (each site's ``C_{N_i} > 0``);
+    ``None``: :func:`default_chain_casimirs`.
+    """
+    orders = tuple(model.orders)
+    c = np.asarray(default_chain_casimirs(orders) if casimirs is None else casimirs, dtype=float)
+    M = sum(orders)
+    if c.shape != (M,) or not np.all(np.isfinite(c)):
+        raise InvalidParameterError(f"casimirs must be M = {M} finite numbers, site by site C_1..C_(N_i) (orders "
+                                    f"{list(orders)}), got {casimirs!r}")
+    size = _check_int(size, "size", 1)
+    rng = np.random.default_rng(seed)
+    parts, o = [], 0
+    for i, N in enumerate(orders):
+        try:
+            parts.append(sample_on_leaf(N, c[o:o + N], size, seed=rng, scale=scale))
+        except InvalidParameterError as exc:
+            raise InvalidParameterError(f"site {i + 1} (order {N}): {exc}") from None
+        o += N
+    return np.concatenate(parts, axis=-1)

@@ -157,8 +157,8 @@ def ensemble_command(
         Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
     ] = None,
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
-    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; needs --input or "
-                                              "--init-from")] = None,
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; states from --input, "
+                                              "--init-from or the chain's leaf sampler (--casimirs)")] = None,
     progress: ProgressOption = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
@@ -197,8 +197,9 @@ def ensemble_command(
                 None, out_dir, resume=True, expect=expect, progress=bar, notify=compile_message, **common))
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
+            draw = dict(orbits=orbits, seed=seed, casimirs=casimirs, scale=scale)
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma))
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma), draw)
         else:
             _chains.family_kw(sites, family, gamma)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
@@ -245,16 +246,19 @@ def ensemble_command(
 
 
 def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir, overwrite,
-                    progress, fam=None):
-    """``ensemble --sites``: the chain's two-point map on the states of ``--input`` or ``--init-from``."""
-    if sample is not None:
-        raise CliInputError("--sites: the samplers (--sample) draw states of one site; give the chain's states with "
-                            "--input FILE or --init-from DIR")
+                    progress, fam=None, draw=None):
+    """``ensemble --sites``: the chain's two-point map on the states of ``--input``, ``--init-from`` or the chain's
+    leaf sampler (:func:`jetgaudin.ensemble.sample_chain_on_leaf`: ``--casimirs`` M numbers site by site, default
+    :func:`jetgaudin.ensemble.default_chain_casimirs`)."""
+    from jetgaudin import ensemble as ens
+
+    if sample is Sampler.energy:
+        raise CliInputError("--sites: the energy-shell sampler (--sample energy) draws states of one top; a chain "
+                            "samples its leaf: --sample leaf [--casimirs C...] (M numbers, site by site)")
     if scheduler is not None:
         raise CliInputError("--sites: chain ensembles run locally; drop --scheduler")
-    if (input is None) == (init_from_dir is None):
-        raise CliInputError("--sites: give the chain's initial states with exactly one of --input FILE and "
-                            "--init-from DIR")
+    if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
+        raise CliInputError("--sites: give at most one of --input FILE, --init-from DIR and --sample leaf")
     bb = _chains.parse_chain_b(b)
     ee = parse_eta(eta, pole_at_zero=False)
     model = _chains.chain_model(sites, bb, **(fam or {}))
@@ -263,11 +267,24 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         if b_file is not None or eta_file is not None:
             raise CliInputError("--sites: per-orbit b and eta in --input are not supported for chains; give --b and "
                                 "--eta")
-    else:
+    elif init_from_dir is not None:
         X0 = _init_from(init_from_dir)
-    X0 = _chains.check_chain_state(model, X0, "--input" if input is not None else "--init-from")
+    else:  # the chain's leaf sampler (the default, as --sample leaf for one top)
+        d = draw or {}
+        n_orbits = parse_count(d.get("orbits", "100"), "--orbits", 1)
+        s_seed = parse_count(d.get("seed", "0"), "--seed", 0)
+        c = None if d.get("casimirs") is None else _floats(d["casimirs"], "--casimirs")
+        if c is not None and len(c) != model.M:
+            raise CliInputError(f"--casimirs: the sites need M = {model.M} numbers, site by site C_1..C_N_i "
+                                f"(orders {list(model.orders)}), got {len(c)}")
+        with blame("--orbits"):
+            _check_memory(n_orbits, model.n_state)
+        with blame("--casimirs"):
+            X0 = ens.sample_chain_on_leaf(model, c, n_orbits, seed=s_seed, scale=d.get("scale", 1.0))
+    where = "--input" if input is not None else "--init-from" if init_from_dir is not None else "--casimirs"
+    X0 = _chains.check_chain_state(model, X0, where)
     m = _chains.chain_map(model, ee, expect.get("branch", "default"), None)
-    with blame("--input" if input is not None else "--init-from"):
+    with blame(where):
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
