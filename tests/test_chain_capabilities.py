@@ -157,7 +157,8 @@ def test_cli_flow_sites_physical(fam, kw, tmp_path):
     m = _model(fam, kw)
     X0 = np.round(np.random.default_rng(8).normal(size=m.n_state), 3)
     extra = ["--family", fam] + (["--gamma", str(kw["gamma"])] if kw else [])
-    code = main_quiet("flow", "--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--init", ",".join(repr(float(v)) for v in X0),
+    init = ",".join(repr(float(v)) for v in X0)
+    code = main_quiet("flow", "--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--init", init,
                       "--hamiltonian", "physical", "--dt", "0.05", "--steps", "10", "--out", tmp_path / "f", *extra)
     assert code == 0
     run = json.loads((tmp_path / "f" / "run.json").read_text())

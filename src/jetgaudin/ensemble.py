@@ -14,7 +14,7 @@ Prop. 2 fixed) and :func:`sample_on_energy_shell` (states with ``H = H_2/2`` of 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -25,7 +25,8 @@ from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
 from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
 from .spectral import integrals as _jg_integrals
 
-__all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
+__all__ = ["EnsembleResult", "BatchBacklund", "DaskBatch", "iterate_ensemble", "dask_client", "dask_chunks",
+           "sample_on_leaf",
            "sample_on_energy_shell", "sample_chain_on_leaf", "default_chain_casimirs", "DEFAULT_CASIMIRS",
            "DRIFT_QUANTILES", "drift_quantiles"]
 
@@ -302,27 +303,112 @@ def dask_client(scheduler, timeout: float = 30.0):
         raise InvalidParameterError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}") from None
 
 
-def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+def dask_chunks(scheduler, chunk_size, B: int, fn, per_orbit: tuple, shared: tuple, timeout: float = 30.0) -> list:
+    """The one Dask path of the ensembles: ``fn(*chunk, *shared)`` for the chunks ``[i, j)`` of ``chunk_size``
+    orbits (default: ``B`` over twice the number of worker threads) of the per-orbit arrays ``per_orbit`` (``None``
+    entries passed as ``None``), on the cluster ``scheduler`` (an address or a ``distributed.Client``); the results
+    in the order of the chunks.  Used by :func:`iterate_ensemble` (the top's kernels) and :class:`DaskBatch` (any
+    map: the chains of every family)."""
     client = dask_client(scheduler, timeout)
     own = client is not scheduler
     try:
-        B = X.shape[0]
         if chunk_size is None:
             threads = sum(client.nthreads().values()) or 1
             chunk_size = max(1, -(-B // (2 * threads)))
         chunk_size = _check_int(chunk_size, "chunk_size", 1)
-        bounds = [(i, min(i + chunk_size, B)) for i in range(0, B, chunk_size)]
-        futures = [
-            client.submit(
-                _run_chunk, X[i:j], b[i:j], eta[i:j], nu0[i:j], cont, steps, save_every, specialise, pure=False
-            )
-            for i, j in bounds
-        ]
-        parts = client.gather(futures)
+        futures = [client.submit(fn, *[None if a is None else a[i:min(i + chunk_size, B)] for a in per_orbit],
+                                 *shared, pure=False) for i in range(0, B, chunk_size)]
+        return client.gather(futures)
     finally:
         if own:
             client.close()
+
+
+def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+    parts = dask_chunks(scheduler, chunk_size, X.shape[0], _run_chunk, (X, b, eta, nu0),
+                        (cont, steps, save_every, specialise), timeout)
     return tuple(np.concatenate([p[k] for p in parts], axis=0) for k in range(6))
+
+
+def _advance_chunk(X, carry, m: Map, steps: int, save_every: int) -> Advance:
+    return m.advance(X, carry, steps, save_every)
+
+
+@dataclass(frozen=True, eq=False)
+class DaskBatch(Map):
+    r"""Any map's batch ``(B, n)`` split by orbits over a Dask cluster: each :meth:`advance` runs
+    ``inner.advance`` on chunks of ``chunk_size`` orbits on the workers (:func:`dask_chunks`, the path of
+    :func:`iterate_ensemble`) and joins them.  The maps of the chains advance every orbit independently, so the
+    result is the local run's bit for bit; the ``auto`` route is resolved on the whole batch first (every chunk on
+    the same route).  Everything else (``integrals``, ``start``, ``step``, ``describe``: the inner map's, so a run
+    records and resumes the inner map) is the inner map's.  Needs ``pip install 'jetgaudin[distributed]'``."""
+
+    inner: Map
+    scheduler: Any = field(default=None, repr=False)
+    chunk_size: int | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.inner, Map):
+            raise InvalidParameterError(f"DaskBatch needs a map, got {type(self.inner).__name__}")
+        if self.chunk_size is not None:
+            _check_int(self.chunk_size, "chunk_size", 1)
+
+    @property
+    def properties(self) -> MapProperties:  # type: ignore[override]
+        return self.inner.properties
+
+    @property
+    def n_state(self) -> int | None:
+        return self.inner.n_state
+
+    @property
+    def backend(self) -> Backend:
+        return self.inner.backend
+
+    @property
+    def chunk_invariant(self) -> bool:
+        return bool(getattr(self.inner, "chunk_invariant", True))
+
+    def __getattr__(self, name: str) -> Any:
+        # the inner map's parameters and optional surface (b, eta, branch, model, integral_names, state_labels,
+        # resolved_backend, prepare_kernels); dunder and private names are not forwarded (pickling, copying)
+        if name.startswith("_") or name == "inner":
+            raise AttributeError(name)
+        return getattr(self.inner, name)
+
+    def with_backend(self, backend=None, kernel=None) -> DaskBatch:
+        """The same split with the inner map on another route (the run layer resolves ``auto`` through this)."""
+        return replace(self, inner=self.inner.with_backend(backend, kernel))  # type: ignore[attr-defined]
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        return self.inner.integrals(X)
+
+    def start(self, X: np.ndarray) -> np.ndarray:
+        return self.inner.start(X)
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        return self.inner.step(X, carry)
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        X = np.asarray(X)
+        inner = self.inner
+        if X.ndim != 2 or len(X) == 0:
+            return inner.advance(X, carry, steps, save_every)
+        resolve = getattr(inner, "resolved_backend", None)
+        if inner.backend is Backend.AUTO and resolve is not None:
+            inner = inner.with_backend(resolve(steps, X))  # type: ignore[attr-defined]
+        c = None if carry is None else np.asarray(carry)
+        parts = dask_chunks(self.scheduler, self.chunk_size, len(X), _advance_chunk, (X, c), (inner, steps, save_every))
+        carries = [p.carry for p in parts]
+        return Advance(rows=np.concatenate([p.rows for p in parts], axis=1), X=np.concatenate([p.X for p in parts]),
+                       carry=None if any(x is None for x in carries) else np.concatenate(carries),
+                       imag_max=np.concatenate([p.imag_max for p in parts]))
+
+    def inverse(self) -> DaskBatch:
+        return replace(self, inner=self.inner.inverse())
+
+    def describe(self) -> dict:
+        return self.inner.describe()
 
 
 # ---------------------------------------------------------------------------------------------

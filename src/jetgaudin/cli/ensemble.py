@@ -13,6 +13,7 @@ No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from enum import StrEnum
 from pathlib import Path
@@ -255,8 +256,6 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
     if sample is Sampler.energy:
         raise CliInputError("--sites: the energy-shell sampler (--sample energy) draws states of one top; a chain "
                             "samples its leaf: --sample leaf [--casimirs C...] (M numbers, site by site)")
-    if scheduler is not None:
-        raise CliInputError("--sites: chain ensembles run locally; drop --scheduler")
     if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
         raise CliInputError("--sites: give at most one of --input FILE, --init-from DIR and --sample leaf")
     bb = _chains.parse_chain_b(b)
@@ -288,8 +287,15 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
-    return run_with_progress("ensemble", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
-                                                                              progress=bar, notify=compile_message))
+    client = None if scheduler is None else ens.dask_client(scheduler)  # one client for the run (the one-body way)
+    try:
+        if client is not None:  # the orbits split over the cluster (jetgaudin.ensemble.DaskBatch; same bits)
+            spec = dataclasses.replace(spec, map=ens.DaskBatch(m, client, common["chunk_size"]))
+        return run_with_progress("ensemble", progress, lambda bar: runlayer.start(
+            spec, out_dir, overwrite=overwrite, progress=bar, notify=compile_message))
+    finally:
+        if client is not None and client is not scheduler:
+            client.close()
 
 
 def _check_memory(orbits: int, n_state: int) -> None:

@@ -220,7 +220,12 @@ def _resolved(spec: RunSpec) -> RunSpec:
     """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
     resolve = getattr(spec.map, "resolved_backend", None)
     if spec.map.backend is Backend.AUTO and resolve is not None:
-        m = dataclasses.replace(spec.map, backend=resolve(spec.steps, spec.X0))  # type: ignore[type-var]
+        backend = resolve(spec.steps, spec.X0)
+        # a map's own with_backend where it has one (the chain maps: their kernel= alias would otherwise keep auto;
+        # DaskBatch: its inner map)
+        with_backend = getattr(spec.map, "with_backend", None)
+        m = with_backend(backend) if with_backend is not None else \
+            dataclasses.replace(spec.map, backend=backend)  # type: ignore[type-var]
         return dataclasses.replace(spec, map=m)
     return spec
 
@@ -414,6 +419,10 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         if inputs_digest(X0, b, eta) != rec["inputs_sha256"]:
             raise ValueError("the stored X0, b, eta do not match their digest in run.json")
         m = map_from_description(run["map"]) if "map" in run else BatchBacklund(b, eta, rec["branch"], **map_options)
+        if "map" in run and map_options.get("scheduler") is not None:  # a chain ensemble resumed on a cluster
+            from ..ensemble import DaskBatch
+
+            m = DaskBatch(m, **map_options)
         spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
         d = read_checkpoint_npz(out_dir, ck, X0.shape)
         n0, X = int(d["step"]), d["X"]
