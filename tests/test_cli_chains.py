@@ -138,8 +138,10 @@ def test_ensemble_sites_members_equal_single_orbits(tmp_path, capsys):
     m = jg.ChainTwoPointBacklund(MODEL, ETA, backend=d.record["map"]["backend"])
     for k in range(3):
         assert np.array_equal(d.X[:, k], m.iterate(X[k], 20))
-    code, _, err = run_cli(capsys, "ensemble", "--sites", SITES, "--sample", "leaf", "--out", tmp_path / "s")
-    assert one_line_error(code, err, "--sites", "--input")
+    # the chain's sampler is its leaf (tests/test_chain_capabilities.py); the top's energy shell is refused
+    code, _, err = run_cli(capsys, "ensemble", "--sites", SITES, "--sample", "energy", "--energy", "1", "--out",
+                           tmp_path / "s")
+    assert one_line_error(code, err, "--sites", "leaf")
 
 
 def test_info_sites_marks_casimirs_and_hamiltonians(capsys):

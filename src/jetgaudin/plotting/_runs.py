@@ -42,6 +42,17 @@ class RunRows:
     orbit: int | None
     status: str
     inputs: dict
+    #: the map description of a chain run (``run.json`` ``"map"``, kind ``chain_*``: ``b``, ``sites``, ``family``,
+    #: ``gamma``), else ``None``; :meth:`model` builds its :class:`jetgaudin.GaudinModel`
+    chain: dict | None = None
+
+    def model(self):
+        """The :class:`jetgaudin.GaudinModel` of a chain run (``None`` for a run of the top)."""
+        if self.chain is None:
+            return None
+        from ..gaudin import GaudinModel
+
+        return GaudinModel.from_description(self.chain)
 
     def read(self, start: int, stop: int, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """``(index, X)`` of the rows ``start:stop:step`` (clipped to the safe rows); ``X`` of shape ``(k, 3N)``."""
@@ -116,9 +127,10 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     program, inp = run.get("program", ""), run.get("inputs", {})
     status = str(run.get("status", "unknown"))
     safe = int(run.get("checkpoint", {}).get("rows", 0))
-    common = dict(run_dir=run_dir, status=status, inputs=inp)
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
     described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
+    chain = described if str(described.get("kind", "")).startswith("chain_") else None
+    common = dict(run_dir=run_dir, status=status, inputs=inp, chain=chain)
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
