@@ -173,3 +173,60 @@ def test_cli_flow_sites_physical(fam, kw, tmp_path):
     # the first step agrees with Ẋ = Π ∇H (finite difference in t: O(dt) = 5e-2 relative)
     v = H.vector_field(X0)
     assert np.linalg.norm((X[1] - X0) / 0.05 - v) < 0.1 * np.linalg.norm(v)
+
+
+# --------------------------------------------------------------------------------------------- plot, animate
+@pytest.fixture(scope="module", params=FAMILIES, ids=[f for f, _ in FAMILIES])
+def chain_runs(request, tmp_path_factory):
+    fam, kw = request.param
+    d = tmp_path_factory.mktemp(fam)
+    extra = ["--family", fam] + (["--gamma", str(kw["gamma"])] if kw else [])
+    sites = ["--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--eta", "0.5+0.05i"]
+    assert main_quiet("ensemble", *sites, "--orbits", "3", "--steps", "30", "--out", d / "e", *extra) == 0
+    m = _model(fam, kw)
+    X0 = np.round(np.random.default_rng(8).normal(size=m.n_state), 3)
+    assert main_quiet("orbit", *sites, "--init", ",".join(repr(float(v)) for v in X0), "--steps", "30", "--no-plots",
+                      "--out", d / "o", *extra) == 0
+    return d, m
+
+
+def _no_top_figures(monkeypatch):
+    """The top's figures of a chain state (jg.integrals of 3M numbers, the material point) must not be drawn."""
+    from jetgaudin.plotting import _animate, _files
+
+    def refuse(*a, **k):
+        raise AssertionError("a top's figure drawn for a chain run")
+
+    monkeypatch.setattr(_files.jg, "integrals", refuse)
+    monkeypatch.setattr(_files, "figure_points_3d", refuse)
+    monkeypatch.setattr(_animate, "point_sets", refuse)
+
+
+def test_plot_of_chain_runs_draws_the_chain_figures(chain_runs, monkeypatch, tmp_path):
+    from jetgaudin import plotting
+
+    d, m = chain_runs
+    _no_top_figures(monkeypatch)
+    for run, kw in ((d / "o", {}), (d / "e", {"orbit": 2}), (d / "e", {})):
+        paths = plotting.save_run_figures(run, tmp_path / run.name, fmt="svg", **kw)
+        assert sorted(p.name for p in paths) == ["chain_integrals.svg", "chain_y0.svg"]
+    assert "orbit 0 of 3" in (tmp_path / "e" / "chain_y0.svg").read_text()  # the ensemble's orbit is named
+    # the figures' data: each site's y_0 and the model's integrals (the model rebuilt from run.json)
+    r = plotting.open_run(d / "e", orbit=2)
+    assert r.model() == m
+    assert main_quiet("plot", d / "o", "--out", tmp_path / "cli") == 0
+    assert (tmp_path / "cli" / "chain_y0.png").exists() and not (tmp_path / "cli" / "figure1.png").exists()
+
+
+def test_animate_of_chain_runs_moves_each_sites_y0(chain_runs, monkeypatch, tmp_path):
+    from PIL import Image
+
+    from jetgaudin import plotting
+
+    d, m = chain_runs
+    _no_top_figures(monkeypatch)
+    path = plotting.animate_run(d / "e", tmp_path / "a.gif", orbit=1, frames=6, dpi=30)
+    with Image.open(path) as im:
+        assert im.n_frames == 6
+    assert main_quiet("animate", d / "o", "--out", tmp_path / "b.gif", "--frames", "4", "--dpi", "30") == 0
+    assert (tmp_path / "b.gif").stat().st_size > 0

@@ -174,9 +174,10 @@ def test_flow_sites_integrates_the_chains_G_eta(tmp_path, capsys):
     assert run["map"]["kind"] == "chain_flow" and run["integral_names"] == MODEL.integral_labels()
     assert run["compare"]["max_distance"] <= 1e-8 * (1 + np.abs(ref).max())
     assert {"chain_y0.png", "chain_integrals.png"} <= set(run["files"])
+    # the chain's physical Hamiltonian (tests/test_chain_capabilities.py); --compare stays G_η's
     code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--init", INIT, "--hamiltonian", "physical",
-                           "--out", tmp_path / "g")
-    assert one_line_error(code, err, "--sites", "interpolating")
+                           "--compare", "--out", tmp_path / "g")
+    assert one_line_error(code, err, "--compare", "interpolating")
 
 
 def test_the_commands_of_docs_chains_run(tmp_path, capsys, monkeypatch):

@@ -111,8 +111,9 @@ def sites_of(record: dict) -> str | None:
 
 
 def multi_site(model) -> bool:
-    """Whether the chain figures replace the paper's (more than one site, or one site not of order 3)."""
-    return len(model.sites) > 1 or model.sites[0][1] != 3
+    """Whether the chain figures replace the paper's (more than one site, one site not of order 3, or a family other
+    than the rational one; the same rule as :func:`jetgaudin.plotting.open_run`)."""
+    return len(model.sites) > 1 or model.sites[0][1] != 3 or model.family.name != "rational"
 
 
 def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | None = None) -> None:
