@@ -130,6 +130,8 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
     described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
     chain = described if str(described.get("kind", "")).startswith("chain_") else None
+    if chain is not None and len(chain["sites"]) == 1 and chain["sites"][0][1] == 3 and "family" not in chain:
+        chain = None  # one rational site of order 3 is the paper's top: its figures (as `orbit --sites` draws it)
     common = dict(run_dir=run_dir, status=status, inputs=inp, chain=chain)
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
