@@ -31,6 +31,7 @@ from . import _compiled
 from ._dressing import (
     _safe_ratio,
     dress_one_point,
+    dress_real_two_point,
     dress_two_point,
     eigenvector,
     horner,
@@ -244,7 +245,7 @@ class TwoPointBacklund(Map):
         L1 = horner(ell, self.eta)
         k1, k2 = eigenvector(L1[..., 0, 0], L1[..., 0, 1], L1[..., 1, 0], nu1)
         M0 = real_two_point_M0(self.eta, k1, k2)
-        new_ell, res = dress_two_point(ell, self.eta, np.conj(self.eta), M0)
+        new_ell, res = dress_real_two_point(ell, self.eta, M0)
         _check_residual(res, ell, "two-point Bäcklund step")
         Xc = state_from_ell(new_ell)
         Xr = Xc.real
