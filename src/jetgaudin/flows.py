@@ -9,7 +9,7 @@ Taylor integrator (``method="heyoka"``, extra ``jetgaudin[heyoka]``).  Returns a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import KW_ONLY, InitVar, dataclass, field
 from enum import StrEnum
 from typing import Any
 
@@ -19,7 +19,7 @@ from ._errors import IntegrationError, InvalidParameterError
 from ._validate import as_state, parse_choice, real_number
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
-from .maps import Advance, Map, MapProperties, check_count, register_map
+from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .spectral import integrals
 
 __all__ = ["Trajectory", "integrate", "Method", "FlowMap"]
@@ -256,7 +256,9 @@ class FlowMap(Map):
     ``method``, ``rtol``, ``atol`` as in :func:`integrate`.  :meth:`advance` integrates ``steps * dt`` in one
     call sampled every ``save_every * dt`` (an adaptive integrator restarted at other times gives other
     round-off: a flow is reproducible for a given chunking, not bit for bit across chunkings; the run layer
-    therefore cuts flows into fixed chunks, ``chunk_invariant = False``).  No carry (zeros).
+    therefore cuts flows into fixed chunks, ``chunk_invariant = False``).  No carry (zeros).  ``backend`` (alias
+    ``kernel``; the rule of :mod:`jetgaudin.maps`): the NumPy/SciPy route only (``"auto"``, the default, is
+    ``"numpy"``; ``"compiled"`` is refused with :class:`~jetgaudin.InvalidParameterError`).
     """
 
     H: IntegralHamiltonian
@@ -264,10 +266,13 @@ class FlowMap(Map):
     method: Method = Method.DOP853
     rtol: float = 1e-12
     atol: float = 1e-12
+    backend: Backend = field(default=None, compare=False)  # type: ignore[assignment]  # None: AUTO
     properties: MapProperties = field(default=_FLOW_PROPERTIES, init=False, repr=False, compare=False)
     chunk_invariant = False
+    _: KW_ONLY
+    kernel: InitVar[Backend | str | None] = None
 
-    def __post_init__(self) -> None:
+    def __post_init__(self, kernel: Backend | str | None = None) -> None:
         if not isinstance(self.H, IntegralHamiltonian):
             raise InvalidParameterError("H must be an IntegralHamiltonian (physical_hamiltonian, ...)")
         dt = _check_tol("dt", self.dt, True)
@@ -278,6 +283,7 @@ class FlowMap(Map):
         object.__setattr__(self, "method", Method.parse(self.method))
         object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
         object.__setattr__(self, "atol", _check_tol("atol", self.atol, False))
+        self._init_backend(kernel)
 
     @property
     def n_state(self) -> int:
