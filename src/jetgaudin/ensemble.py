@@ -14,7 +14,7 @@ Prop. 2 fixed) and :func:`sample_on_energy_shell` (states with ``H = H_2/2`` of 
 
 from __future__ import annotations
 
-from dataclasses import KW_ONLY, InitVar, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -22,7 +22,7 @@ import numpy as np
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
 from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
-from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
+from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop
 from .spectral import integrals as _jg_integrals
 
 __all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
@@ -110,12 +110,11 @@ class BatchBacklund(Map):
     branch: Branch = Branch.DEFAULT
     scheduler: Any = field(default=None, repr=False)
     chunk_size: int | None = None
-    backend: Backend = field(default=None)  # type: ignore[assignment]  # None: AUTO
+    backend: Backend = Backend.AUTO
     properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False)
-    _: KW_ONLY
-    kernel: InitVar[Backend | str | None] = None
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
-    def __post_init__(self, kernel: Backend | str | None = None) -> None:
+    def __post_init__(self) -> None:
         b = np.atleast_1d(np.asarray(self.b))
         B = b.shape[0] if b.ndim == 1 else -1
         bb = _per_orbit(self.b, B, "b", float)
@@ -130,7 +129,7 @@ class BatchBacklund(Map):
         object.__setattr__(self, "b", bb)
         object.__setattr__(self, "eta", ee)
         object.__setattr__(self, "branch", Branch.parse(self.branch))
-        self._init_backend(kernel)
+        self._init_backend()
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return per_orbit_integrals(X, self.b)
@@ -156,6 +155,16 @@ class BatchBacklund(Map):
         out = [self._orbit_map(i).step(X[i], None if carry is None else carry[i]) for i in range(len(X))]
         return (np.array([o[0] for o in out]), np.array([o[1] for o in out], dtype=complex),
                 np.array([o[2] for o in out], dtype=float))
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """The compiled kernels (:meth:`_compiled_advance`) or, for ``backend="numpy"``, the loop over :meth:`step`
+        with the carry as given (``None``: each orbit's first step applies the branch rule, as the single-orbit
+        map does, so that orbit ``i`` equals it bit for bit)."""
+        X = np.asarray(X)
+        if X.size and self.resolved_backend(X, steps) is Backend.COMPILED:
+            steps, save_every = check_count(steps, "steps"), check_count(save_every, "save_every", 1)
+            return self._compiled_advance(X, carry, steps, save_every)
+        return step_loop(self, X, carry, steps, save_every)
 
     def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
         res = iterate_ensemble(X, self.b, self.eta, steps, save_every=save_every, branch=self.branch, nu1=carry,

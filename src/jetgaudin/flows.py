@@ -9,7 +9,7 @@ Taylor integrator (``method="heyoka"``, extra ``jetgaudin[heyoka]``).  Returns a
 
 from __future__ import annotations
 
-from dataclasses import KW_ONLY, InitVar, dataclass, field
+from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
@@ -266,13 +266,12 @@ class FlowMap(Map):
     method: Method = Method.DOP853
     rtol: float = 1e-12
     atol: float = 1e-12
-    backend: Backend = field(default=None, compare=False)  # type: ignore[assignment]  # None: AUTO
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_FLOW_PROPERTIES, init=False, repr=False, compare=False)
     chunk_invariant = False
-    _: KW_ONLY
-    kernel: InitVar[Backend | str | None] = None
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
-    def __post_init__(self, kernel: Backend | str | None = None) -> None:
+    def __post_init__(self) -> None:
         if not isinstance(self.H, IntegralHamiltonian):
             raise InvalidParameterError("H must be an IntegralHamiltonian (physical_hamiltonian, ...)")
         dt = _check_tol("dt", self.dt, True)
@@ -283,7 +282,7 @@ class FlowMap(Map):
         object.__setattr__(self, "method", Method.parse(self.method))
         object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
         object.__setattr__(self, "atol", _check_tol("atol", self.atol, False))
-        self._init_backend(kernel)
+        self._init_backend()
 
     @property
     def n_state(self) -> int:
@@ -313,25 +312,27 @@ class FlowMap(Map):
 
     def inverse(self) -> FlowMap:
         """The flow backwards in time (``dt → −dt``)."""
-        return _flow_map(self.H, -self.dt, self.method, self.rtol, self.atol)
+        return _flow_map(self.H, -self.dt, self.method, self.rtol, self.atol, self.backend)
 
     def describe(self) -> dict:
         b = np.asarray(self.H.b, dtype=float)
         return {"kind": "flow", "b": b.tolist(), "weights": np.asarray(self.H.weights).tolist(),
                 "c": None if self.H.c is None else np.asarray(self.H.c).tolist(), "dt": self.dt,
-                "method": self.method.value, "rtol": self.rtol, "atol": self.atol}
+                "method": self.method.value, "rtol": self.rtol, "atol": self.atol, "backend": self.backend.value}
 
 
-def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float) -> FlowMap:
+def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float,
+              backend: Backend | str = Backend.AUTO) -> FlowMap:
     """A flow map with any nonzero ``dt`` (the constructor takes ``dt > 0``; the inverse runs backwards)."""
-    m = FlowMap(H, abs(dt), method, rtol, atol)
+    m = FlowMap(H, abs(dt), method, rtol, atol, backend)
     object.__setattr__(m, "dt", float(dt))
     return m
 
 
 def _flow_from(d: dict) -> FlowMap:
     H = IntegralHamiltonian(d["b"], np.asarray(d["weights"], dtype=float), d.get("c"))
-    return _flow_map(H, float(d["dt"]), Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
+    return _flow_map(H, float(d["dt"]), Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]),
+                     d.get("backend", "auto"))
 
 
 register_map("flow", _flow_from)

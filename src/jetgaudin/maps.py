@@ -16,7 +16,8 @@ The run layer (:mod:`jetgaudin.run`) drives any map through this surface only:
 **The backend rule** (one for every map, written here once):
 
 * every map takes ``backend=`` (alias ``kernel=``; a :class:`Backend` or its value ``"auto"``, ``"numpy"``,
-  ``"compiled"``) in its constructor and in :meth:`Map.iterate`; the default is ``Backend.AUTO`` everywhere;
+  ``"compiled"``) in its constructor and in :meth:`Map.iterate`; the default is ``Backend.AUTO`` everywhere
+  (:func:`backend_option`: ``"auto"`` yields to the other name, two different concrete choices are refused);
 * a map *declares* a compiled route by overriding :meth:`Map._compiled_advance` (then :attr:`Map.has_compiled` is
   true) and, optionally, its cost rule :meth:`Map._auto_backend` for ``AUTO`` (default: compiled) and
   :meth:`Map.prepare_kernels`; everything else is shared: :meth:`Map.resolved_backend` ``(X, steps)`` (``AUTO``
@@ -80,12 +81,14 @@ class Backend(StrEnum):
 
 
 def backend_option(backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Backend | None:
-    """The backend a caller asked for with ``backend=`` or its alias ``kernel=`` (``None``: neither given, keep the
-    map's own).  Both given and different: :class:`InvalidParameterError`."""
+    """The backend a caller asked for with ``backend=`` or its alias ``kernel=``: ``None`` when neither is given
+    (keep the map's own); ``AUTO`` (no preference) yields to the other; two different concrete choices are an
+    :class:`InvalidParameterError`."""
     chosen = [Backend.parse(v) for v in (backend, kernel) if v is not None]
-    if len(chosen) == 2 and chosen[0] is not chosen[1]:
+    concrete = {c for c in chosen if c is not Backend.AUTO}
+    if len(concrete) > 1:
         raise InvalidParameterError(f"backend={backend!r} and its alias kernel={kernel!r} disagree; give one of them")
-    return chosen[0] if chosen else None
+    return concrete.pop() if concrete else (Backend.AUTO if chosen else None)
 
 
 class Branch(StrEnum):
@@ -199,12 +202,15 @@ class Map(abc.ABC):
             return b
         return self._auto_backend(np.asarray(X), steps) if self.has_compiled else Backend.NUMPY
 
-    def _init_backend(self, kernel: Backend | str | None = None) -> None:
-        """Set the ``backend`` field from it and its alias ``kernel`` (``None``/unset: ``AUTO``), refusing
-        ``COMPILED`` for a map without a compiled route; called by the ``__post_init__`` of every map with a
-        ``backend`` field (declared ``backend: Backend | str | None = None`` and ``kernel: InitVar = None``)."""
-        chosen = backend_option(self.backend, kernel)  # type: ignore[arg-type]
+    def _init_backend(self) -> None:
+        """Set the ``backend`` field from it and its alias field ``kernel`` (:func:`backend_option`; the alias is
+        then cleared), refusing ``COMPILED`` for a map without a compiled route.  Called by the ``__post_init__``
+        of every map with the fields ``backend: Backend = Backend.AUTO`` and ``kernel: Backend | str | None =
+        field(default=None, kw_only=True, repr=False, compare=False)``."""
+        chosen = backend_option(self.backend, getattr(self, "kernel", None))
         object.__setattr__(self, "backend", Backend.AUTO if chosen is None else chosen)
+        if hasattr(self, "kernel"):
+            object.__setattr__(self, "kernel", None)
         if self.backend is Backend.COMPILED and not self.has_compiled:
             raise InvalidParameterError(
                 f"{type(self).__name__} has no compiled route: backend (kernel) must be 'auto' or 'numpy', "

@@ -17,7 +17,7 @@ Conventions (see ``docs/backlund.md``, section 1):
 
 from __future__ import annotations
 
-from dataclasses import KW_ONLY, InitVar, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -187,16 +187,15 @@ class TwoPointBacklund(Map):
     b: float
     eta: complex
     branch: Branch = Branch.DEFAULT
-    backend: Backend = field(default=None, compare=False)  # type: ignore[assignment]  # None: AUTO
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False, compare=False)
-    _: KW_ONLY
-    kernel: InitVar[Backend | str | None] = None
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
-    def __post_init__(self, kernel: Backend | str | None = None) -> None:
+    def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
-        self._init_backend(kernel)
+        self._init_backend()
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: the real two-point map is "
@@ -393,16 +392,15 @@ class OnePointBacklund(Map):
     eta: complex
     branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
-    backend: Backend = field(default=None, compare=False)  # type: ignore[assignment]  # None: AUTO
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_ONE_POINT_PROPERTIES, init=False, repr=False, compare=False)
-    _: KW_ONLY
-    kernel: InitVar[Backend | str | None] = None
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
-    def __post_init__(self, kernel: Backend | str | None = None) -> None:
+    def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
-        self._init_backend(kernel)
+        self._init_backend()
 
     @property
     def sheet(self) -> int:
