@@ -220,7 +220,7 @@ def _resolved(spec: RunSpec) -> RunSpec:
     """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
     resolve = getattr(spec.map, "resolved_backend", None)
     if spec.map.backend is Backend.AUTO and resolve is not None:
-        m = dataclasses.replace(spec.map, backend=resolve(spec.X0, spec.steps))  # type: ignore[type-var]
+        m = dataclasses.replace(spec.map, backend=resolve(X=spec.X0, steps=spec.steps))  # type: ignore[type-var]
         return dataclasses.replace(spec, map=m)
     return spec
 
