@@ -54,9 +54,21 @@ class EnsembleResult:
     save_every: int
 
     @property
-    def max_drift(self) -> np.ndarray:
-        """Largest relative integral drift of each orbit, shape ``(B,)``."""
+    def max_drift_per_orbit(self) -> np.ndarray:
+        """Largest relative drift of each orbit over its 2N integrals, ``max_m drift[:, m]``, shape ``(B,)``."""
         return np.max(self.drift, axis=-1)
+
+    @property
+    def max_drift_per_integral(self) -> np.ndarray:
+        """Largest relative drift of each integral ``(H_1..H_N, C_1..C_N)`` over the orbits, ``max_i drift[i, :]``,
+        shape ``(2N,)``."""
+        return np.max(self.drift, axis=0)
+
+    @property
+    def max_drift(self) -> np.ndarray:
+        """Per orbit, shape ``(B,)``: the same as :attr:`max_drift_per_orbit` (kept under its first name; the
+        per-integral maximum is :attr:`max_drift_per_integral`, the table of both is :attr:`drift`)."""
+        return self.max_drift_per_orbit
 
 
 def _per_orbit(value, B, name, dtype):
