@@ -162,7 +162,9 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     r"""Integrate ``Ẋ = Π(X) ∇H`` from ``X0`` over ``[0, T]`` (``T < 0``: backwards).
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
-    :func:`jetgaudin.interpolating_flow_hamiltonian`), or any object with ``vector_field(X)``
+    :func:`jetgaudin.interpolating_flow_hamiltonian` ``(X0, b, η)``, the Hamiltonian whose flow from ``X0`` is that of
+    ``G_η``; the value ``G_η(X)`` itself is :func:`jetgaudin.interpolating_hamiltonian`, a number, not something to
+    integrate), or any object with ``vector_field(X)``
     (then give the field ``b`` for the recorded integrals, unless ``H.record_integrals(X)`` gives them, as for
     :class:`jetgaudin.gaudin.ChainHamiltonian`).  ``t_eval`` (default: ``0`` and ``T``)
     are the sample times, strictly monotone, between ``0`` and ``T``.  ``method``: ``"DOP853"``
@@ -252,7 +254,8 @@ class FlowMap(Map):
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) over a fixed time step ``dt``, as a :class:`~jetgaudin.maps.Map`.
 
     ``H``: an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian`, or
-    :func:`jetgaudin.interpolating_flow_hamiltonian`, whose time-1 flow from its ``X0`` is the two-point map);
+    :func:`jetgaudin.interpolating_flow_hamiltonian` ``(X0, b, η)``, whose time-1 flow from its ``X0`` is the two-point
+    map; not :func:`jetgaudin.interpolating_hamiltonian`, which is the value ``G_η(X)``);
     ``method``, ``rtol``, ``atol`` as in :func:`integrate`.  :meth:`advance` integrates ``steps * dt`` in one
     call sampled every ``save_every * dt`` (an adaptive integrator restarted at other times gives other
     round-off: a flow is reproducible for a given chunking, not bit for bit across chunkings; the run layer
