@@ -646,3 +646,25 @@ def test_one_point_iterate(rng, N):
     assert (np.abs(I - I[0]) / scale).max() <= 1e-11
     back = B.inverse()(orb[1])
     assert np.abs(back - X).max() <= 1e-9 * _tol_scale(X, orb[1])
+
+
+def test_numpy_route_drift_is_not_linear():
+    # The NumPy route divides only M[P, l] by D (l_new = l + M[P, l]/D, _dressing.dress_real_two_point): its round-off
+    # is a random walk.  The former form R/D rescaled l by the same rounding of |eta|^2 at every step and the
+    # integrals drifted linearly: 2.1e-12 after 10^4 steps of Appendix 2 (AMD EPYC), against 5.9e-15 now.  Bound
+    # 3e-14: five times the measured drift, seventy times below the linear drift (docs/backlund.md, section 7).
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA, backend="numpy")
+    orbit = B.iterate(APPENDIX2_X0, 10_000, save_every=100)
+    I = jg.integrals(orbit, APPENDIX2_B)
+    assert np.max(np.abs(I - I[0]) / np.maximum(1.0, np.abs(I[0]))) <= 3e-14
+
+
+def test_generic_compiled_route_drift_is_not_linear():
+    # the generic kernel (any N) in the same form: 5.7e-14 after 10^5 steps of Appendix 2, against 2.1e-11 in the
+    # former form (docs/backlund.md, section 7); bound 5e-13, nine times the measured drift, forty times below
+    from jetgaudin.backlund import kernels
+
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    out, final, drift, _ = kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, B.nu1(APPENDIX2_X0),
+                                                  False, 100_000, 1000, specialise=False)
+    assert np.max(drift) <= 5e-13
