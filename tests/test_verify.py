@@ -6,6 +6,7 @@ import json
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 import typer
 from typer.testing import CliRunner
@@ -332,3 +333,33 @@ def test_prop2_proof_index_numerically():
     # a few products of O(1) numbers: round-off ~1e-15
     assert abs(lhs - corrected) < 1e-12
     assert abs(lhs - printed) > 1e-3
+
+
+def test_app2_sphere_is_undecided_when_its_second_route_cannot_run(monkeypatch):
+    # the second route (the NumPy library map) raising must leave the check undecided, never a pass: formerly the
+    # exception was swallowed and the 50-digit route alone reported "holds"
+    import jetgaudin as jg
+
+    assert run_checks(only="App2-sphere")[0].status == HOLDS
+
+    def broken(self, *args, **kwargs):
+        raise RuntimeError("deliberately broken second route")
+
+    monkeypatch.setattr(jg.TwoPointBacklund, "iterate", broken)
+    res = run_checks(only="App2-sphere")[0]
+    assert res.status == UNDECIDED and "deliberately broken second route" in res.note
+    assert exit_code([res]) == 1
+
+
+def test_app2_sphere_fails_when_its_second_route_drifts(monkeypatch):
+    # and a second route that runs but leaves the sphere (here: every state scaled by 1 + 1e-9) fails the check
+    import jetgaudin as jg
+
+    real = jg.TwoPointBacklund.iterate
+
+    def drifting(self, X0, steps, **kwargs):
+        orbit = real(self, X0, steps, **kwargs)
+        return orbit * (1 + 1e-9 * np.arange(len(orbit)) / len(orbit))[:, None]
+
+    monkeypatch.setattr(jg.TwoPointBacklund, "iterate", drifting)
+    assert run_checks(only="App2-sphere")[0].status == FAILS
