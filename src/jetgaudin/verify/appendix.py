@@ -17,7 +17,7 @@ import mpmath as mp
 import sympy as sp
 
 from . import printed
-from ._registry import FAILS, NUMERIC_TOL, UNDECIDED, Erratum, Outcome, Verdict, register
+from ._registry import FAILS, INTERPRETATION, NUMERIC_TOL, UNDECIDED, Erratum, Outcome, Verdict, register
 from ._tools import ell_from_state, is_zero, nu_at, rand_mpc, rand_mpf, rand_state, state_from_ell, two_point_map
 
 s_, t_, a_, h_, b_ = sp.symbols("s t a h b")
@@ -294,7 +294,10 @@ def _app2(ctx):
         "the physical flow of H = H_2/2 (run backwards for Im(eta) > 0) composed with a rotation about the field",
         "Checked here: the O(h) term of the map is -2h X_nu(a) to 1e-34 (and neither h X_nu(a) nor h X_H). "
         "The large-|eta| form is a consequence (nu = |b| + H_1/(2|b|l) + (H_2/(2|b|) - H_1^2/(8|b|^3))/l^2 + ...): "
-        "tests/test_backlund.py::test_large_eta_limit_is_physical_flow_times_rotation and docs/backlund.md section 6.",
+        "tests/test_backlund.py::test_large_eta_limit_is_physical_flow_times_rotation and docs/backlund.md section 6. "
+        "An interpretation of a loose phrase, not a misprint: 'the time step' read as 'a step Im(eta) of a flow' "
+        "fails; read as 'proportional to the step' it holds.",
+        kind=INTERPRETATION,
     ),
 )
 def _app2_timestep(ctx):
