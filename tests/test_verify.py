@@ -373,7 +373,7 @@ def test_interpretations_are_labelled_and_only_partly_checked():
     from jetgaudin.verify.coverage import STATEMENTS, Coverage
 
     load_all()
-    interp = {label for label, chk in REGISTRY.items() if chk.erratum is not None and chk.erratum.kind == INTERPRETATION}
+    interp = {lab for lab, chk in REGISTRY.items() if chk.erratum is not None and chk.erratum.kind == INTERPRETATION}
     assert interp == {"fu", "Rem-spectrality", "App2-timestep"}
     for st in STATEMENTS:
         if set(st.checks) & interp:
