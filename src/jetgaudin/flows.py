@@ -327,7 +327,7 @@ class FlowMap(Map):
 def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float,
               backend: Backend | str = Backend.AUTO) -> FlowMap:
     """A flow map with any nonzero ``dt`` (the constructor takes ``dt > 0``; the inverse runs backwards)."""
-    m = FlowMap(H, abs(dt), method, rtol, atol, backend)
+    m = FlowMap(H, abs(dt), method, rtol, atol, Backend.parse(backend))
     object.__setattr__(m, "dt", float(dt))
     return m
 

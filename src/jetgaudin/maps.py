@@ -41,7 +41,7 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -189,12 +189,12 @@ class Map(abc.ABC):
         """The compiled route of :meth:`advance` (maps with one override it; ``X`` non-empty, counts checked)."""
         raise NotImplementedError(f"{type(self).__name__} has no compiled route")
 
-    def _auto_backend(self, X: np.ndarray, steps: int) -> Backend:
+    def _auto_backend(self, X: Any, steps: Any) -> Backend:
         """What ``AUTO`` means for a map with a compiled route, for ``steps`` steps of ``X`` (here: compiled; the
         two-point maps weigh the compile or load time against the steps, :func:`jetgaudin.backlund.auto_kernel`)."""
         return Backend.COMPILED
 
-    def resolved_backend(self, X: np.ndarray, steps: int) -> Backend:
+    def resolved_backend(self, X: Any, steps: Any) -> Backend:
         """The route :meth:`advance` takes for ``steps`` steps of the states ``X``: the map's ``backend``, with
         ``AUTO`` resolved (:meth:`_auto_backend` for a map with a compiled route, the NumPy route otherwise)."""
         b = self.backend
@@ -217,7 +217,7 @@ class Map(abc.ABC):
                 "got 'compiled'"
             )
 
-    def with_backend(self, backend: Backend | str) -> Map:
+    def with_backend(self, backend: Backend | str) -> Self:
         """This map with another ``backend`` (the same map when it is unchanged; :class:`InvalidParameterError` for
         ``"compiled"`` on a map without a compiled route)."""
         backend = Backend.parse(backend)
@@ -230,12 +230,12 @@ class Map(abc.ABC):
             return self
         return dataclasses.replace(self, backend=backend)  # type: ignore[type-var]
 
-    def prepare_kernels(self, X: np.ndarray | None = None, steps: int | None = None,
-                        notify: Callable[[str], None] | None = None) -> Any:
-        """Compile (or load) the kernels :meth:`advance` of ``steps`` steps from ``X`` will call, visibly
-        (``notify(message)``; default stderr), and return a report of the time spent (``None``: nothing to
-        compile, as here for a map without a compiled route).  Without arguments: every kernel the map could
-        need."""
+    def prepare_kernels(self, *args: Any, **kwargs: Any) -> Any:
+        """``prepare_kernels(X=None, steps=None, notify=None)``: compile (or load) the kernels :meth:`advance` of
+        ``steps`` steps from ``X`` will call, visibly (``notify(message)``; default stderr), and return a report of
+        the time spent (``None``: nothing to compile, as here for a map without a compiled route).  Without
+        arguments: every kernel the map could need.  (Declared with ``*args, **kwargs`` so that a map may spell its
+        signature out; the order is ``(X, steps, notify)``.)"""
         return None
 
     @abc.abstractmethod
