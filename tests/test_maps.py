@@ -140,3 +140,14 @@ def test_description_round_trip_keeps_the_backend(name):
         pytest.skip("ensembles record their inputs, not a map description")
     m = _maps(backend="numpy")[name]()
     assert jg.maps.map_from_description(m.describe()).backend is Backend.NUMPY
+
+
+def test_a_backwards_flow_map_runs_through_the_run_layer(tmp_path):
+    # the run layer records the route AUTO chose on a copy of the map that is not validated again: a flow map run
+    # backwards (FlowMap.inverse(), dt < 0, which the constructor refuses) still runs, recorded as "numpy"
+    from jetgaudin import run as rl
+
+    F = FlowMap(jg.physical_hamiltonian(3, APPENDIX2_B), 0.1).inverse()
+    assert F.dt == -0.1 and F.backend is Backend.AUTO
+    res = rl.start(rl.RunSpec(F, X0, 2, program="test"), tmp_path / "f")
+    assert res.state is rl.RunStatus.COMPLETED and res.spec.map.backend is Backend.NUMPY and res.spec.map.dt == -0.1

@@ -37,6 +37,7 @@ Concrete maps are frozen dataclasses.  The selection enums :class:`Backend` and 
 from __future__ import annotations
 
 import abc
+import copy
 import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -56,6 +57,7 @@ __all__ = [
     "backend_option",
     "check_count",
     "map_from_description",
+    "with_resolved_backend",
     "register_map",
     "step_loop",
 ]
@@ -286,6 +288,15 @@ class Map(abc.ABC):
     @abc.abstractmethod
     def describe(self) -> dict:
         """A JSON-able description with ``"kind"`` and every parameter (:func:`map_from_description` inverts it)."""
+
+
+def with_resolved_backend(m: Map, backend: Backend) -> Map:
+    """A copy of ``m`` with its ``backend`` field set to ``backend`` (the run layer records the route ``AUTO`` chose);
+    the copy is not validated again (``m`` was when it was built: a flow map run backwards, ``dt < 0``, which the
+    constructor refuses, stays valid)."""
+    out = copy.copy(m)
+    object.__setattr__(out, "backend", Backend.parse(backend))
+    return out
 
 
 def step_loop(m: Map, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
