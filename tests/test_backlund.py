@@ -248,6 +248,34 @@ def test_two_point_is_composition_of_one_point(rng, N, eta):
     assert np.abs(W - Y).max() <= 1e-11 * (1 + np.abs(Y).max())
 
 
+def test_a_nu_off_the_curve_leaves_a_division_remainder(rng):
+    # nu1 not an eigenvalue of l(eta1): det M(eta1) != 0, so (lambda - eta1)(lambda - eta2) does not divide
+    # M l adj M and the exact division leaves a remainder of order one; the map refuses the step (the residual test
+    # of maps._check_residual, relative tolerance 1e-8) instead of returning a wrong state.  The right nu1 passes.
+    # Kills the mutant "rel > tol" -> "rel == tol" (docs/mutation.md).
+    X = random_state(rng, 3)
+    eta = 0.8 + 0.4j
+    nu1 = jg.nu(eta, X, 1.0)
+    two_point_general(X, 1.0, eta, np.conj(eta), nu1, np.conj(nu1))
+    with pytest.raises(jg.SingularStepError, match="remainder"):
+        two_point_general(X, 1.0, eta, np.conj(eta), 1.5 * nu1, np.conj(1.5 * nu1))
+
+
+def test_one_point_parameters_are_the_maps(rng):
+    # the public helper one_point_parameters gives the (p, q) of OnePointBacklund.parameters: p = y_0^-/(2b) (hh) and
+    # q = (u(eta) - nu)/v(eta) (hhh), bit for bit (the same operations).  Kills the mutant 2b -> 2 + b.
+    from jetgaudin.backlund.maps import one_point_parameters
+
+    X = random_state(rng, 3, (4,))
+    for b in (1.7, -0.4):
+        B = jg.OnePointBacklund(b, 0.8 + 0.4j)
+        p, q, nu = B.parameters(X)
+        p2, q2 = one_point_parameters(ell_coefficients(X, b), B.eta, nu, b)
+        assert np.array_equal(p, p2) and np.array_equal(q, q2)
+        y0m = X[..., 0] - 1j * X[..., 1]  # y_0^- = y_0^1 - i y_0^2
+        assert np.allclose(p, y0m / (2 * b), rtol=1e-15, atol=0)
+
+
 def test_other_choice_of_nu2_is_not_real(rng):
     """The real reduction needs mu2 = conj(mu1): with mu2 = -conj(mu1) the map leaves the real space."""
     X = random_state(rng, 3)
