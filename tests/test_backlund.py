@@ -261,6 +261,34 @@ def test_a_nu_off_the_curve_leaves_a_division_remainder(rng):
         two_point_general(X, 1.0, eta, np.conj(eta), 1.5 * nu1, np.conj(1.5 * nu1))
 
 
+def test_two_point_parameters_refuse_coinciding_eigenvectors():
+    # eq. (X): t = (eta1 - eta2)/(s + kappa) is refused when |s + kappa| <= 1e-13 (|s| + |kappa|) (the eigenvectors
+    # at eta1 and eta2 coincide).  eta2 = eta1 + d with nu2 continued makes s + kappa = O(d): at d = 6.5e-13 the
+    # denominator, 1.2e-13 here, is inside the bound (|s| = 0.70: the bound is 1.4e-13), at d = 1e-10 (1.8e-11)
+    # it is not.  Kills the mutant 1e-13 (|s| + |kappa|) -> 1e-13 |s|/|kappa| (1e-13 here; docs/mutation.md).
+    from jetgaudin.backlund._dressing import horner, spectral_kappa, spectral_s
+    from jetgaudin.backlund.maps import two_point_parameters
+
+    X, b, e1 = np.asarray(APPENDIX2_X0), APPENDIX2_B, 0.8 + 0.4j
+    ell = ell_coefficients(X, b)
+    nu1 = jg.nu(e1, X, b)
+
+    def den(d):
+        nu2 = -jg.nu(e1 + d, X, b)  # -nu2 is the eigenvalue at eta2 close to nu1
+        L1, L2 = horner(ell, e1), horner(ell, e1 + d)
+        sv = spectral_s(L1[0, 0], L1[0, 1], L1[1, 0], nu1)
+        kv = spectral_kappa(L2[0, 0], L2[0, 1], L2[1, 0], -nu2)
+        return nu2, abs(sv + kv), abs(sv) + abs(kv), abs(sv) / abs(kv)
+
+    nu2, dn, ssum, ratio = den(6.5e-13)
+    assert 1e-13 * ratio < dn <= 1e-13 * ssum  # the case sits between the bound and the mutant's
+    with pytest.raises(jg.SingularStepError, match="s \\+ kappa"):
+        two_point_parameters(ell, e1, e1 + 6.5e-13, nu1, nu2)
+    nu2, dn, ssum, _ = den(1e-10)
+    assert dn > 1e-13 * ssum
+    two_point_parameters(ell, e1, e1 + 1e-10, nu1, nu2)
+
+
 def test_one_point_parameters_are_the_maps(rng):
     # the public helper one_point_parameters gives the (p, q) of OnePointBacklund.parameters: p = y_0^-/(2b) (hh) and
     # q = (u(eta) - nu)/v(eta) (hhh), bit for bit (the same operations).  Kills the mutant 2b -> 2 + b.
