@@ -24,12 +24,13 @@ The run layer (:mod:`jetgaudin.run`) drives any map through this surface only:
   is the NumPy route for a map without a compiled one), :meth:`Map.advance` (the compiled hook or the loop over
   :meth:`Map.step`), :meth:`Map.with_backend`, :meth:`Map.iterate`;
 * ``backend="compiled"`` for a map without a compiled route is an :class:`InvalidParameterError` at construction
-  (:meth:`Map._check_backend`, called by the maps' ``__post_init__``);
+  (:meth:`Map._init_backend`, called by the maps' ``__post_init__``) and in :meth:`Map.iterate`;
 * the argument order is ``(X, steps)`` everywhere: ``resolved_backend(X, steps)``, ``prepare_kernels(X, steps,
   notify)``; ``prepare_kernels()`` without arguments compiles every kernel the map could need.
 
-Both routes of the two-point map keep the integrals at round-off (a random walk; ``docs/reliability.md``), so the
-``AUTO`` choice is a matter of cost only.
+Both routes of the two-point map keep the integrals at round-off (a random walk; ``docs/backlund.md``, section 7),
+so the ``AUTO`` choice is a matter of cost only.  The same rule in words, with the template of a map that follows
+it: ``docs/architecture.md``, "The backend rule".
 
 Concrete maps are frozen dataclasses.  The selection enums :class:`Backend` and :class:`Branch` live here.
 """
