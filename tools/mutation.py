@@ -2,7 +2,7 @@
 
 Usage (needs ``pip install -e '.[mutation]'``; see docs/mutation.md)::
 
-    python tools/mutation.py                      # the default sample (about 70 mutants, ~40 min on 2 cores)
+    python tools/mutation.py                      # the default sample (61 mutants, ~20 min on 2 cores)
     python tools/mutation.py --per-module 2 --only algebra.py --json out.json
 
 For each module of :data:`GROUPS` the script copies ``src/`` and ``tests/`` into a temporary directory (Cosmic Ray
