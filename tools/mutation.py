@@ -9,7 +9,8 @@ For each module of :data:`GROUPS` the script copies ``src/`` and ``tests/`` into
 mutates files in place: the working tree is never touched), lets ``cosmic-ray init`` enumerate every mutant, keeps
 those of :data:`OPERATORS` (the plausible slips: arithmetic, comparison, sign, constant, boolean; not the bitwise
 operators, which fail on floats at once), draws ``--per-module`` of them with ``--seed``, marks the others skipped,
-and runs ``cosmic-ray exec`` with the module's fast test selection (``pytest -x``: the first failing test kills).
+and runs ``cosmic-ray exec`` with the module's fast test selection (``pytest -x``: the first failing test kills),
+after checking that the selection passes on the unmutated copy (a baseline).
 It prints one line per module and writes a JSON report (counts and every survivor with its diff).  The gaudin
 package is not mutated this round: it is being rebuilt (issue 27).
 """
@@ -82,6 +83,10 @@ def run_module(module: str, tests: tuple[str, ...], k: int, seed: int, timeout: 
     command = f"{sys.executable} -m pytest -x -q -p no:cacheprovider -p no:randomly " + " ".join(tests)
     cfg.write_text(f'[cosmic-ray]\nmodule-path = "{path}"\ntimeout = {timeout}\nexcluded-modules = []\n'
                    f'test-command = "env PYTHONPATH=src {command}"\n\n[cosmic-ray.distributor]\nname = "local"\n')
+    # baseline: the selection must pass on the unmutated copy, or every mutant would count as killed
+    base = subprocess.run(["env", "PYTHONPATH=src", *command.split()], cwd=work, capture_output=True, text=True)
+    if base.returncode != 0:
+        raise SystemExit(f"{module}: the tests fail without a mutant (fix them first):\n{base.stdout[-2000:]}")
     _cosmic("init", str(cfg), str(session), cwd=work)
     with use_db(str(session), WorkDB.Mode.open) as db:
         items = list(db.work_items)
