@@ -13,8 +13,8 @@ from jetgaudin.backlund import kernels
 from jetgaudin.ensemble import BatchBacklund
 from jetgaudin.exact import ExactFlow
 from jetgaudin.flows import FlowMap
-from jetgaudin.midpoint import ImplicitMidpoint
 from jetgaudin.maps import Backend, backend_option
+from jetgaudin.midpoint import ImplicitMidpoint
 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
