@@ -45,6 +45,7 @@ import numpy as np
 from scipy import special
 
 from .._errors import InvalidParameterError
+from ._series import div, mul
 
 __all__ = [
     "check_modulus",
@@ -58,8 +59,6 @@ __all__ = [
     "curve_function",
     "curve_function_taylor",
     "curve_function_regular",
-    "series_mul",
-    "series_div",
 ]
 
 #: sign of w_a = (ns, ds, cs) under x -> x + 2K and under x -> x + 2iK'
@@ -153,26 +152,7 @@ def w_values(x, k) -> np.ndarray:
         return np.stack([delta / ns, nd / ns, nc / ns]).astype(complex)
 
 
-# ---------------------------------------------------------------- power series (leading axis = order)
-
-
-def series_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Cauchy product of two coefficient arrays ``(order, ...)``, truncated to ``order``."""
-    n = a.shape[0]
-    out = np.zeros(np.broadcast_shapes(a.shape, b.shape), dtype=np.result_type(a, b))
-    for i in range(n):
-        out[i:] += a[i] * b[: n - i]
-    return out
-
-
-def series_div(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Coefficients of ``a/b`` (``b[0] ≠ 0``), by ``q_n = (a_n − Σ_{i<n} q_i b_{n−i}) / b_0``."""
-    n = a.shape[0]
-    q = np.zeros(np.broadcast_shapes(a.shape, b.shape), dtype=np.result_type(a, b, complex))
-    for j in range(n):
-        acc = a[j] - sum((q[i] * b[j - i] for i in range(j)), start=np.zeros_like(q[0]))
-        q[j] = acc / b[0]
-    return q
+# ---------------------------------------------------------------- Taylor series (leading axis = order)
 
 
 def _ode_series(s0, c0, d0, m, order):
@@ -232,9 +212,9 @@ def w_taylor(x0, k, order: int) -> np.ndarray:
             raise InvalidParameterError("w_taylor: x0 is a pole of w_a (a zero of sn: 2mK + 2inK')")
         one = np.zeros_like(S)
         one[0] = 1.0
-        out[0][:, far] = series_div(one, S)
-        out[1][:, far] = series_div(D, S)
-        out[2][:, far] = series_div(C, S)
+        out[0][:, far] = div(one, S)
+        out[1][:, far] = div(D, S)
+        out[2][:, far] = div(C, S)
     if np.any(near):
         xs = x[near]
         up = xs.imag > 0  # x = u + iK' (up) or u − iK'
@@ -256,7 +236,7 @@ def w_regular(k, order: int) -> np.ndarray:
     T = S[1:]
     out = np.empty((3, order))
     for a, N in enumerate((np.eye(order + 1, 1).ravel().astype(complex), D[: order + 1], C[: order + 1])):
-        q = series_div(N, T)
+        q = div(N, T)
         out[a] = q[1 : order + 1].real
     return out
 
@@ -318,7 +298,7 @@ def curve_function_taylor(x0, k, order: int) -> np.ndarray:
     out[0] = curve_function(x0, k)
     if order > 1:
         ns = w_taylor(x0, k, order - 1)[0]
-        dF = -series_mul(ns, ns)
+        dF = -mul(ns, ns)
         dF[0] += 1.0 - float(special.ellipe(k * k)) / K
         out[1:] = dF / np.arange(1, order).reshape((-1,) + (1,) * x0.ndim)
     return out
@@ -331,7 +311,7 @@ def curve_function_regular(k, order: int) -> np.ndarray:
     order = int(order)
     K, _ = periods(k)
     rho = w_regular(k, order + 1)[0]
-    d = -series_mul(rho, rho)[:order]  # −ρ²
+    d = -mul(rho, rho)[:order]  # −ρ²
     d[: order] -= 2.0 * rho[1 : order + 1]  # −2ρ/x (ρ(0) = 0: ρ is odd)
     d[0] += 1.0 - float(special.ellipe(k * k)) / K
     out = np.zeros(order)

@@ -146,6 +146,7 @@ class GaudinModel:
     sites: tuple = field(default=((0.0, 1),))
     family: Any = "rational"
     gamma: float | None = None
+    modulus: float | None = None
 
     def __post_init__(self):
         if np.iscomplexobj(self.b) or isinstance(self.b, bool):
@@ -158,10 +159,11 @@ class GaudinModel:
             raise InvalidParameterError(f"the field strength b must be finite, got {b}")
         object.__setattr__(self, "b", b)
         object.__setattr__(self, "sites", _check_sites(self.sites))
-        fam = make_family(self.family, gamma=self.gamma)
+        fam = make_family(self.family, gamma=self.gamma, modulus=self.modulus)
         fam.check(b, self.sites)
         object.__setattr__(self, "family", fam)
         object.__setattr__(self, "gamma", fam.describe().get("gamma"))
+        object.__setattr__(self, "modulus", fam.describe().get("modulus"))
 
     # ---- layout ---------------------------------------------------------------------------
 
@@ -212,7 +214,7 @@ class GaudinModel:
     @classmethod
     def from_description(cls, d: dict) -> GaudinModel:
         """The model :meth:`describe` (or a map's description) describes."""
-        extra = {k: d[k] for k in ("gamma",) if k in d}
+        extra = {k: d[k] for k in ("gamma", "modulus") if k in d}
         return cls(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]), d.get("family", "rational"), **extra)
 
     # ---- integrals as quadratic forms --------------------------------------------------------
@@ -258,15 +260,22 @@ class GaudinModel:
         lin.setflags(write=False)
         return q, lin
 
+    def _extra_labels(self) -> list[str]:
+        """The integrals after the ``h_{j,m}``: the constant term of ``ν²`` when it is one (elliptic ``c0``), then
+        the family's linear extras (trigonometric ``J``)."""
+        c = self.family.constant_integral
+        return ([c] if c else []) + self.family.extra_integrals(self.sites)[0]
+
     @property
     def n_integrals(self) -> int:
-        """``2M`` plus the family's extra integrals (trigonometric: ``J``)."""
-        return 2 * self.M + len(self.family.extra_integrals(self.sites)[0])
+        """``2M`` plus the family's extra integrals (trigonometric: ``J``; elliptic: ``c0``)."""
+        return 2 * self.M + len(self._extra_labels())
 
     def integral_labels(self) -> list[str]:
-        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1), then the family's extras (``J``)."""
+        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1), then the family's extras (``J``,
+        ``c0``)."""
         return [f"h{i + 1},{m}" for i, (_, N) in enumerate(self.sites) for m in range(1, 2 * N + 1)] + \
-            self.family.extra_integrals(self.sites)[0]
+            self._extra_labels()
 
     def casimir_mask(self) -> np.ndarray:
         """Boolean ``(n_integrals,)``: ``True`` for the Casimirs ``h_{i,m}``, ``m > N_i``; ``False`` for the ``M``
