@@ -145,11 +145,9 @@ def ellipfun(u, k) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def w_values(x, k) -> np.ndarray:
     """``(ns x, ds x, cs x)``, shape ``(3,) + x.shape``: finite everywhere except at the zeros ``2mK + 2inK'`` of
-    ``sn`` (the poles of every ``w_a``), including at the poles of ``sn``."""
-    k = check_modulus(k)
-    delta, ns, nc, nd = _numerators(x, k)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.stack([delta / ns, nd / ns, nc / ns]).astype(complex)
+    ``sn`` (the poles of every ``w_a``; inf or nan there), including at the poles of ``sn`` (the first Taylor
+    coefficient of :func:`w_taylor`, whose shifted form serves the pole rows)."""
+    return _w_series(x, check_modulus(k), 1, strict=False)[:, 0]
 
 
 # ---------------------------------------------------------------- Taylor series (leading axis = order)
@@ -200,21 +198,25 @@ def _split(x0, k):
 def w_taylor(x0, k, order: int) -> np.ndarray:
     r"""Taylor coefficients of ``w_a = (ns, ds, cs)`` at ``x0`` (not a zero of ``sn``), shape
     ``(3, order) + x0.shape``; ``φ_{a,n}(x0) = (−1)^n · w_taylor(x0, k, n + 1)[a, n]``."""
-    k = check_modulus(k)
-    order = int(order)
+    return _w_series(x0, check_modulus(k), int(order), strict=True)
+
+
+def _w_series(x0, k, order, strict):
     x, sign, near = _split(x0, k)
     out = np.zeros((3, order) + x.shape, dtype=complex)
     K, Kp = periods(k)
     far = ~near
     if np.any(far):
-        S, C, D = sncndn_taylor(x[far], k, order)
-        if np.any(S[0] == 0):
+        s, c, d = ellipfun(x[far], k)
+        S, C, D = _ode_series(s, c, d, k * k, order)
+        if strict and np.any(S[0] == 0):
             raise InvalidParameterError("w_taylor: x0 is a pole of w_a (a zero of sn: 2mK + 2inK')")
         one = np.zeros_like(S)
         one[0] = 1.0
-        out[0][:, far] = div(one, S)
-        out[1][:, far] = div(D, S)
-        out[2][:, far] = div(C, S)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[0][:, far] = div(one, S)
+            out[1][:, far] = div(D, S)
+            out[2][:, far] = div(C, S)
     if np.any(near):
         xs = x[near]
         up = xs.imag > 0  # x = u + iK' (up) or u − iK'
@@ -251,40 +253,61 @@ def _zeta_real(x, m, K, E):
     return special.ellipeinc(ph, m) - lin * x
 
 
-def jacobi_zeta(u, k) -> np.ndarray:
-    """Jacobi's ``Z(u)`` at complex ``u`` (module docstring), shape of ``u``; poles at ``iK'`` modulo periods."""
-    k = check_modulus(k)
+def _zeta_parts(u, k):
+    """``(Z_0(v), csdn(v), c)`` with ``Z(u) = Z_0(v) + csdn(v) + c`` and ``F(u) = Z_0(v) + c`` where ``F = cs dn + Z``:
+    ``u`` is reduced to ``|Re| ≤ K``, ``|Im| ≤ K'`` (``Z(u + 2K) = Z(u)``, ``Z(u + 2iK') = Z(u) − iπ/K``) and, within
+    ``K'/2`` of a pole row, written ``u = v ± iK'`` with ``Z(v ± iK') = Z(v) + cs(v) dn(v) ∓ iπ/(2K)`` and
+    ``cs dn(v ± iK') = −cs dn(v)`` (A&S 17.4.38), so that the poles at ``iK'`` are never evaluated; elsewhere
+    ``v = u``, ``csdn = 0`` and ``c`` the reduction's shift."""
     m = k * k
     K, Kp = periods(k)
     E = float(special.ellipe(m))
     Ep = float(special.ellipe(1.0 - m))
     u = np.asarray(u, dtype=complex)
-    # reduce: Z(u + 2K) = Z(u), Z(u + 2iK') = Z(u) − iπ/K
     nx = np.round(u.real / (2.0 * K))
     u = u - 2.0 * K * nx
-    shift = np.zeros(u.shape, dtype=complex)
+    const = np.zeros(u.shape, dtype=complex)
+    csdn = np.zeros(u.shape, dtype=complex)
     if np.isfinite(Kp):
         ny = np.round(u.imag / (2.0 * Kp))
         u = u - 2j * Kp * ny
-        shift = -1j * np.pi / K * ny
+        const = -1j * np.pi / K * ny
+        row = np.where(np.abs(u.imag) > 0.5 * Kp, np.sign(u.imag), 0.0)
+        u = u - 1j * Kp * row
+        const = const - row * 1j * np.pi / (2.0 * K)
+        if np.any(row != 0):
+            _, _, dn = ellipfun(u, k)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                csdn = np.where(row != 0, w_values(u, k)[2] * dn, 0.0)
     x, y = u.real, u.imag
     zx = _zeta_real(x, m, K, E)
     s1, c1, d1, _ = special.ellipj(y, 1.0 - m)
     lin = 0.0 if not np.isfinite(Kp) else np.pi / (2.0 * K * Kp)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ziy = 1j * (d1 * s1 / c1 - _zeta_real(y, 1.0 - m, Kp, Ep) - lin * y)
-        sniy = 1j * s1 / c1
-        snx = special.ellipj(x, m)[0]
-        snu = ellipfun(u, k)[0]
-        out = zx + ziy - m * snx * sniy * snu
-    return out + shift
+    # |y| <= K'/2 here: c1 >= cn(K'/2 | m1) > 0, no division by zero
+    ziy = 1j * (d1 * s1 / c1 - _zeta_real(y, 1.0 - m, Kp, Ep) - lin * y)
+    snu = ellipfun(u, k)[0]
+    z0 = zx + ziy - m * special.ellipj(x, m)[0] * (1j * s1 / c1) * snu
+    return z0, csdn, const
+
+
+def jacobi_zeta(u, k) -> np.ndarray:
+    """Jacobi's ``Z(u)`` at complex ``u`` (module docstring, :func:`_zeta_parts`), shape of ``u``; poles at ``iK'``
+    modulo the periods."""
+    z0, csdn, const = _zeta_parts(u, check_modulus(k))
+    return z0 + csdn + const
 
 
 def curve_function(x, k) -> np.ndarray:
-    """``F(x) = cs(x) dn(x) + Z(x)`` (module docstring), the simple-pole function of the ``ν²`` expansion."""
+    """``F(x) = cs(x) dn(x) + Z(x)`` (module docstring), the simple-pole function of the ``ν²`` expansion; near the
+    pole rows of ``sn`` ``F(v ± iK') = Z(v) ∓ iπ/(2K)`` (the poles of ``cs dn`` and ``Z`` cancel exactly)."""
     k = check_modulus(k)
+    x = np.asarray(x, dtype=complex)
+    z0, csdn, const = _zeta_parts(x, k)
+    near = csdn != 0
     _, _, dn = ellipfun(x, k)
-    return w_values(x, k)[2] * dn + jacobi_zeta(x, k)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        direct = w_values(x, k)[2] * dn
+    return np.where(near, 0.0, direct) + z0 + const
 
 
 def curve_function_taylor(x0, k, order: int) -> np.ndarray:
