@@ -144,7 +144,9 @@ class EllipticFamily(Family):
 
     def _lam0(self, xi) -> complex:
         nK, nKp = HALF_PERIODS[self.half_period]
-        return complex(np.real(xi)) + nK * self.K + 1j * nKp * self.Kp
+        if nKp and not np.isfinite(self.Kp):
+            raise InvalidParameterError("the half periods iK', K + iK' do not exist at k = 0 (K' = inf)")
+        return complex(np.real(xi)) + nK * self.K + (1j * self.Kp if nKp else 0.0)
 
     def dressing_basis(self, lam, xi):
         lam = np.asarray(lam, dtype=complex)

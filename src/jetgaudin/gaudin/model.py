@@ -50,6 +50,7 @@ __all__ = [
     "gaudin_magnet",
     "lagrange_chain",
     "twisted_chain",
+    "clebsch_top",
 ]
 
 
@@ -501,3 +502,17 @@ def lagrange_chain(b: float, positions) -> GaudinModel:
 def twisted_chain(b: float, positions) -> GaudinModel:
     """The twisted (generalised Lagrange) chain: ``N_i = 3`` at each position."""
     return _uniform(b, positions, 3, "twisted_chain")
+
+
+def clebsch_top(modulus: float, position: float = 0.0) -> GaudinModel:
+    r"""The Clebsch top: one elliptic (XYZ) jet site of order 2 at ``position`` (modulus ``k``), the coalescence of two
+    order-1 sites (``docs/tutorials/xyz.md``).  State ``(M, p) = (y_0, y_1)`` with the bracket of ``e(3)`` (``g^(2)``):
+    ``{M_a, M_b} = ε_{abc} M_c``, ``{M_a, p_b} = ε_{abc} p_c``, ``{p_a, p_b} = 0``.  Integrals (``integrals(X)``):
+    ``h_{1,1} = 0``, ``h_{1,2} = |M|² − 2 Σ_a r_a p_a²``, the Casimirs ``h_{1,3} = 2 M·p``, ``h_{1,4} = |p|²``, and
+    ``c0 = Σ_a A_a M_a² + Σ_a B_a p_a²`` with ``A = (1, k'², 0) − E/K``, ``r_a`` the ``x`` coefficients of ``w_a − 1/x``
+    (``(1+k²)/6``, ``(1−2k²)/6``, ``−(2−k²)/6``).  Every ``H_μ = c0 + μ h_{1,2} = Σ a_i M_i² + Σ b_i p_i²``
+    (``a_i = A_i + μ``) is a Kirchhoff Hamiltonian (a rigid body in an ideal fluid) in **Clebsch's case**
+    ``b_i = a_j a_k + const`` (``(i, j, k)`` cyclic; equivalently ``Σ_cyc (b_j − b_k)/a_i = 0``), with
+    ``k² = (a_1 − a_2)/(a_1 − a_3)``: every Clebsch top with distinct ``a_i`` is this model up to a time scale and
+    the Casimirs (derived in the tutorial, tested in ``tests/test_elliptic.py``)."""
+    return GaudinModel(0.0, [(position, 2)], family="elliptic", modulus=modulus)
