@@ -147,6 +147,7 @@ class Family(abc.ABC):
     def check_xi(self, xi: complex) -> None:
         """Refuse a spectral parameter the family's maps cannot take (:class:`InvalidParameterError`); none by
         default (the elliptic family refuses ``|Im ξ|`` too close to ``K'``)."""
+        return None
 
     #: ``True`` when the dressing basis depends on the map's ``ξ`` (elliptic: ``w_a(λ − Re ξ)``): the core then
     #: calls ``dressing_basis(lam, xi)`` and ``dressing_taylor(lam0, order, xi)``

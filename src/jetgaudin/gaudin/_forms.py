@@ -73,10 +73,8 @@ def constant_form(model, q) -> np.ndarray:
     (a family with :attr:`~jetgaudin.families.Family.constant_integral`; needs ``b = 0``): the ``x^0`` Laurent
     coefficient of ``ν²`` at the first site ``λ_1`` minus that of the sum,
 
-    .. math:: c_0 = [x^0]
-u^2(\lambda_1 + x) - \sum_m h_{1,m}\, [x^0](\psi_m(x) - x^{-m})
-              - \sum_{i 
-e 1} \sum_m h_{i,m}\, \psi_m(\lambda_1 - \lambda_i),
+    .. math:: c_0 = [x^0]\nu^2(\lambda_1 + x) - \sum_m h_{1,m}\, [x^0](\psi_m(x) - x^{-m})
+              - \sum_{i \ne 1} \sum_m h_{i,m}\, \psi_m(\lambda_1 - \lambda_i),
 
     with ``q`` the forms of the ``h_{j,m}`` (rows in the order of the integrals)."""
     fam = model.family

@@ -385,6 +385,10 @@ class GaudinModel:
         from ._curve import branch_points
 
         r = branch_points(self, X)
+        if r is None:
+            raise InvalidParameterError(
+                f"branch_points: the {self.family.name} family has no uniformizer (nu^2 is an elliptic function, its "
+                "zeros are not the roots of one polynomial); nu and the maps continue nu numerically instead")
         if self.family.uniform:
             return r
         return np.log(r) / (2j * self.family.gamma)
@@ -515,4 +519,4 @@ def clebsch_top(modulus: float, position: float = 0.0) -> GaudinModel:
     ``b_i = a_j a_k + const`` (``(i, j, k)`` cyclic; equivalently ``Σ_cyc (b_j − b_k)/a_i = 0``), with
     ``k² = (a_1 − a_2)/(a_1 − a_3)``: every Clebsch top with distinct ``a_i`` is this model up to a time scale and
     the Casimirs (derived in the tutorial, tested in ``tests/test_elliptic.py``)."""
-    return GaudinModel(0.0, [(position, 2)], family="elliptic", modulus=modulus)
+    return GaudinModel(0.0, ((position, 2),), family="elliptic", modulus=modulus)
