@@ -54,8 +54,15 @@ class Family(abc.ABC):
     name: str = ""
     #: ``True`` when ``w_1 = w_2 = w_3`` (rational): the core then uses the Gram matrix of the ``y``'s
     uniform: bool = False
-    #: number ``P`` of dressing basis matrices ``B_p``
+    #: number ``P`` of dressing basis matrices ``B_p`` (the compiled kernel takes ``P = 6``)
     n_dressing: int = 0
+    #: the gauge rule's id in the compiled kernel (:mod:`jetgaudin.gaudin._family_kernel`; ``None``: the family
+    #: has no compiled route yet — add a branch to its ``_coefficients`` and set the id)
+    kernel_rule: int | None = None
+
+    def kernel_constants(self, xi: complex) -> np.ndarray:
+        """The constants ``gk`` of the gauge rule in the compiled kernel for the parameter ``ξ``."""
+        return np.array([xi], dtype=complex)
 
     # ---- parameters -------------------------------------------------------------------------------------
 

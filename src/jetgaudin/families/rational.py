@@ -23,6 +23,7 @@ class RationalFamily(Family):
     name = "rational"
     uniform = True
     n_dressing = 6
+    kernel_rule = 0
 
     def taylor(self, a, x0, order):
         x0 = np.asarray(x0, dtype=complex)

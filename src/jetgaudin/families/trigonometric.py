@@ -63,6 +63,7 @@ class TrigonometricFamily(Family):
     name = "trigonometric"
     uniform = False
     n_dressing = 6  # E11 e^{iγλ}, E11 e^{−iγλ}, E12, E21, E22 e^{iγλ}, E22 e^{−iγλ}
+    kernel_rule = 1
 
     def __init__(self, gamma: float = 1.0):
         self.gamma = _check_gamma(gamma)
@@ -145,11 +146,17 @@ class TrigonometricFamily(Family):
     def real_dressing(self, xi, k1, k2):
         return gauge_rule(self.gamma, xi, k1, k2)
 
+    def kernel_constants(self, xi):
+        g, xb = self.gamma, np.conj(xi)
+        return np.array([np.exp(-1j * g * xi), np.exp(-1j * g * xb), np.exp(1j * g * xi), np.exp(1j * g * xb),
+                         np.sin(g * (xi - xb))])
+
 
 def spectral_rows(gamma, xi, k1, k2):
     r"""The two rows' null vectors ``(α, α_0, β)`` and ``(γ', δ, δ_0)`` of spectrality (cross products), shape
     ``(B, 3)`` each: row 1 of ``D(ξ_i) k_i = 0`` reads ``(e^{iγξ_i} k_{i1}, e^{−iγξ_i} k_{i1}, k_{i2})·(α, α_0, β) = 0``
-    for ``ξ_1 = ξ``, ``ξ_2 = ξ̄``, row 2 ``(k_{i1}, e^{iγξ_i} k_{i2}, e^{−iγξ_i} k_{i2})·(γ', δ, δ_0) = 0``."""
+    for ``ξ_1 = ξ``, ``ξ_2 = ξ̄``, row 2 ``(k_{i1}, e^{iγξ_i} k_{i2}, e^{−iγξ_i} k_{i2})·(γ', δ, δ_0) = 0``.  With
+    ``k2 = (−k̄_{12}, k̄_{11})`` they give ``αα_0 = δδ_0`` identically and ``α/δ → −1`` as ``Im ξ → 0``."""
     e1p, e1m = np.exp(1j * gamma * xi), np.exp(-1j * gamma * xi)
     e2p, e2m = np.exp(1j * gamma * np.conj(xi)), np.exp(-1j * gamma * np.conj(xi))
     a1, a2 = k1[..., 0], k1[..., 1]
@@ -162,24 +169,38 @@ def spectral_rows(gamma, xi, k1, k2):
 def gauge_rule(gamma, xi, k1, k2, rule: str = "symmetric"):
     r"""Coefficients ``(α, α_0, β, γ', δ, δ_0)`` ``(B, 6)`` of the real two-point map's dressing.
 
-    ``rule="symmetric"`` (the map's): rows scaled so that ``α α_0 = δ δ_0``, the sign chosen so that
-    ``(α − α_0)/(δ − δ_0)`` has positive real part (``→ 1`` in the rational limit ``γ → 0``, where the dressing
-    becomes ``1 + iγ(λ − … )``-times the rational ``λ + M_0``).  Other values (``"alpha"``: ``α = δ``) exist only
-    to test that a wrong rule fails."""
-    r1, r2 = spectral_rows(gamma, xi, k1, k2)
-    alpha, alpha0 = r1[..., 0], r1[..., 1]
-    delta, delta0 = r2[..., 1], r2[..., 2]
+    ``rule="symmetric"`` (the map's; ``docs/families.md`` §gauge): with ``p = |k_{11}|²``, ``q = |k_{12}|²``,
+    ``s(x) = sin(γx)``,
+
+    .. math:: D(\lambda) = \frac{1}{p+q}\begin{pmatrix} p\,s(\lambda-\xi) + q\,s(\lambda-\bar\xi) &
+              -k_{11}\bar k_{12}\, s(\xi-\bar\xi) \\ -\bar k_{11} k_{12}\, s(\xi-\bar\xi) &
+              q\,s(\lambda-\xi) + p\,s(\lambda-\bar\xi)\end{pmatrix},
+
+    the rational ``K = λ + M_0`` of eq. (mm) (:func:`jetgaudin.backlund._dressing.real_two_point_M0`, times
+    ``|k|²``) with every difference ``x`` replaced by ``sin(γx)``: it kills ``k1`` at ``ξ`` and
+    ``k2 = (−k̄_{12}, k̄_{11})`` at ``ξ̄``, satisfies the symmetric gauge ``αα_0 = δδ_0`` (invariant under
+    ``λ → −λ``, which swaps ``e^{±iγλ}``), is real (``|ρ| = 1``) and tends to ``sin(γ(λ − ξ))·1`` (the identity
+    map) as ``Im ξ → 0`` — which fixes the sign ``ρ = ±1`` left by ``αα_0 = δδ_0``.  It is the time-1 flow of
+    ``G_ξ`` (``tests/test_trigonometric_maps.py``).  Other values exist only to test that a wrong rule fails:
+    ``"alpha"`` (``α = δ``: not real) and ``"sign"`` (``ρ = −1``, the other root of ``αα_0 = δδ_0``, e.g. the raw
+    cross products of :func:`spectral_rows`: real, Poisson, but the flow composed with the rotation by ``π`` about
+    ``e_3``, not the identity at ``Im ξ → 0``)."""
+    a1, a2 = k1[..., 0], k1[..., 1]
+    p, q = np.abs(a1) ** 2, np.abs(a2) ** 2
+    n = p + q
+    e1p, e1m = np.exp(1j * gamma * xi), np.exp(-1j * gamma * xi)
+    e2p, e2m = np.exp(1j * gamma * np.conj(xi)), np.exp(-1j * gamma * np.conj(xi))
+    off = np.sin(gamma * (xi - np.conj(xi))) / n
+    # s(λ − ξ) = (e^{−iγξ} e^{iγλ} − e^{iγξ} e^{−iγλ})/(2i)
+    c = np.stack([(p * e1m + q * e2m) / (2j * n), -(p * e1p + q * e2p) / (2j * n), -a1 * np.conj(a2) * off,
+                  -np.conj(a1) * a2 * off, (q * e1m + p * e2m) / (2j * n), -(q * e1p + p * e2p) / (2j * n)], -1)
     if rule == "symmetric":
-        rho = np.sqrt(delta * delta0 / (alpha * alpha0))
-        flip = ((rho * (alpha - alpha0)) / (delta - delta0)).real < 0
-        rho = np.where(flip, -rho, rho)
-    elif rule == "alpha":
-        rho = delta / alpha
-    elif rule == "alpha0":
-        rho = delta0 / alpha0
+        return c
+    if rule == "alpha":
+        rho = c[..., 4] / c[..., 0]
+    elif rule == "sign":
+        rho = -np.ones_like(c[..., 0])
     else:  # pragma: no cover - a programming error
         raise ValueError(rule)
-    c = np.concatenate([rho[..., None] * r1[..., [0, 1, 2]], r2], axis=-1)
-    # overall scale: det D's quadratic in z has leading coefficient αδ; normalise |αδ| ~ 1 for round-off
-    scale = np.sqrt(np.abs(c[..., 0] * c[..., 4]) + np.abs(c[..., 1] * c[..., 5]))
-    return c / scale[..., None]
+    c[..., :3] = c[..., :3] * rho[..., None]
+    return c

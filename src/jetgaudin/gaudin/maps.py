@@ -35,6 +35,7 @@ from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
 from ..lax import ell_coefficients, state_from_ell
+from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ._curve import _component_poles, nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
@@ -141,16 +142,6 @@ def dress_sites(model, parts, series):
     return out
 
 
-def _matrix(xi):
-    """``ℓ = [[ξ^3, ξ^1 − iξ^2], [ξ^1 + iξ^2, −ξ^3]]`` from ``ξ`` ``(..., 3)``."""
-    out = np.empty(xi.shape[:-1] + (2, 2), dtype=complex)
-    out[..., 0, 0] = xi[..., 2]
-    out[..., 1, 1] = -xi[..., 2]
-    out[..., 0, 1] = xi[..., 0] - 1j * xi[..., 1]
-    out[..., 1, 0] = xi[..., 0] + 1j * xi[..., 1]
-    return out
-
-
 def _residual(K, L, A, scale):
     """``max |K ℓ adj K|`` at a zero of ``det K``, relative to ``1 + max|ℓ coefficients|`` (zero if exact)."""
     R = mm(mm(K, L), A)
@@ -171,6 +162,7 @@ class _ChainMap(Map):
     branch: Branch
     properties: MapProperties
     kind: str
+    kernel: Any  # the alias of backend given to the constructor (then equal to backend)
 
     def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
@@ -183,8 +175,10 @@ class _ChainMap(Map):
         object.__setattr__(self, "backend", backend)
         object.__setattr__(self, "kernel", backend)
 
-    #: whether the map has a compiled route; the one backend rule (:func:`resolve_backend`) reads it
-    has_compiled: bool = False
+    @property
+    def has_compiled(self) -> bool:
+        """Whether the map has a compiled route (the one backend rule, :func:`resolve_backend`, reads it)."""
+        return False
 
     def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
         """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
@@ -324,8 +318,22 @@ class ChainTwoPointBacklund(_ChainMap):
 
     @property
     def has_compiled(self) -> bool:
-        """The rational family's map runs in :mod:`jetgaudin.gaudin._kernels`."""
-        return self.model.family.uniform
+        """The rational family's map runs in :mod:`jetgaudin.gaudin._kernels`, the others' in the one family kernel
+        of :mod:`jetgaudin.gaudin._family_kernel` (where the family declares its ``kernel_rule``)."""
+        return self.model.family.uniform or self.model.family.kernel_rule is not None
+
+    def _kernel(self):
+        """``(module name, dispatcher, run(x, ν, steps, save_every))`` of the compiled route."""
+        b = float(self.model.b)
+        if self.model.family.uniform:  # the rational chain kernel (its speed and bits kept)
+            from . import _kernels as K
+
+            c = K.orbit_constants(self.model, self.eta)
+            return "_kernels", K.run_orbit, lambda x, nu, n, se: K.run_orbit(x, b, self.eta, nu, *c, n, se)
+        from . import _family_kernel as F
+
+        c = F.orbit_constants(self.model, self.eta)
+        return "_family_kernel", F.run_orbit, lambda x, nu, n, se: F.run_orbit(x, b, nu, *c, n, se)
 
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
         """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
@@ -335,42 +343,38 @@ class ChainTwoPointBacklund(_ChainMap):
         if self.resolved_backend(steps, X) is not Backend.COMPILED or np.size(X) == 0:
             return None
         from ..backlund._compiled import kernels
-        from . import _kernels
 
         x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[:1]
-        loaded = bool(getattr(_kernels.run_orbit, "signatures", None))
-        where = getattr(getattr(_kernels.run_orbit, "_cache", None), "_cache_path", None)  # Numba's cache directory
-        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, "_kernels.run_orbit-*.nbi")))
+        name, disp, _ = self._kernel()
+        loaded = bool(getattr(disp, "signatures", None))
+        where = getattr(getattr(disp, "_cache", None), "_cache_path", None)  # Numba's cache directory
+        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, f"{name}.run_orbit-*.nbi")))
         compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
-        return kernels().prepare_call(("gaudin.run_orbit",), loaded, _CHAIN_COMPILE_S,
+        return kernels().prepare_call((f"gaudin.{name}.run_orbit",), loaded, _CHAIN_COMPILE_S,
                                       lambda: compiled.advance(x0, None, 0), notify, cached)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
                 backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Advance:
         """As :meth:`_ChainMap.advance` (``backend`` / ``kernel``: this call's route); on the compiled route
         (``backend``, :meth:`resolved_backend`) the steps run in the Numba kernel of :mod:`jetgaudin.gaudin._kernels`
-        (the same orbits to round-off; ``ν1`` at ``X`` by the NumPy branch rule; the residual check is not made and
-        ``imag_max`` is zeros: the imaginary residue is not computed).  A batch member equals its single run, and a
-        split run the unsplit one, bit for bit (both routes)."""
+        (rational) or :mod:`jetgaudin.gaudin._family_kernel` (other families): the same orbits to round-off; ``ν1``
+        at ``X`` by the NumPy branch rule; the residual check is not made and ``imag_max`` is zeros (the imaginary
+        residue is not computed).  A batch member equals its single run, and a split run the unsplit one, bit for
+        bit (both routes)."""
         if backend is not None or kernel is not None:
             return self.with_backend(backend, kernel).advance(X, carry, steps, save_every)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         if self.resolved_backend(steps, X) is not Backend.COMPILED or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
-        from . import _kernels
-
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
-        consts = _kernels.orbit_constants(self.model, self.eta)
-        run_orbit: Any = _kernels.run_orbit  # a Numba dispatcher
-        b = float(self.model.b)
+        run_orbit = self._kernel()[2]
         rows = np.empty((steps // save_every,) + Xb.shape)
         final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
-            out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
-                                                        *consts, steps, save_every)
+            out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")

@@ -421,7 +421,7 @@ class GaudinModel:
         ``backend`` / its alias ``kernel``: the route of ``advance`` / ``iterate``, default ``"auto"``)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), backend, kernel)
+        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend), kernel)
 
     def one_point_backlund(
         self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
@@ -431,7 +431,7 @@ class GaudinModel:
         the rational family."""
         from .maps import ChainOnePointBacklund
 
-        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, backend, kernel)
+        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
 
 
 @dataclass(frozen=True)
