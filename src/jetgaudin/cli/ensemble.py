@@ -158,6 +158,7 @@ def ensemble_command(
     progress: ProgressOption = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens
@@ -194,9 +195,9 @@ def ensemble_command(
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma))
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma, modulus=modulus))
         else:
-            _chains.family_kw(sites, family, gamma)  # --family / --gamma need --sites
+            _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
                 raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
             bb = parse_b(b)
