@@ -83,6 +83,7 @@ class EllipticFamily(Family):
     n_dressing = 4  # 1, w_1 σ_1, w_2 σ_2, w_3 σ_3
     constant_integral = "c0"
     dressing_needs_xi = True
+    kernel_rule = 2  # jetgaudin.gaudin._family_kernel: the null vector of spectrality
 
     def __init__(self, modulus: float = 0.5, half_period: str = "0"):
         self.modulus = _jacobi.check_modulus(modulus)
@@ -167,6 +168,12 @@ class EllipticFamily(Family):
 
     def real_dressing(self, xi, k1, k2):
         return spectral_null_vector(self, xi, k1, k2)
+
+    def kernel_constants(self, xi):
+        """``(w_a(ξ − λ_0), w_a(ξ̄ − λ_0))``, ``a = 1, 2, 3``: the dressing basis at the two spectral points."""
+        xi = complex(xi)
+        lam0 = self._lam0(xi)
+        return _jacobi.w_values(np.array([xi - lam0, np.conj(xi) - lam0]), self.modulus).T.ravel()
 
 
 def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
