@@ -57,10 +57,11 @@ _MAP = r"""
 - C Prop1, Prop2-involution, LP-rank | Abstract/Intro: a hierarchy of Liouville completely integrable models with a
   linear r-matrix structure
 - C Intro-algebras | Intro: N = 1 is the Euler top on su(2); N = 2 the Lagrange top on e(3) = su(2) (+)_s R^3
-- P Chain-r, Chain-integrals | Intro: direct sums give n-body chains (Gaudin model, Lagrange chain) with rational,
-  trigonometric, elliptic r-matrices
+- P Chain-r, Chain-integrals, XYZ-w, XYZ-r, XYZ-nu2, XYZ-Clebsch | Intro: direct sums give n-body chains (Gaudin
+  model, Lagrange chain) with rational, trigonometric, elliptic r-matrices
   reason: the rational case is checked (r-matrix structure of the sum over sites, integrals in involution); the
-  trigonometric and elliptic cases are cited, not derived in this paper
+  elliptic one too (its r-matrix identity and relation, the exact expansion of nu^2, the Clebsch case of the order-2
+  site: jetgaudin's elliptic family); the trigonometric case is cited, not derived in this paper
 - NC | Intro: the construction generalises to any simple Lie algebra
   reason: $CITED
 - P Sec3-structure, Sec3-cocycle | Intro: the N = 3 algebra includes su(2) and R^3 as proper subalgebras but is no
