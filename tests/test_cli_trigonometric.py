@@ -99,3 +99,34 @@ def test_zero_b_and_J_refused_and_family_needs_sites(tmp_path, capsys):
         code, _, err = run_cli(capsys, cmd, "--family", "trigonometric", "--out", tmp_path / cmd) if cmd != "info" \
             else run_cli(capsys, cmd, "--family", "trigonometric")
         assert one_line_error(code, err, "--family", "--sites"), (cmd, err)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_run_layer_interrupt_and_resume_bit_for_bit(tmp_path, backend):
+    """The run layer drives the trigonometric map like any map: an interrupted run (SIGINT after step 9, chunks of 3)
+    resumed from its run.json (the map rebuilt from its description, family and gamma included) equals the
+    uninterrupted orbit bit for bit."""
+    from test_gaudin_run import _interrupt_once
+
+    B = MODEL.two_point_backlund(ETA, kernel=backend)
+    progress, sent = _interrupt_once(9)
+    with pytest.raises(rl.RunInterrupted):
+        rl.start(rl.RunSpec(B, X0, 60, 4, checkpoint_seconds=0.0, program="jetgaudin orbit"), tmp_path / "i",
+                 progress=progress, max_chunk_steps=3)
+    assert sent
+    res = rl.resume(tmp_path / "i")
+    assert res.state is rl.RunStatus.COMPLETED
+    assert np.array_equal(rl.load(tmp_path / "i").X, B.iterate(X0, 60, save_every=4))
+
+
+def test_plot_of_a_trigonometric_run(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "orbit", *COMMON, "--init", INIT, "--steps", "5", "--kernel", "numpy",
+                           "--no-plots", "--out", tmp_path / "o")
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "plot", tmp_path / "o")
+    assert code == 0 and "wrote" in out, err
+
+
+def test_warmup_compiles_the_family_kernel(capsys):
+    code, out, err = run_cli(capsys, "warmup")
+    assert code == 0 and "the family kernel (trigonometric chains)" in out, err

@@ -268,3 +268,38 @@ def test_description_round_trip():
     assert m.describe() == {"b": 0.5, "sites": [[0.0, 1], [1.0, 2]], "family": "trigonometric", "gamma": 0.8}
     assert GaudinModel.from_description(m.describe()) == m
     assert GaudinModel(0.5, [(0.0, 1)]).describe() == {"b": 0.5, "sites": [[0.0, 1]]}  # rational: as today
+
+
+def test_symbolic_trigonometric_checks_can_fail(monkeypatch):
+    """The verify section's checks are not vacuous: the rational r-matrix in place of the trigonometric one breaks
+    Trig-r's identity, and the other sign of the gauge (rho = -1) breaks Trig-gauge."""
+    import jetgaudin.verify.trigonometric as vt
+    from jetgaudin.verify import run_checks
+
+    w = vt._w
+    monkeypatch.setattr(vt, "_w", lambda x, p, a: w(x, p, 0))  # cot -> 1/sin everywhere: not the XXZ r-matrix
+    assert not vt._r_matrix_holds((1, 1))
+    monkeypatch.setattr(vt, "_w", w)
+    d = vt._dressing
+    monkeypatch.setattr(vt, "_dressing", lambda k, xi, lam: vt.mp.matrix([[-1, 0], [0, 1]]) * d(k, xi, lam))
+    (r,) = run_checks(only=["Trig-gauge"])
+    assert r.status != "holds"
+
+
+def test_numerical_branch_rule_of_families_without_uniformizer(rng):
+    """A family that declares no uniformizer (as an elliptic one may) gets the core's numerical continuation of nu
+    along the segment: on trigonometric models (the uniformizer hidden) it gives the exact rule's nu (1e-12: the same
+    square root, the sign decided), and the map through it is the same map (1e-12)."""
+    from jetgaudin.families import TrigonometricFamily
+
+    class Hidden(TrigonometricFamily):
+        def uniformizer(self, lam):
+            return None
+
+    m = random_trig(rng)
+    h = GaudinModel(m.b, m.sites, family=Hidden(m.gamma))
+    X = rng.normal(size=(3, m.n_state))
+    xi = float(np.mean(m.positions[:2])) + 0.7j
+    assert np.abs(h.nu(X, xi) - m.nu(X, xi)).max() <= 1e-12 * np.abs(m.nu(X, xi)).max()
+    assert h.branch_points(X).shape == (3, 0)
+    assert np.abs(h.two_point_backlund(xi)(X) - m.two_point_backlund(xi)(X)).max() <= 1e-12 * (1 + np.abs(X).max())

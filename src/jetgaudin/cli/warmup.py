@@ -22,11 +22,23 @@ def _chain_warmup(notify):
     return jg.ChainTwoPointBacklund(model, 0.9 + 0.05j, backend="compiled").prepare_kernels(X, 1, notify)
 
 
+def _family_warmup(notify):
+    """The one family kernel (``jetgaudin.gaudin._family_kernel``: the trigonometric family's compiled route), compiled
+    through a small trigonometric chain's ``prepare_kernels`` (one compile serves every family and chain)."""
+    import numpy as np
+
+    from jetgaudin.gaudin import GaudinModel
+
+    model = GaudinModel(0.8, [(-1.0, 2), (0.5, 1)], family="trigonometric")
+    X = np.random.default_rng(7).normal(size=(1, model.n_state))
+    return model.two_point_backlund(0.9 + 0.05j, kernel="compiled").prepare_kernels(X, 1, notify)
+
+
 @app.command("warmup")
 def warmup_command() -> None:
-    """Compile every Numba kernel once (N = 3 and generic routes, lanes, batch, branch rule, the chains' kernel) so
-    that later runs start at full speed; prints what it compiled and the time.  Compiled kernels are cached on
-    disk."""
+    """Compile every Numba kernel once (N = 3 and generic routes, lanes, batch, branch rule, the chains' kernel,
+    the family kernel) so that later runs start at full speed; prints what it compiled and the time.  Compiled
+    kernels are cached on disk."""
     from ..backlund import kernels
 
     def say(msg: str) -> None:
@@ -38,3 +50,5 @@ def warmup_command() -> None:
     typer.echo(f"warmup: {len(report.kernels)} kernels {report.state} before; {report.seconds:.1f} s")
     chain = _chain_warmup(say)
     typer.echo(f"warmup: the chains' kernel {chain.state}; {chain.seconds:.1f} s")
+    fam = _family_warmup(say)
+    typer.echo(f"warmup: the family kernel (trigonometric chains) {fam.state}; {fam.seconds:.1f} s")

@@ -137,11 +137,6 @@ class Family(abc.ABC):
         M = sum(N for _, N in sites)
         return [], np.zeros((0, 3 * M))
 
-    @property
-    def has_uniformizer(self) -> bool:
-        """Whether :meth:`uniformizer` gives one (else the branch rule of ``ν`` is continued numerically)."""
-        return self.uniformizer(0.0) is not None
-
     #: label of the constant term of ``ν²`` when it is itself an integral (a quadratic form in the state,
     #: appended after the ``h_{j,m}``; elliptic ``"c0"``), ``None`` when it is a function of ``b`` and the extras
     constant_integral: str | None = None
@@ -166,6 +161,11 @@ class Family(abc.ABC):
         ``z = λ``; trigonometric ``z = e^{2iγλ}``).  ``None`` (default): the core continues ``ν`` numerically
         along the segment instead of by its exact root product."""
         return None
+
+    def uniformizer_inverse(self, z) -> np.ndarray:
+        """``λ(z)``, one preimage of :meth:`uniformizer` (for the branch points; needed when ``uniformizer`` is not
+        ``None``); a family without a uniformizer has no exact branch points: ``z`` (empty) is returned."""
+        return np.asarray(z, dtype=complex)
 
     # ---- the dressing -----------------------------------------------------------------------------------
 

@@ -116,6 +116,9 @@ class TrigonometricFamily(Family):
     def uniformizer(self, lam):
         return np.exp(2j * self.gamma * np.asarray(lam, dtype=complex))
 
+    def uniformizer_inverse(self, z):
+        return np.log(np.asarray(z, dtype=complex)) / (2j * self.gamma)
+
     # ---- dressing -------------------------------------------------------------------------------------------
 
     def dressing_basis(self, lam):

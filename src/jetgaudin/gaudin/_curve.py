@@ -128,14 +128,13 @@ def curve_polynomial(model, X) -> np.ndarray:
     return Q
 
 
-def branch_points(model, X) -> np.ndarray | None:
+def branch_points(model, X) -> np.ndarray:
     """Roots of :func:`curve_polynomial`, shape ``(..., 2M)`` (``(..., 2M − 2)`` for ``b = 0``); other families:
-    the zeros of ``ν²`` as roots ``z_k`` of :func:`_uniform_polynomial` (in the uniformizer ``z``); ``None`` for a
-    family without a uniformizer (elliptic)."""
+    the zeros of ``ν²`` as roots ``z_k`` of :func:`_uniform_polynomial` (in the uniformizer ``z``)."""
     if model.family.uniform:
         return _roots(curve_polynomial(model, X))
-    if not model.family.has_uniformizer:
-        return None  # the branch rule continues ν numerically (_nu_continued)
+    if model.family.uniformizer(0.0) is None:  # no exact rule: the continuation is numerical (no roots needed)
+        return np.zeros(np.shape(X)[:-1] + (0,), dtype=complex)
     Q = _uniform_polynomial(model, X)[..., ::-1]
     if np.any(np.abs(Q[..., 0]) <= 1e-13 * np.max(np.abs(Q), axis=-1)):
         raise BranchPointError(
@@ -175,48 +174,38 @@ def _nu_uniformized(model, X, lam, roots, sheet):
     return sheet * np.where(test >= 0, 1.0, -1.0) * direct
 
 
-#: samples of the numerical continuation of ν along the vertical segment (doubled until every step turns ν² by
-#: less than π/2, i.e. ν by less than π/4: the choice of the root closest to the previous one is then unambiguous)
-_CONTINUATION_START, _CONTINUATION_MAX = 64, 8192
-
-
-def _nu_continued(model, X, lam, sheet):
-    """The branch rule for a family without a uniformizer (elliptic): ``ν(λ)`` continued numerically from
-    ``ν(a) = +√ν²(a)`` (``a = Re λ``; positive for a real state) along the vertical segment ``[a, λ]`` by
-    unwrapping the phase of ``ν²`` on a sample grid, refined until each step turns ``ν²`` by less than ``π/2``;
-    the result is the direct ``±√ν²(λ)`` with the sign of the continuation.  :class:`BranchPointError` when the
-    segment passes through (or, at the finest grid, within round-off of) a zero of ``ν²``."""
-    shape = np.broadcast_shapes(X.shape[:-1], lam.shape)
-    X = np.broadcast_to(X, shape + X.shape[-1:])
-    lam = np.broadcast_to(lam, shape)
-    n = _CONTINUATION_START
-    while True:
+def _nu_numerical(model, X, lam, sheet, n0: int = 64, n_max: int = 2**16):
+    """The branch rule by numerical continuation (families without a uniformizer): ``±√ν²`` at ``n`` equally spaced
+    points of the segment from ``Re λ`` (``ν > 0`` there for a real state), each time the root nearer to the
+    previous one; ``n`` doubles until no step moves ``ν`` by more than a quarter of its size (then the nearer
+    root is unambiguous), else :class:`BranchPointError` (a branch point on or near the segment)."""
+    a = lam.real
+    n = n0
+    while n <= n_max:
         t = np.linspace(0.0, 1.0, n + 1)
-        path = lam.real[..., None] + 1j * lam.imag[..., None] * t
-        nu2 = np.sum(lax_vector(model, X[..., None, :], path) ** 2, axis=-1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            turn = np.angle(nu2[..., 1:] / nu2[..., :-1])
-        ok = np.isfinite(turn) & (np.abs(turn) < 0.5 * np.pi)
-        if np.all(ok):
-            break
-        if n >= _CONTINUATION_MAX or not np.all(np.isfinite(turn)):
-            raise BranchPointError(
-                "nu^2 vanishes on (or numerically at) the vertical segment from Re(eta) to eta: the branch rule of nu "
-                "cannot continue through a branch point; move eta")
+        pts = a[..., None] + 1j * lam.imag[..., None] * t
+        nu2 = np.sum(lax_vector(model, X[..., None, :], pts) ** 2, axis=-1)
+        r = np.sqrt(nu2)
+        v = r[..., 0]
+        ok = np.ones(lam.shape, dtype=bool)
+        for k in range(1, n + 1):
+            rk = r[..., k]
+            rk = np.where(np.abs(rk - v) <= np.abs(rk + v), rk, -rk)
+            ok &= np.abs(rk - v) <= 0.25 * np.maximum(np.abs(rk), np.abs(v))
+            v = rk
+        if np.all(ok) and np.all(v != 0):
+            return sheet * v
         n *= 2
-    ref = np.sqrt(nu2[..., 0]) * np.exp(0.5j * np.sum(turn, axis=-1))
-    direct = np.sqrt(nu2[..., -1])
-    test = (np.conj(direct) * ref).real
-    return sheet * np.where(test >= 0, 1.0, -1.0) * direct
+    raise BranchPointError("nu could not be continued along the vertical segment from Re(eta) (a branch point on or "
+                           "near it); move eta")
 
 
 def nu_with_roots(model, X, lam, roots, sheet: int = 1):
-    """``ν(λ)`` on the default branch given the roots of ``Q`` (``X``, ``lam``, ``roots`` broadcast; ``roots`` is
-    unused, ``None``, for a family without a uniformizer: :func:`_nu_continued`)."""
+    """``ν(λ)`` on the default branch given the roots of ``Q`` (``X``, ``lam``, ``roots`` broadcast)."""
     if not model.family.uniform:
         _check_start(model, lam)
-        if roots is None:
-            return _nu_continued(model, X, lam, sheet)
+        if model.family.uniformizer(0.0) is None:
+            return _nu_numerical(model, X, lam, sheet)
         return _nu_uniformized(model, X, lam, roots, sheet)
     a = lam.real
     for p, _ in model.sites:

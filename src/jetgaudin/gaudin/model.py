@@ -381,17 +381,12 @@ class GaudinModel:
     def branch_points(self, X) -> np.ndarray:
         """The zeros of ``ν²``: roots of ``D(λ)² ν²(λ)``, ``D = Π (λ − λ_i)^{N_i}``, shape ``(..., 2M)``
         (``(..., 2M − 2)`` for ``b = 0``).  Trigonometric: the ``2M`` zeros in one period, ``λ = log(z_k)/(2iγ)``
-        with ``Re λ`` in ``(−π/(2γ), π/(2γ)]``, ``z_k`` the roots in ``z = e^{2iγλ}``."""
+        with ``Re λ`` in ``(−π/(2γ), π/(2γ)]``, ``z_k`` the roots in ``z = e^{2iγλ}``; a family without a
+        uniformizer: none (``(..., 0)``; its branch rule is numerical)."""
         from ._curve import branch_points
 
         r = branch_points(self, X)
-        if r is None:
-            raise InvalidParameterError(
-                f"branch_points: the {self.family.name} family has no uniformizer (nu^2 is an elliptic function, its "
-                "zeros are not the roots of one polynomial); nu and the maps continue nu numerically instead")
-        if self.family.uniform:
-            return r
-        return np.log(r) / (2j * self.family.gamma)
+        return r if self.family.uniform else self.family.uniformizer_inverse(r)
 
     def hamiltonian(self, weights) -> ChainHamiltonian:
         """``H = Σ w_{i,m} h_{i,m}`` as an object for :func:`jetgaudin.integrate`."""
