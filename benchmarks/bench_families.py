@@ -77,32 +77,31 @@ def rational_kernel(args):
         print(line)
 
 
-def trigonometric(args, rng):
-    print("(b) trigonometric map (gamma = 0.7), steps/s; the rational kernel on the same sites")
-    print(f"  {'sites':42s} {'numpy':>9s} {'compiled':>11s} {'ratio':>7s} {'rational kernel':>16s}")
+def _family_rates(args, rng, title, other, make, make_other, rename=str):
+    """steps/s of one orbit, NumPy and compiled, for each site list of ``TRIG``; ``make_other``'s kernel beside."""
+    print(title)
+    print(f"  {'sites':42s} {'numpy':>9s} {'compiled':>11s} {'ratio':>7s} {other:>16s}")
     for name, sites in TRIG.items():
-        m = GaudinModel(0.8, sites, family="trigonometric", gamma=0.7)
+        m = make(sites)
         X = rng.normal(size=m.n_state)
         B = m.two_point_backlund(XI)
         rn = rate(B, X, args.numpy_steps, 1, "numpy", repeats=3)
         rc = rate(B, X, args.steps, 1000, "compiled")
-        rr = rate(GaudinModel(0.8, sites).two_point_backlund(XI), X, args.steps, 1000, "compiled")
-        print(f"  {name:42s} {rn:9.0f} {rc:11.0f} {rc / rn:7.0f} {rr:16.0f}")
+        ro = rate(make_other(sites).two_point_backlund(XI), X, args.steps, 1000, "compiled")
+        print(f"  {rename(name):42s} {rn:9.0f} {rc:11.0f} {rc / rn:7.0f} {ro:16.0f}")
+
+
+def trigonometric(args, rng):
+    _family_rates(args, rng, "(b) trigonometric map (gamma = 0.7), steps/s; the rational kernel on the same sites",
+                  "rational kernel", lambda s: GaudinModel(0.8, s, family="trigonometric", gamma=0.7),
+                  lambda s: GaudinModel(0.8, s))
 
 
 def elliptic(args, rng):
-    print("(e) elliptic map (modulus k = 0.6, b = 0), steps/s; the trigonometric kernel (gamma = 0.7) on the same "
-          "sites")
-    print(f"  {'sites':42s} {'numpy':>9s} {'compiled':>11s} {'ratio':>7s} {'trig kernel':>16s}")
-    for name, sites in TRIG.items():
-        m = GaudinModel(0.0, sites, family="elliptic", modulus=0.6)
-        X = rng.normal(size=m.n_state)
-        B = m.two_point_backlund(XI)
-        rn = rate(B, X, args.numpy_steps, 1, "numpy", repeats=3)
-        rc = rate(B, X, args.steps, 1000, "compiled")
-        rt = rate(GaudinModel(0.8, sites, family="trigonometric", gamma=0.7).two_point_backlund(XI), X, args.steps,
-                  1000, "compiled")
-        print(f"  {name.replace('trig', 'XYZ'):42s} {rn:9.0f} {rc:11.0f} {rc / rn:7.0f} {rt:16.0f}")
+    _family_rates(args, rng, "(e) elliptic map (modulus k = 0.6, b = 0), steps/s; the trigonometric kernel (gamma = "
+                  "0.7) on the same sites", "trig kernel",
+                  lambda s: GaudinModel(0.0, s, family="elliptic", modulus=0.6),
+                  lambda s: GaudinModel(0.8, s, family="trigonometric", gamma=0.7), lambda n: n.replace("trig", "XYZ"))
 
 
 def one_kernel(args, rng):

@@ -6,15 +6,7 @@ the field ``b = 0``, the checks and the matching with the literature.
 
 from .flow import ChainFlowMap
 from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
-from .model import (
-    ChainHamiltonian,
-    GaudinModel,
-    clebsch_top,
-    gaudin_magnet,
-    lagrange_chain,
-    parse_sites,
-    twisted_chain,
-)
+from .model import ChainHamiltonian, GaudinModel, clebsch_top, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
 
 __all__ = [
     "GaudinModel",
