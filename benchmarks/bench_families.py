@@ -13,7 +13,9 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
 (d) the same work two ways (trigonometric and elliptic, M = 4): ``--work-steps`` steps of the compiled map against
     heyoka integrating the flow of ``G_ξ`` over the same time sampled at integer times (wall, whole calls, median
     of 3);
-(e) the elliptic map (modulus 0.6, issue 24), compiled and NumPy, on the sites of (b), the trigonometric kernel
+(e) an ensemble (trig magnet M = 4, 64 orbits): the batch on all cores (``prange``) against the orbits one by one
+    (wall time, median of 3; orbit-steps/s);
+(f) the elliptic map (modulus 0.6, issue 24), compiled and NumPy, on the sites of (b), the trigonometric kernel
     beside it.
 """
 
@@ -98,7 +100,7 @@ def trigonometric(args, rng):
 
 
 def elliptic(args, rng):
-    _family_rates(args, rng, "(e) elliptic map (modulus k = 0.6, b = 0), steps/s; the trigonometric kernel (gamma = "
+    _family_rates(args, rng, "(f) elliptic map (modulus k = 0.6, b = 0), steps/s; the trigonometric kernel (gamma = "
                   "0.7) on the same sites", "trig kernel",
                   lambda s: GaudinModel(0.0, s, family="elliptic", modulus=0.6),
                   lambda s: GaudinModel(0.8, s, family="trigonometric", gamma=0.7), lambda n: n.replace("trig", "XYZ"))
@@ -152,19 +154,31 @@ def _same_work(args, rng, label, m):
               f"{np.abs(out[-1].X - orbit).max():.2e}")
 
 
+def ensemble(args, rng):
+    m = GaudinModel(0.8, TRIG["trig magnet M=4"], family="trigonometric", gamma=0.7)
+    X = rng.normal(size=(64, m.n_state))
+    B = m.two_point_backlund(XI, kernel="compiled")
+    B.iterate(X[:2], 10)
+    n = args.steps // 64
+    tb = float(np.median(timed(lambda: B.iterate(X, n, save_every=n), 3, time.perf_counter)))
+    ts = float(np.median(timed(lambda: [B.iterate(x, n, save_every=n) for x in X], 3, time.perf_counter)))
+    print(f"(e) ensemble, trig magnet M=4, 64 orbits x {n} steps (wall, {os.cpu_count()} cores): batch "
+          f"{64 * n / tb:.3g} orbit-steps/s, one by one {64 * n / ts:.3g} ({ts / tb:.2f}x)")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=1_000_000)
     p.add_argument("--numpy-steps", type=int, default=1000)
     p.add_argument("--work-steps", type=int, default=1000)
     p.add_argument("--baseline-src", default=None, help="a source tree (its src/) for the rational baseline")
-    p.add_argument("--parts", default="abcde")
+    p.add_argument("--parts", default="abcdef")
     a = p.parse_args()
     print("machine:", machine())
     rng = np.random.default_rng(1)
     for part, fn in (("a", lambda: rational_kernel(a)), ("b", lambda: trigonometric(a, rng)),
                      ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng)),
-                     ("e", lambda: elliptic(a, rng))):
+                     ("e", lambda: ensemble(a, rng)), ("f", lambda: elliptic(a, rng))):
         if part in a.parts:
             fn()
 

@@ -35,6 +35,16 @@ def random_trig(rng, gamma=None, orders=(1, 2, 3), b=None):
     return GaudinModel(b, [(float(p), int(rng.choice(orders))) for p in pos], family="trigonometric", gamma=g)
 
 
+def coalesced(y, lam0, eps, b, g):
+    """N = len(y) order-1 sites at lam0 + eps t_i (t = -1, 0.35, 1.2) with the spins S solving the moment equations
+    sum_i (eps t_i)^k S_i = y_k: ``(V, S, chain)``, V[k, i] = (eps t_i)^k."""
+    N = len(y)
+    t = np.array([-1.0, 0.35, 1.2])[:N]
+    V = (eps * t)[None, :] ** np.arange(N)[:, None]
+    chain = GaudinModel(b, [(lam0 + e, 1) for e in eps * t], family="trigonometric", gamma=g)
+    return V, np.linalg.solve(V, y), chain
+
+
 def xi_gradients(m, lam):
     """d xi^a(lam)/dX_I, shape (3, 3M): xi is affine in X, so differences of basis states are exact."""
     E = np.eye(m.n_state)
@@ -88,12 +98,9 @@ def test_jet_site_is_the_coalescence_of_order_one_sites(rng, N):
     jet = GaudinModel(b, [(lam0, N)], family="trigonometric", gamma=g)
     lam = 1.0 + 0.4j
     ref = jet.lax_matrix(y.reshape(-1), lam)
-    t = np.array([-1.0, 0.35, 1.2])[:N]
     errs = []
     for eps in (0.02, 0.01, 0.005):
-        V = (eps * t)[None, :] ** np.arange(N)[:, None]
-        S = np.linalg.solve(V, y)
-        chain = GaudinModel(b, [(lam0 + e, 1) for e in eps * t], family="trigonometric", gamma=g)
+        _, S, chain = coalesced(y, lam0, eps, b, g)
         errs.append(np.abs(chain.lax_matrix(S.reshape(-1), lam) - ref).max())
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
     assert np.all((ratios > 1.9) & (ratios < 2.1)), ratios
@@ -303,3 +310,13 @@ def test_numerical_branch_rule_of_families_without_uniformizer(rng):
     assert np.abs(h.nu(X, xi) - m.nu(X, xi)).max() <= 1e-12 * np.abs(m.nu(X, xi)).max()
     assert h.branch_points(X).shape == (3, 0)
     assert np.abs(h.two_point_backlund(xi)(X) - m.two_point_backlund(xi)(X)).max() <= 1e-12 * (1 + np.abs(X).max())
+
+
+def test_exact_chain_flow_refuses_the_trigonometric_family():
+    """ChainExactFlow (issue 25) matches rational weights (lambda - lambda_i)^-m: a trigonometric Hamiltonian is
+    refused with a message, not integrated wrongly."""
+    from jetgaudin.exact_chain import ChainExactFlow
+
+    m = GaudinModel(0.8, [(0.0, 1), (1.0, 1)], family="trigonometric", gamma=0.7)
+    with pytest.raises(jg.InvalidParameterError, match="rational family"):
+        ChainExactFlow(m.hamiltonian(np.ones(m.n_integrals)), 0.1)

@@ -15,7 +15,7 @@ import jetgaudin as jg
 from jetgaudin.families import trigonometric as trig
 from jetgaudin.gaudin import GaudinModel
 from test_gaudin_maps import CHECKS
-from test_trigonometric import random_trig
+from test_trigonometric import coalesced, random_trig
 
 
 @pytest.fixture
@@ -185,12 +185,9 @@ def test_pole_coalescence(rng, N):
     g, lam0, b, xi = 0.8, 0.3, 0.9, 1.0 + 0.4j
     y = rng.normal(size=(N, 3))
     ref = GaudinModel(b, [(lam0, N)], family="trigonometric", gamma=g).two_point_backlund(xi)(y.reshape(-1))
-    t = np.array([-1.0, 0.35, 1.2])[:N]
     errs = []
     for eps in (0.02, 0.01, 0.005):
-        V = (eps * t)[None, :] ** np.arange(N)[:, None]
-        S = np.linalg.solve(V, y)
-        chain = GaudinModel(b, [(lam0 + e, 1) for e in eps * t], family="trigonometric", gamma=g)
+        V, S, chain = coalesced(y, lam0, eps, b, g)
         Sn = chain.two_point_backlund(xi)(S.reshape(-1)).reshape(N, 3)
         errs.append(np.abs(V @ Sn - ref.reshape(N, 3)).max())
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
@@ -214,3 +211,18 @@ def test_description_rebuilds_the_map():
     d = B.describe()
     assert d["family"] == "trigonometric" and d["gamma"] == 0.8
     assert map_from_description(d) == B
+
+
+def test_zero_field(rng):
+    """b = 0 (J != 0: nu^2 -> -gamma^2 J^2 at +-i infinity): the map is real, keeps the integrals, is the time-1 flow
+    of G_xi (tolerances as the declared properties: 1e-12 relative, 1e-10) and inverted by the other branch."""
+    m = GaudinModel(0.0, [(-0.4, 1), (0.3, 2), (1.1, 1)], family="trigonometric", gamma=1.3)
+    X = rng.normal(size=m.n_state)
+    xi = 0.6 - 0.4j
+    B = m.two_point_backlund(xi)
+    Y, _, imag = B.step(X)
+    assert imag.max() <= 1e-13
+    assert np.abs(m.integrals(Y) - m.integrals(X)).max() <= 1e-12 * (1 + np.abs(m.integrals(X)).max())
+    Z = jg.integrate(m.interpolating_flow_hamiltonian(X, xi), X, 1.0, rtol=1e-13, atol=1e-13).X[-1]
+    assert np.abs(Y - Z).max() <= 1e-10 * (1 + np.abs(X).max())
+    assert np.abs(B.inverse()(Y) - X).max() <= 1e-9 * (1 + np.abs(X).max())

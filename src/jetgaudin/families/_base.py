@@ -54,7 +54,7 @@ class Family(abc.ABC):
     name: str = ""
     #: ``True`` when ``w_1 = w_2 = w_3`` (rational): the core then uses the Gram matrix of the ``y``'s
     uniform: bool = False
-    #: number ``P`` of dressing basis matrices ``B_p`` (the compiled kernel takes ``P = 6``)
+    #: number ``P`` of dressing basis matrices ``B_p``
     n_dressing: int = 0
     #: the gauge rule's id in the compiled kernel (:mod:`jetgaudin.gaudin._family_kernel`; ``None``: the family
     #: has no compiled route yet — add a branch to its ``_coefficients`` and set the id)

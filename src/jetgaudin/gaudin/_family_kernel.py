@@ -26,7 +26,7 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ._kernels import _abs2
 
@@ -90,7 +90,8 @@ def _elliptic_coefficients(gk, a1, a2, c):
 
 @njit(cache=True)
 def _coefficients(rule, gk, a1, a2, c):
-    """The dressing coefficients ``c`` (6,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)``."""
+    """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
+    and 1: P = 6; a new family adds its rule here)."""
     p = _abs2(a1)
     q = _abs2(a2)
     n = p + q
@@ -199,7 +200,7 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
 
 
 @njit(cache=True)
-def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_every):
+def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
     """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
     n = x0.shape[0]
     rows = np.empty((steps // save_every + 1, n))
@@ -207,7 +208,7 @@ def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_ev
     x = x0.copy()
     y = np.empty(n)
     Nmax = T.shape[1]
-    c = np.empty(6, dtype=np.complex128)
+    c = np.zeros(n_basis, dtype=np.complex128)
     Dt = np.empty((Nmax, 4), dtype=np.complex128)
     At = np.empty((Nmax, 4), dtype=np.complex128)
     det = np.empty(Nmax, dtype=np.complex128)
@@ -222,8 +223,27 @@ def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, site_off, site_n, steps, save_ev
     return rows, x, nu
 
 
+@njit(cache=True, parallel=True)
+def run_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
+    """A batch of independent orbits ``X0`` (B, 3M), one :func:`run_orbit` per iteration of a ``prange`` loop (all
+    cores): ``(rows (steps//save_every, B, 3M) without the start states, final (B, 3M), last ν1 (B,))``; every
+    orbit gets the bits of its single run."""
+    B, n = X0.shape
+    rows = np.empty((steps // save_every, B, n))
+    final = np.empty((B, n))
+    last = np.empty(B, dtype=np.complex128)
+    for i in prange(B):
+        r, x, nu = run_orbit(X0[i].copy(), b, nu0[i], f, rule, gk, T, pidx, n_basis, site_off, site_n, steps,
+                             save_every)
+        rows[:, i] = r[1:]
+        final[i] = x
+        last[i] = nu
+    return rows, final, last
+
+
 def orbit_constants(model, xi):
-    """``(f, rule, gk, T, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module docstring)."""
+    """``(f, rule, gk, T, pidx, P, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module
+    docstring)."""
     fam = model.family
     f = np.zeros((3, model.M), dtype=complex)
     for i, (p, N) in enumerate(model.sites):
@@ -244,5 +264,5 @@ def orbit_constants(model, xi):
         for t, p in enumerate(np.flatnonzero(used[:, e])):
             pidx[e, t] = p
             T[:, :, e, t] = full[:, :, p, e]
-    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx,
+    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx, P,
             np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))

@@ -27,6 +27,7 @@ from __future__ import annotations
 import glob
 import os
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -69,6 +70,17 @@ def resolve_backend(backend: Backend, has_compiled: bool, steps: int, X, kind: s
         return backend
     work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
     return Backend.COMPILED if has_compiled and work >= _AUTO_MIN_WORK else Backend.NUMPY
+
+
+@lru_cache(maxsize=64)
+def _orbit_constants(model: GaudinModel, eta: complex) -> tuple:
+    """The compiled kernels' per-orbit constants, computed once per ``(model, η)`` (a run calls ``advance`` chunk by
+    chunk; the kernels only read them)."""
+    if model.family.uniform:
+        from ._kernels import orbit_constants
+    else:
+        from ._family_kernel import orbit_constants
+    return orbit_constants(model, eta)
 
 
 def _check_model(model) -> None:
@@ -325,14 +337,13 @@ class ChainTwoPointBacklund(_ChainMap):
     def _kernel(self):
         """``(module name, dispatcher, run(x, ν, steps, save_every))`` of the compiled route."""
         b = float(self.model.b)
+        c = _orbit_constants(self.model, self.eta)
         if self.model.family.uniform:  # the rational chain kernel (its speed and bits kept)
             from . import _kernels as K
 
-            c = K.orbit_constants(self.model, self.eta)
             return "_kernels", K.run_orbit, lambda x, nu, n, se: K.run_orbit(x, b, self.eta, nu, *c, n, se)
         from . import _family_kernel as F
 
-        c = F.orbit_constants(self.model, self.eta)
         return "_family_kernel", F.run_orbit, lambda x, nu, n, se: F.run_orbit(x, b, nu, *c, n, se)
 
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
@@ -369,13 +380,24 @@ class ChainTwoPointBacklund(_ChainMap):
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
-        run_orbit = self._kernel()[2]
+        name, _, run_orbit = self._kernel()
+        if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
+            from . import _family_kernel
+
+            run_batch: Any = _family_kernel.run_batch  # a Numba dispatcher
+            rows, final, last = run_batch(np.ascontiguousarray(Xb), float(self.model.b), nu.astype(complex),
+                                          *_orbit_constants(self.model, self.eta), steps, save_every)
+            return self._finish(rows, final, last, shape)
         rows = np.empty((steps // save_every,) + Xb.shape)
         final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
             out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
+        return self._finish(rows, final, last, shape)
+
+    @staticmethod
+    def _finish(rows, final, last, shape) -> Advance:
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")
         return Advance(rows=rows.reshape((rows.shape[0],) + shape), X=final.reshape(shape),

@@ -128,19 +128,29 @@ def _taylor_coefficient(k: int, n: int, d: float) -> float:
 
 @dataclass(frozen=True)
 class GaudinModel:
-    r"""The chain with ``sites = [(λ_i, N_i), …]`` in the field ``b e_3`` (see the module docstring).
+    r"""The chain with ``sites = [(λ_i, N_i), …]`` in the field ``b e_3`` (see the module docstring), of the
+    Gaudin family ``family`` (``docs/families.md``: the formulas above are the rational family's; the
+    trigonometric one replaces ``(λ − λ_i)^{−(k+1)}`` by ``φ_{a,k}(λ − λ_i)`` built on ``γ/sin(γx)``,
+    ``γ cot(γx)``, :mod:`jetgaudin.families.trigonometric`).
 
     Parameters
     ----------
     b : float
         Field strength (any real; ``b = 0`` is the magnet without field, see ``docs/chains.md``).
     sites : sequence of (float, int)
-        Distinct real positions and integer orders ``N_i ≥ 1``.
+        Distinct real positions (modulo the family's period, ``π/γ`` for the trigonometric family) and integer
+        orders ``N_i ≥ 1``.
+    family : {"rational", "trigonometric"} or jetgaudin.families.Family
+        The family (default rational: the paper's chains).
+    gamma : float, optional
+        The anisotropy ``γ > 0`` of the trigonometric family (default 1); the rational family has none.
 
     Raises
     ------
     InvalidParameterError
-        Non-real, non-finite or repeated positions; orders not integers ``≥ 1``; ``b`` not a finite real.
+        Non-real, non-finite or repeated positions; orders not integers ``≥ 1``; ``b`` not a finite real; an
+        unknown family; ``gamma`` not a finite real ``> 0``, or given to the rational family; sites equal modulo
+        the period.
     """
 
     b: float
