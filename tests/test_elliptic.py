@@ -136,13 +136,15 @@ def test_involution():
 # ---------------------------------------------------------------------------------------------- the map
 
 
+@pytest.mark.parametrize("k, eta", [(0.6, ETA), (0.95, -0.3 - 0.2j), (0.05, 1.2 + 0.4j)])
 @pytest.mark.parametrize("sites", [SITES, JET_SITES])
-def test_map_properties(sites):
+def test_map_properties(sites, k, eta):
     """Integrals preserved (1e-12 relative), Poisson map (finite-difference Jacobian, test_gaudin_maps.check_poisson),
-    real output, inverse = opposite branch = conj(eta), the time-1 flow of G_eta (check_interpolates_flow)."""
-    m = model(0.6, sites)
+    real output, inverse = opposite branch = conj(eta), the time-1 flow of G_eta (check_interpolates_flow); moduli
+    near 0 and 1, Im eta of both signs."""
+    m = model(k, sites)
     X = state(m, 2)
-    B = m.two_point_backlund(ETA)
+    B = m.two_point_backlund(eta)
     Y = B(X)
     assert np.abs(m.integrals(Y) - m.integrals(X)).max() <= 1e-12 * np.abs(m.integrals(X)).max()
     rng = np.random.default_rng(0)
