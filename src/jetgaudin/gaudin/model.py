@@ -140,10 +140,13 @@ class GaudinModel:
     sites : sequence of (float, int)
         Distinct real positions (modulo the family's period, ``π/γ`` for the trigonometric family) and integer
         orders ``N_i ≥ 1``.
-    family : {"rational", "trigonometric"} or jetgaudin.families.Family
+    family : {"rational", "trigonometric", "elliptic"} or jetgaudin.families.Family
         The family (default rational: the paper's chains).
     gamma : float, optional
         The anisotropy ``γ > 0`` of the trigonometric family (default 1); the rational family has none.
+    modulus : float, optional
+        The modulus ``k ∈ [0, 1)`` of the elliptic (XYZ) family (required by it; ``b`` must be 0 there,
+        :mod:`jetgaudin.families.elliptic`).
 
     Raises
     ------
