@@ -13,7 +13,9 @@ the addition theorem with Jacobi's imaginary transformation (Abramowitz & Stegun
           \operatorname{dn}(x+iy) = \frac{d c_1 d_1 - i m\, s c s_1}{\delta}.
 
 ``δ`` is a sum of two non-negative terms (no cancellation), so the relative accuracy is that of the real calls
-(a few ulp, tested against ``mpmath.ellipfun`` in ``tests/test_jacobi.py``) up to the poles.  The real arguments
+up to the poles (against ``mpmath.ellipfun``, ``tests/test_jacobi.py``: ~1e-15 for 0.3 ≤ k ≤ 0.8, 7e-15 at 0.99,
+9e-14 at 1e-4; ~1e-11 at k = 1e-6 and 0.999999, where Cephes' own expansions for m → 1 and ``cn = cos(am)`` limit
+it).  The real arguments
 are first reduced (``x`` modulo ``2K``, ``y`` modulo ``2K'``, with the sign rules ``sn, cn → −sn, −cn`` under
 ``x → x + 2K`` and ``cn, dn → −cn, −dn`` under ``y → y + 2K'``) because Cephes' phase ``am(x)`` loses absolute
 accuracy proportionally to ``|x|``.  The ratios ``ns = δ/N_s``, ``ds = N_d/N_s``, ``cs = N_c/N_s`` of the three
