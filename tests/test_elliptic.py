@@ -268,6 +268,7 @@ def test_clebsch_top_is_the_clebsch_case(k):
         a, b = A + mu, B - 2 * mu * r
         c = b - np.array([a[1] * a[2], a[2] * a[0], a[0] * a[1]])
         assert np.ptp(c) <= 1e-12 * np.abs(b).max()
+        assert abs((a[0] - a[1]) / (a[0] - a[2]) - k * k) <= 1e-13  # the modulus from the body's a_i
     # not the Clebsch case for a wrong b (e.g. a sign flip of B): the check bites
     c = -B - np.array([A[1] * A[2], A[2] * A[0], A[0] * A[1]])
     assert np.ptp(c) > 1e-3
