@@ -96,3 +96,21 @@ def test_family_needs_modulus_and_modulus_needs_elliptic(tmp_path, capsys):
     code, _, err = run_cli(capsys, "info", "--sites", "0:1,1:1", "--family", "trigonometric", "--modulus", "0.3",
                            "--b", "1", "--init", "1,0,0.3,0.2,0.1,-0.5")
     assert one_line_error(code, err, "--modulus", "elliptic"), err
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_resume_and_plot(tmp_path, capsys, backend):
+    """An interrupted elliptic run (SIGINT after step 6, chunks of 3) resumed from run.json (the map rebuilt from its
+    description: family and modulus) equals the uninterrupted orbit bit for bit; `plot` draws the finished run."""
+    from test_gaudin_run import _interrupt_once
+
+    B = MODEL.two_point_backlund(ETA, kernel=backend)
+    progress, sent = _interrupt_once(6)
+    with pytest.raises(rl.RunInterrupted):
+        rl.start(rl.RunSpec(B, X0, 24, 2, checkpoint_seconds=0.0, program="jetgaudin orbit"), tmp_path / "i",
+                 progress=progress, max_chunk_steps=3)
+    assert sent
+    assert rl.resume(tmp_path / "i").state is rl.RunStatus.COMPLETED
+    assert np.array_equal(rl.load(tmp_path / "i").X, B.iterate(X0, 24, save_every=2))
+    code, out, err = run_cli(capsys, "plot", tmp_path / "i")
+    assert code == 0 and "wrote" in out, err
