@@ -17,11 +17,22 @@ from jetgaudin.ensemble import DEFAULT_CASIMIRS, default_chain_casimirs, sample_
 from jetgaudin.gaudin import GaudinModel
 from test_cli_chains import main_quiet, one_line_error
 
-FAMILIES = [("rational", {}), ("trigonometric", {"gamma": 0.7})]
+FAMILIES = [("rational", {}), ("trigonometric", {"gamma": 0.7}), ("elliptic", {"modulus": 0.6})]
+#: the families with a physical Hamiltonian (a point at infinity; jetgaudin.gaudin.physical)
+WITH_INFINITY = FAMILIES[:2]
 
 
-def _model(fam, kw, b=0.8, sites=((-1.0, 1), (0.3, 3), (1.2, 2))):
-    return GaudinModel(b, sites, family=fam, **kw)
+def _b(fam):
+    return 0.0 if fam == "elliptic" else 0.8  # the elliptic family has no field
+
+
+def _model(fam, kw, b=None, sites=((-1.0, 1), (0.3, 3), (1.2, 2))):
+    return GaudinModel(_b(fam) if b is None else b, sites, family=fam, **kw)
+
+
+def _cli_family(fam, kw):
+    """``--family F [--gamma g | --modulus k] --b b`` of the command line."""
+    return ["--family", fam] + [a for k, v in kw.items() for a in (f"--{k}", str(v))] + ["--b", str(_b(fam))]
 
 
 # ------------------------------------------------------------------------------------------------ the sampler
@@ -58,8 +69,8 @@ def test_chain_sampler_bad_input():
 
 @pytest.mark.parametrize(("fam", "kw"), FAMILIES)
 def test_cli_ensemble_sites_samples_the_default_leaf(fam, kw, tmp_path):
-    extra = ["--family", fam] + (["--gamma", str(kw["gamma"])] if kw else [])
-    code = main_quiet("ensemble", "--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--eta", "0.5+0.05i", "--orbits", "6",
+    extra = _cli_family(fam, kw)
+    code = main_quiet("ensemble", "--sites", "-1:1,0.3:3,1.2:2", "--eta", "0.5+0.05i", "--orbits", "6",
                       "--seed", "5", "--steps", "12", "--out", tmp_path / "e", *extra)
     assert code == 0
     m = _model(fam, kw)
@@ -106,7 +117,7 @@ def _nu2_coefficient(m, X):
     return -(2 * f(T + np.log(2) / (2 * g)) - f(T)).real / (8 * g * g)
 
 
-@pytest.mark.parametrize(("fam", "kw"), FAMILIES)
+@pytest.mark.parametrize(("fam", "kw"), WITH_INFINITY)
 def test_physical_hamiltonian_is_the_coefficient_at_infinity(fam, kw, rng):
     for sites in (((-1.0, 1), (0.3, 3), (1.2, 2)), ((0.4, 2),), ((-0.5, 1), (0.2, 1), (0.9, 1))):
         m = _model(fam, kw, sites=sites)
@@ -152,13 +163,23 @@ def test_physical_hamiltonian_rational_limit_and_period(rng):
                        w, rtol=0, atol=1e-14)
 
 
-@pytest.mark.parametrize(("fam", "kw"), FAMILIES)
+def test_physical_hamiltonian_refused_without_a_point_at_infinity(tmp_path, capsys):
+    m = _model("elliptic", {"modulus": 0.6})
+    with pytest.raises(jg.InvalidParameterError, match="elliptic family has no physical Hamiltonian"):
+        m.physical_hamiltonian()
+    init = ",".join(["0.1"] * m.n_state)
+    code = main_quiet("flow", "--sites", "-1:1,0.3:3,1.2:2", "--init", init, "--hamiltonian", "physical",
+                      "--out", tmp_path / "f", *_cli_family("elliptic", {"modulus": 0.6}))
+    assert one_line_error(code, capsys.readouterr().err, "--hamiltonian", "weights")
+
+
+@pytest.mark.parametrize(("fam", "kw"), WITH_INFINITY)
 def test_cli_flow_sites_physical(fam, kw, tmp_path):
     m = _model(fam, kw)
     X0 = np.round(np.random.default_rng(8).normal(size=m.n_state), 3)
-    extra = ["--family", fam] + (["--gamma", str(kw["gamma"])] if kw else [])
+    extra = _cli_family(fam, kw)
     init = ",".join(repr(float(v)) for v in X0)
-    code = main_quiet("flow", "--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--init", init,
+    code = main_quiet("flow", "--sites", "-1:1,0.3:3,1.2:2", "--init", init,
                       "--hamiltonian", "physical", "--dt", "0.05", "--steps", "10", "--out", tmp_path / "f", *extra)
     assert code == 0
     run = json.loads((tmp_path / "f" / "run.json").read_text())
@@ -180,8 +201,8 @@ def test_cli_flow_sites_physical(fam, kw, tmp_path):
 def chain_runs(request, tmp_path_factory):
     fam, kw = request.param
     d = tmp_path_factory.mktemp(fam)
-    extra = ["--family", fam] + (["--gamma", str(kw["gamma"])] if kw else [])
-    sites = ["--sites", "-1:1,0.3:3,1.2:2", "--b", "0.8", "--eta", "0.5+0.05i"]
+    extra = _cli_family(fam, kw)
+    sites = ["--sites", "-1:1,0.3:3,1.2:2", "--eta", "0.5+0.05i"]
     assert main_quiet("ensemble", *sites, "--orbits", "3", "--steps", "30", "--out", d / "e", *extra) == 0
     m = _model(fam, kw)
     X0 = np.round(np.random.default_rng(8).normal(size=m.n_state), 3)

@@ -75,11 +75,13 @@ def test_recorded_ensemble_on_dask_equals_local(cluster, tmp_path):
 # ---- chains of every family (issue 23): any map's batch through jetgaudin.ensemble.DaskBatch -------------------
 @pytest.mark.parametrize(("family", "kw", "backend"), [("rational", {}, "numpy"), ("rational", {}, "compiled"),
                                                        ("trigonometric", {"gamma": 0.7}, "numpy"),
-                                                       ("trigonometric", {"gamma": 0.7}, "compiled")])
+                                                       ("trigonometric", {"gamma": 0.7}, "compiled"),
+                                                       ("elliptic", {"modulus": 0.6}, "numpy"),
+                                                       ("elliptic", {"modulus": 0.6}, "compiled")])
 def test_chain_ensemble_on_dask_equals_local_bit_for_bit(cluster, family, kw, backend):
     from jetgaudin.ensemble import DaskBatch, sample_chain_on_leaf
 
-    model = jg.GaudinModel(0.8, [(-1.0, 1), (0.3, 2)], family=family, **kw)
+    model = jg.GaudinModel(0.0 if family == "elliptic" else 0.8, [(-1.0, 1), (0.3, 2)], family=family, **kw)
     X0 = sample_chain_on_leaf(model, None, 7, seed=3)
     m = model.two_point_backlund(0.5 + 0.05j, backend=backend)
     local = m.advance(X0, None, 9, 3)

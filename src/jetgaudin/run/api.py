@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import _fs
 from .._errors import InvalidParameterError, JetGaudinError, RecordingError, RunDirectoryError
-from ..maps import Backend, Map, map_from_description
+from ..maps import Backend, Map, map_from_description, with_resolved_backend
 from .driver import CompileInterrupted, Driver, Position, RaiseOnSignal, RunInterrupted
 from .files import (
     ENSEMBLE_H5,
@@ -220,12 +220,11 @@ def _resolved(spec: RunSpec) -> RunSpec:
     """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
     resolve = getattr(spec.map, "resolved_backend", None)
     if spec.map.backend is Backend.AUTO and resolve is not None:
-        backend = resolve(spec.steps, spec.X0)
-        # a map's own with_backend where it has one (the chain maps: their kernel= alias would otherwise keep auto;
-        # DaskBatch: its inner map)
-        with_backend = getattr(spec.map, "with_backend", None)
-        m = with_backend(backend) if with_backend is not None else \
-            dataclasses.replace(spec.map, backend=backend)  # type: ignore[type-var]
+        backend = resolve(X=spec.X0, steps=spec.steps)
+        inner = getattr(spec.map, "inner", None)  # a wrapper (jetgaudin.ensemble.DaskBatch): its inner map's route
+        wrapper: Any = spec.map
+        m = dataclasses.replace(wrapper, inner=with_resolved_backend(inner, backend)) if isinstance(inner, Map) \
+            else with_resolved_backend(spec.map, backend)
         return dataclasses.replace(spec, map=m)
     return spec
 
