@@ -256,7 +256,8 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
         run = dict(_new_record(spec, health), **(record or {}))
         store = _open_store(spec, out_dir, run, fresh=True)
         pos = Position(0, spec.X0.copy(), None)
-        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, compile_s=compile_s, **options)
+        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, fresh=True, compile_s=compile_s,
+                      **options)
 
 
 def _prepare(spec: RunSpec, X: np.ndarray, out_dir: Path, notify: Callable[[str], None] | None,
@@ -293,7 +294,7 @@ def _clear(out_dir: Path) -> None:
 
 
 def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: Health, elapsed0: float, *,
-           first: bool, compile_s: float = 0.0, progress: Callable[[int, int], None] | None = None,
+           first: bool, fresh: bool = False, compile_s: float = 0.0, progress: Callable[[int, int], None] | None = None,
            handle_signals: bool = True, max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20,
            chunk_rows: int = 4096) -> RunResult:
     if isinstance(store, EnsembleStore):
@@ -314,7 +315,7 @@ def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: He
     n0 = pos.n
     driver = Driver(spec, store, pos, health, summary=summary, elapsed0=elapsed0, progress=progress,
                     handle_signals=handle_signals, max_chunk_steps=max_chunk_steps, max_chunk_bytes=max_chunk_bytes,
-                    chunk_rows=chunk_rows, first=first)
+                    chunk_rows=chunk_rows, first=first, fresh=fresh)
     try:
         out = driver.run()
     except BaseException as exc:  # a bug or an unexpected error: the checkpointed data stay valid and resumable

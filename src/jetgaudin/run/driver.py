@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _fs
 from .._errors import JetGaudinError, RunIOError
 from ..maps import Backend
 from .files import one_line
@@ -174,8 +175,9 @@ class Driver:
                  summary: Callable[[Health, float], dict], elapsed0: float = 0.0,
                  progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
                  max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20, chunk_rows: int = 4096,
-                 first: bool = False):
+                 first: bool = False, fresh: bool = False):
         self.spec, self.store, self.pos, self.health = spec, store, pos, health
+        self.fresh = fresh
         self.summary_fn, self.elapsed0, self.progress = summary, elapsed0, progress
         self.handle_signals, self.first = handle_signals, first
         row_bytes = 8 * spec.B * spec.n_state
@@ -212,6 +214,7 @@ class Driver:
         t_ck = time.monotonic()
         with SignalFlag(self.handle_signals) as sig:
             try:
+                store.begin(self.fresh)
                 if self.first:
                     bad = health.check([0], pos.X[None])
                     failure = bad.reason if bad else None
@@ -232,8 +235,8 @@ class Driver:
                 else:
                     status, text = RunStatus.COMPLETED, "completed"
                 store.checkpoint(pos.n, pos.X, pos.carry, self.summary(text))
-            except RunIOError as exc:
-                reason = one_line(exc)
+            except RunIOError as exc:  # the status says what failed in one word: "disk full", ...
+                reason = _fs.io_failure(exc)
                 store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())
                 return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
             if self.progress is not None:

@@ -36,6 +36,13 @@ from .files import (
 
 #: errors that mean "writing failed" (h5py raises RuntimeError or OSError subclasses for HDF5 failures)
 WRITE_ERRORS = (OSError, RuntimeError)
+#: bytes of HDF5 metadata (chunk index, object headers, superblock) one append or flush may add, reserved with the
+#: data: measured below 20 kB for an append of up to 4096 chunks (``tests/test_data_safety.py``)
+H5_META_BYTES = 64 << 10
+#: bytes kept free for the last ``run.json`` of a session (plus twice the record's size)
+RESERVE_BYTES = 64 << 10
+#: HDF5 objects of a file whose write failed: never closed (HDF5 crashes closing them after a real ENOSPC)
+_ABANDONED: list = []
 
 
 def now() -> str:
@@ -101,6 +108,7 @@ class Store:
         if not fresh and self.h_rows.hexdigest() != self.run["checkpoint"].get("rows_sha256"):
             _fs.remove_file(self.out_dir, tmp)
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        _fs.release_space(self.out_dir, tmp)
         try:
             _fs.check_regular_or_absent(self.out_dir, self.h5_name)
             os.replace(tmp_path, path)
@@ -116,6 +124,8 @@ class Store:
         rows = self.rows if old is not None else 0
         row_values = int(np.prod(self.shape))
         with h5py.File(path, "w", libver="latest") as f:
+            extra_bytes = sum(int(np.asarray(v).nbytes) for v in extra.values())
+            _fs.reserve_space(path.parent, path.name, extra_bytes + self._h5_bytes(0, rows), what="writing")
             for k, v in extra.items():
                 f.create_dataset(k, data=v)
             per_chunk = self._h5_chunks()
@@ -143,11 +153,16 @@ class Store:
         if k == 0:
             return
         r = self.rows
+        _fs.reserve_space(self.out_dir, self.h5_name, self._h5_bytes(r, k), what="appending rows to")
         try:
             self.dn.resize((r + k,))
             self.dS.resize((r + k,) + self.shape)
             self.dn[r : r + k] = n_idx
             self.dS[r : r + k] = S
+        except WRITE_ERRORS as exc:
+            self._abandon()
+            raise RunIOError(f"{_fs.io_failure(exc)} while appending rows") from exc
+        try:
             self._append_more(n_idx, S)
         except WRITE_ERRORS as exc:
             raise RunIOError(f"{_fs.io_failure(exc)} while appending rows") from exc
@@ -157,11 +172,38 @@ class Store:
     def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         pass
 
+    def _h5_bytes(self, r: int, k: int) -> int:
+        """An upper bound of the bytes HDF5 writes to append ``k`` rows after row ``r`` (every chunk the rows touch,
+        of ``n`` and of the data, in full, and :data:`H5_META_BYTES`), reserved before the rows are handed to it."""
+        if k <= 0:
+            return H5_META_BYTES
+        chunks = self._h5_chunks()
+        per_row = 1
+        for size, c in zip(self.shape, chunks[1:], strict=True):
+            per_row *= -(-size // c)
+        touched = (r + k - 1) // chunks[0] - r // chunks[0] + 1
+        n_touched = (r + k - 1) // 4096 - r // 4096 + 1
+        return touched * per_row * 8 * int(np.prod(chunks)) + n_touched * 8 * 4096 + H5_META_BYTES
+
     def _sync_data(self) -> None:
-        self.dn.flush()
-        self.dS.flush()
-        self.f.flush()
+        _fs.reserve_space(self.out_dir, self.h5_name, H5_META_BYTES, what="flushing")
+        try:
+            self.dn.flush()
+            self.dS.flush()
+            self.f.flush()
+        except WRITE_ERRORS as exc:
+            self._abandon()
+            raise RunIOError(f"{_fs.io_failure(exc)} while flushing {self.out_dir / self.h5_name}") from exc
         _fs.fsync_file(self.out_dir, self.h5_name)
+        _fs.release_space(self.out_dir, self.h5_name)
+
+    def _abandon(self) -> None:
+        """After a failed HDF5 write, never touch the file's objects again: HDF5 may crash closing them (a real
+        ENOSPC: SIGSEGV in ``H5D_close``); they are kept referenced and the file is left as the last durable
+        checkpoint declared it (the rows after it are not data)."""
+        if self.f is not None:
+            _ABANDONED.append((self.f, self.dn, self.dS))
+            self.f = None
 
     def checkpoint(self, step: int, X: np.ndarray, carry: Any, summary: dict) -> None:
         """Make everything appended durable and record ``(step, X, carry)`` as the checkpoint: data → fsync →
@@ -188,9 +230,18 @@ class Store:
     def _committed(self) -> None:
         pass
 
+    def begin(self, fresh: bool) -> None:
+        """Start a session of writing: a new run's first ``run.json`` (no row yet: a failure at the first append
+        leaves a run that resumes from ``X0``), then the reserve (:func:`jetgaudin._fs.make_reserve`) that
+        :meth:`mark` frees to record a full disk."""
+        if fresh:
+            write_run(self.out_dir, copy.deepcopy(self.run))
+        _fs.make_reserve(self.out_dir, RESERVE_BYTES + 2 * len(json.dumps(self.run)))
+
     def mark(self, status: str, **fields: Any) -> None:
         """Best effort: record ``status`` (and ``fields``) over the last durable checkpoint (the disk may be what
-        failed)."""
+        failed: the reserve is freed first)."""
+        _fs.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             new = copy.deepcopy(self.run)
             new.update(fields, status=status, updated=now())
@@ -198,6 +249,7 @@ class Store:
             self.run = new
 
     def close(self) -> None:
+        _fs.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             if self.f is not None:
                 self.f.close()
