@@ -34,6 +34,7 @@ __all__ = [
     "LOCK_NAME",
     "RunDirLock",
     "check_new_run_dir",
+    "clearable",
     "make_run_dir",
     "plain_name",
     "open_dir",
@@ -466,6 +467,8 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
     if not entries:
         _probe_lock(path, option)
         return path
+    if overwrite:
+        clearable(path, entries, option)
     if not overwrite:
         if _RUN_JSON in entries:
             status = _run_status(path)
@@ -477,6 +480,25 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
                                 "directory, or pass --overwrite")
     _probe_lock(path, option)
     return path
+
+
+def clearable(path: Path, entries: list[str], option: str = "--overwrite") -> list[str]:
+    """The entries ``--overwrite`` removes from ``path`` (all but the lock), after checking that every one is a
+    file or a link (removed itself, never followed): a directory inside is refused, before anything is removed
+    (a refusal changes nothing)."""
+    names = []
+    for name in entries:
+        if name == LOCK_NAME:
+            continue
+        try:
+            st = os.lstat(path / name)
+        except FileNotFoundError:
+            continue
+        if stat.S_ISDIR(st.st_mode):
+            raise RunDirectoryError(f"{option}: {path} holds a directory {name!r}; not a run directory, refusing to "
+                                    "clear it (nothing was removed); choose another directory")
+        names.append(name)
+    return names
 
 
 def _probe_creatable(path: Path, option: str) -> None:
@@ -501,7 +523,7 @@ def _probe_lock(path: Path, option: str) -> None:
         return
     if not stat.S_ISREG(st.st_mode):
         raise RunDirectoryError(f"{option}: {lock} is not a regular file; remove it")
-    with RunDirLock(path):
+    with RunDirLock(path, claim=False):
         pass
 
 
@@ -528,9 +550,10 @@ class RunDirLock:
     :class:`~jetgaudin.RunLockedError`.
     """
 
-    def __init__(self, path: str | os.PathLike[str]):
+    def __init__(self, path: str | os.PathLike[str], *, claim: bool = True):
         self.path = Path(path)
         self._fd: int | None = None
+        self._claim = claim
 
     @property
     def held(self) -> bool:
@@ -560,13 +583,22 @@ class RunDirLock:
                 raise RunLockedError(f"{self.path} is in use by {who} (one writer per run directory); wait for it "
                                      "to finish or stop it, then try again") from None
             raise RunDirectoryError(f"cannot lock run directory {self.path}: {exc.strerror or exc}") from None
+        self._fd = fd
+        if self._claim:
+            self.claim()
+        return self
+
+    def claim(self) -> None:
+        """Write this process's PID into the lock file (for the message a second writer gets).  A holder that may
+        still refuse (a resume checking its run) takes the lock with ``claim=False`` and claims it once it writes:
+        a refusal leaves the lock file as it was."""
+        if self._fd is None:
+            return
         try:
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            os.ftruncate(self._fd, 0)
+            os.pwrite(self._fd, f"{os.getpid()}\n".encode(), 0)
         except OSError:
             pass  # the PID is only for the message of a second writer
-        self._fd = fd
-        return self
 
     def release(self) -> None:
         if self._fd is not None:

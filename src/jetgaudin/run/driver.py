@@ -219,6 +219,7 @@ class Driver:
                     bad = health.check([0], pos.X[None])
                     failure = bad.reason if bad else None
                     store.append(np.array([0]), pos.X[None])
+                    store.anchor = (0, pos.X, None)
                     store.checkpoint(0, pos.X, pos.carry, self.summary("running"))
                 while failure is None and pos.n < steps and not sig.signum:
                     failure = self._chunk(sig, L if not invariant else None, sample_imag, per_step)
@@ -256,6 +257,7 @@ class Driver:
         rows_n: list[int] = []
         rows: list[np.ndarray] = []
         end: tuple[int, np.ndarray, Any] | None = None  # (step, X, carry) after the last call
+        anchor: tuple[int, np.ndarray, Any] | None = None  # where the call that made the last row started
         failure: str | None = None
         t_enter = time.monotonic()
         if sample_imag:  # the compiled route does not compute the residue: one reference step per chunk
@@ -276,6 +278,7 @@ class Driver:
             L = fixed if fixed is not None else (1 if per_step else self._limit(self._L))
             k, se = piece(n, L, steps, every)
             tc = time.monotonic()
+            start = (n, X, carry)
             try:
                 adv = m.advance(X, carry, k, se)
             except JetGaudinError as exc:  # SingularStepError, BranchPointError met along the orbit
@@ -288,9 +291,11 @@ class Driver:
             if se == every and k >= every:
                 rows_n.extend(range(n + every, n + k + 1, every))
                 rows.extend(adv.rows)
+                anchor = start
             elif (n + k) % every == 0 or n + k == steps:
                 rows_n.append(n + k)
                 rows.append(adv.rows[-1])
+                anchor = start
             n, X, carry = n + k, adv.X, adv.carry
             if per_step or not sample_imag:
                 failure = health.check_imag(n, adv.imag_max)
@@ -306,6 +311,8 @@ class Driver:
             if fixed is not None or sig.signum or time.monotonic() - t0 >= flush or len(rows_n) >= self.max_rows:
                 break
         failure = self._commit(rows_n, rows, end, failure)
+        if failure is None and anchor is not None:
+            self.store.anchor = anchor  # the last saved row is the end of that call (a resume replays it)
         self._overhead = max(0.0, time.monotonic() - t_enter - t_calls)
         return failure
 

@@ -61,6 +61,9 @@ class Store:
         self.out_dir, self.run, self.shape = Path(out_dir), run, tuple(shape)
         self.h_rows = RowDigest()
         self.rows = 0 if fresh else int(run["checkpoint"]["rows"])
+        #: ``(step, X, carry)`` where the kernel call that made the last saved row started: recorded with every
+        #: checkpoint, replayed by a resume (:mod:`jetgaudin.run.replay`)
+        self.anchor: tuple[int, np.ndarray, Any] | None = None
         self.f: Any = None
         self._build_h5(fresh, extra or {})
         import h5py
@@ -299,7 +302,7 @@ class OrbitStore(Store):
         self.h_csv = hashlib.sha256()
         ck = self.run["checkpoint"]
         path = self.out_dir / self.csv_name
-        if fresh or int(ck.get("csv_bytes", 0)) == 0:  # new, or nothing durable yet: start the file again
+        if fresh or (int(ck.get("csv_bytes", 0)) == 0 and self.rows == 0):  # nothing durable yet: start again
             head = self._header().encode()
             self.csv_fh = _fs.open_write(self.out_dir, self.csv_name)
             self.csv_fh.write(head)
@@ -307,6 +310,7 @@ class OrbitStore(Store):
             self.csv_bytes = len(head)
             return
         self.csv_bytes = int(ck["csv_bytes"])
+        lines, tail = 0, b""
         try:
             _fs.check_regular_or_absent(self.out_dir, self.csv_name)
             size = os.lstat(path).st_size
@@ -317,6 +321,8 @@ class OrbitStore(Store):
                     if not block:
                         break
                     self.h_csv.update(block)
+                    lines += block.count(b"\n")
+                    tail = (tail + block)[-(1 << 16):]
                     left -= len(block)
         except OSError:
             raise RecordingError(f"{path} is missing or unreadable; cannot resume") from None
@@ -324,13 +330,26 @@ class OrbitStore(Store):
             raise RecordingError(f"{path} is truncated (shorter than run.json records); cannot resume")
         if self.h_csv.hexdigest() != ck.get("csv_sha256"):
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        if lines != self.rows + 1 or not tail.endswith(self._row_text(self.rows - 1)):
+            # the declared CSV must hold the header and exactly the declared rows (a resume never cuts a durable row)
+            raise RecordingError(f"{path}: run.json's csv_bytes does not cover exactly the {self.rows} saved rows "
+                                 "(edited or corrupted); cannot resume")
         self.csv_fh = _fs.open_write(self.out_dir, self.csv_name, append=True)
         os.ftruncate(self.csv_fh.fileno(), self.csv_bytes)
 
+    def _row_text(self, i: int) -> bytes:
+        """The CSV line of saved row ``i`` (the header for ``i = -1``)."""
+        if i < 0:
+            return self._header().encode()
+        return self._csv_text(np.array([self.dn[i]]), np.array(self.dS[i : i + 1]))
+
+    def _csv_text(self, n_idx: np.ndarray, S: np.ndarray) -> bytes:
+        index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
+        return format_rows(index, S).encode()
+
     def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         if self.csv_fh is not None:
-            index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
-            text = format_rows(index, S).encode()
+            text = self._csv_text(n_idx, S)
             self.csv_fh.write(text)
             self.h_csv.update(text)
 
@@ -343,8 +362,10 @@ class OrbitStore(Store):
     def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
         ck = new["checkpoint"]
         ck["X_hex"] = hex_floats(X)
-        c = None if carry is None else complex(np.asarray(carry).reshape(-1)[0])
-        ck["nu1_hex"] = None if c is None else [c.real.hex(), c.imag.hex()]
+        ck["nu1_hex"] = _hex_carry(carry)
+        if self.anchor is not None:
+            a_n, a_X, a_c = self.anchor
+            ck["anchor"] = {"step": int(a_n), "X_hex": hex_floats(a_X), "nu1_hex": _hex_carry(a_c)}
         if self.csv_fh is not None:
             ck["csv_bytes"] = self.csv_fh.tell()
             ck["csv_sha256"] = self.h_csv.hexdigest()
@@ -354,6 +375,11 @@ class OrbitStore(Store):
         if self.csv_fh is not None:
             with contextlib.suppress(Exception):
                 self.csv_fh.close()
+
+
+def _hex_carry(carry: Any) -> list[str] | None:
+    c = None if carry is None else complex(np.asarray(carry).reshape(-1)[0])
+    return None if c is None else [c.real.hex(), c.imag.hex()]
 
 
 class EnsembleStore(Store):
@@ -385,8 +411,10 @@ class EnsembleStore(Store):
     def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
         name = f"checkpoint-{self.slot}.npz"
         buf = io.BytesIO()
+        a_n, a_X, a_c = self.anchor if self.anchor is not None else (-1, np.zeros((0,) + X.shape[1:]), None)
         np.savez(buf, step=np.int64(step), X=X, nu1=np.zeros(0, complex) if carry is None else carry,
-                 drift=self.drift_rel)
+                 drift=self.drift_rel, anchor_step=np.int64(a_n), anchor_X=a_X,
+                 anchor_nu1=np.zeros(0, complex) if a_c is None else a_c)
         data = buf.getvalue()
         _fs.atomic_write_bytes(self.out_dir, name, data)
         import hashlib
@@ -402,8 +430,12 @@ def read_checkpoint_npz(out_dir: Path, ck: dict, shape: tuple[int, int]) -> dict
     file of bounded size, matching its digest)."""
     name = _fs.plain_name(ck["file"])
     B, n = shape
-    cap = 8 * B * n + 16 * B + 8 * B * n + (1 << 16)
+    cap = 2 * (8 * B * n + 16 * B) + 8 * B * n + (1 << 16)  # X, nu1 and the anchor's, the drift, the zip's own
     if file_sha256(out_dir, name, cap) != ck["sha256"]:
         raise ValueError(f"{name} does not match its digest")
-    with np.load(io.BytesIO(_fs.read_bytes(out_dir, name, cap))) as d:
-        return {k: np.array(d[k]) for k in ("step", "X", "nu1", "drift")}
+    with np.load(io.BytesIO(_fs.read_bytes(out_dir, name, cap)), allow_pickle=False) as d:
+        out = {k: np.array(d[k]) for k in ("step", "X", "nu1", "drift")}
+        for k in ("anchor_step", "anchor_X", "anchor_nu1"):
+            if k in d:
+                out[k] = np.array(d[k])
+        return out
