@@ -59,6 +59,10 @@ def _root(
 def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
+    bad = _bad_number(args)
+    if bad is not None:
+        typer.echo(bad, err=True)
+        sys.exit(2)
     try:
         code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
     except SystemExit as exc:
@@ -96,6 +100,58 @@ def main(argv: list[str] | None = None) -> None:
     except BrokenPipeError:
         _silence_stdout()
     sys.exit(code if isinstance(code, int) else 0)
+
+
+def _bad_number(args: list[str]) -> str | None:
+    """The one-line error for a value of a numeric option (``int``/``float`` typed) that Python's ``float``/``int``
+    would read but the command line does not accept: non-ASCII digits (``١.٥``), underscores (``1_``, ``1_0``), or
+    a non-finite float (``inf``, ``nan``: every float option wants a finite number); ``None`` if all are fine."""
+    import math
+
+    from ._common import _NUMBER
+
+    if not args:
+        return None
+    try:
+        cmd = typer.main.get_command(app)
+        sub = cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001 - the check is an addition; the parser reports anything else
+        return None
+    if sub is None:
+        return None
+    import typing
+
+    kinds: dict[str, str] = {}
+    for p in sub.params:
+        ann = getattr(getattr(p, "type_descriptor", None), "annotation", None)
+        types = set(typing.get_args(ann)) | {ann}
+        kind = "float" if float in types else "integer" if int in types and bool not in types else ""
+        if kind:
+            for opt in getattr(p, "opts", []):
+                if opt.startswith("-"):
+                    kinds[opt] = kind
+    i = 1
+    while i < len(args):
+        a = args[i]
+        opt, value = (a.split("=", 1) + [None])[:2] if a.startswith("--") else (a, None)
+        if opt in kinds:
+            if value is None:
+                if i + 1 >= len(args):
+                    return None
+                value = args[i + 1]
+                i += 1
+            v = value.strip()
+            ok = bool(_NUMBER.fullmatch(v)) if kinds[opt] == "float" else v.lstrip("+-").isascii() and \
+                v.lstrip("+-").isdigit()
+            if ok and kinds[opt] == "float" and not math.isfinite(float(v)):
+                return f"jetgaudin {args[0]}: error: {opt}: {value!r} is not finite; give a finite number"
+            if not ok:
+                return (f"jetgaudin {args[0]}: error: {opt}: cannot read {value!r} as "
+                        f"{'a number' if kinds[opt] == 'float' else 'an integer'} (ASCII digits 0-9, no '_')")
+        elif a == "--":
+            break
+        i += 1
+    return None
 
 
 def entry() -> None:

@@ -45,6 +45,7 @@ from ._common import (
     resume_dir,
     run_with_progress,
     timing_text,
+    to_float,
 )
 
 #: largest --input file read (a CSV of 10^6 states of N = 3 is ~0.2 GB)
@@ -58,7 +59,7 @@ class Sampler(StrEnum):
 
 def _floats(text: str, option: str) -> list[float]:
     try:
-        vals = [float(p) for p in str(text).split(",")]
+        vals = [to_float(p, option) for p in str(text).split(",")]
     except ValueError:
         raise CliInputError(f"{option}: cannot read {text!r}; give comma-separated numbers, e.g. 0.5,0.2,1") from None
     if not all(np.isfinite(vals)):
@@ -130,6 +131,8 @@ def ensemble_command(
     from jetgaudin import ensemble_recording as er
 
     with reported_errors():
+        if show < 0:
+            raise CliInputError(f"--show: the number of orbits listed must be >= 0, got {show}")
         chunk = None if chunk_size is None else parse_count(chunk_size, "--chunk-size", 1)
         with blame("--max-drift"):
             runlayer.HealthLimits(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift)
@@ -178,7 +181,8 @@ def ensemble_command(
                 n_orbits = parse_count(orbits, "--orbits", 1)
                 s_seed = parse_count(seed, "--seed", 0)
                 if sample is None:  # the documented default: the leaf DEFAULT_CASIMIRS (N = 3)
-                    sample, casimirs = Sampler.leaf, casimirs or ",".join(map(str, ens.DEFAULT_CASIMIRS))
+                    sample = Sampler.leaf
+                    casimirs = casimirs if casimirs is not None else ",".join(map(str, ens.DEFAULT_CASIMIRS))
                 if sample is Sampler.leaf:
                     if casimirs is None:
                         raise CliInputError("--sample leaf needs --casimirs C_1,...,C_N")
