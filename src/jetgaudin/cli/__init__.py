@@ -162,11 +162,18 @@ def entry() -> None:
     project promises (``docs/reliability.md``).  An exception other than ``SystemExit`` (a bug) propagates as usual."""
     import os
 
+    from .. import _startup
+
+    _startup.release()  # from here on main() reports interrupts and errors itself
     try:
         main()
         code: Any = 0
     except SystemExit as exc:
         code = exc.code
+    except (MemoryError, ImportError) as exc:  # out of memory (ulimit -v) while importing or allocating
+        text = " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
+        print(f"jetgaudin: error: {text} (out of memory? check ulimit -v)", file=sys.stderr)
+        code = 1
     if code is None:
         code = 0
     elif not isinstance(code, int):  # as sys.exit("message") would: the message on stderr, exit 1
