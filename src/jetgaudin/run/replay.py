@@ -6,7 +6,8 @@ consistent without running the map themselves is the orbit: every checkpoint rec
 the checkpoint with the map rebuilt from ``run.json``, in kernel calls cut as :func:`jetgaudin.run.driver.piece`
 cuts them, and requires, bit for bit (``np.array_equal``):
 
-* every saved row the replay passes (``n_a < n ≤ n_last``) equal to the stored row (its step and its state);
+* the last two rows on the recorded save grid (row ``i`` at step ``i · save_every``, the last possibly at the last
+  step), and every saved row the replay passes (``n_a ≤ n ≤ n_last``) equal to the stored row (step and state);
 * the state and ``ν1`` reached at the checkpoint's step equal to the checkpoint's.
 
 So a checkpoint state moved by one ulp, a checkpoint step moved by one, a checkpoint pushed off its rows, or a map
@@ -58,6 +59,10 @@ def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, 
     n_a, X, carry = anchor
     n_last = int(store.dn[rows - 1])
     if not (0 <= n_a <= n_last <= pos.n <= spec.steps) or np.shape(X) != np.shape(pos.X):
+        raise bad
+    # the rows lie on the recorded save grid: row i at step i * save_every, the last one possibly at the last step
+    on_grid = n_last == (rows - 1) * every or (n_last == spec.steps and (rows - 2) * every < n_last)
+    if not on_grid or (rows >= 2 and int(store.dn[rows - 2]) != (rows - 2) * every):
         raise bad
     if n_a % every == 0 and n_a // every < rows and (int(store.dn[n_a // every]) != n_a or not np.array_equal(
             np.asarray(store.dS[n_a // every]), X)):
