@@ -31,21 +31,32 @@ _BLOCK_BYTES = 1 << 24
 
 
 def _memory_limit() -> int:
-    """Bytes the states read from a file may take: 1/32 of the memory available now.  An ensemble run's peak memory
-    is about 16 times its states (measured: 10^7 x 9 states, 0.72 GB, peaked at 11.6 GB on the 2-core AMD EPYC VM:
-    integrals and drifts per orbit, the kernel's rows, the checkpoint built in memory), and half the memory is
-    left to the rest of the machine."""
+    """Bytes the states read from a file may take: 1/32 of the memory this process may use (:func:`_memory_bytes`,
+    and the address-space limit ``ulimit -v``).  An ensemble run's peak memory is about 16 times its states
+    (measured: 10^7 x 9 states, 0.72 GB, peaked at 11.6 GB on the 2-core AMD EPYC VM: integrals and drifts per
+    orbit, the kernel's rows, the checkpoint built in memory), and half the memory is left to the rest."""
+    import resource
+
+    avail = _memory_bytes()
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if soft != resource.RLIM_INFINITY:
+        avail = min(avail, soft)
+    return avail // 32
+
+
+def _memory_bytes() -> int:
+    """The memory available now (``MemAvailable`` of ``/proc/meminfo``; else the physical memory)."""
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024 // 32
+                    return int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         pass
     try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 32
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
     except (ValueError, OSError, AttributeError):
-        return 1 << 31
+        return 1 << 36
 
 
 def _check_shape(shape: tuple[int, ...], path: Path) -> None:
