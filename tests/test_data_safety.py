@@ -23,21 +23,12 @@ import pytest
 
 import jetgaudin as jg
 from jetgaudin import run as rl
-from jetgaudin.cli import main
 from jetgaudin.run.files import write_run
+from test_run import run_cli
 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 X0 = np.array(APPENDIX2_X0)
-
-
-def run_cli(capsys, *args):
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:
-        code = exc.code
-    out = capsys.readouterr()
-    return (0 if code is None else code), out.out, out.err
 
 
 def one_line(err: str) -> bool:

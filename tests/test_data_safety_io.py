@@ -24,27 +24,15 @@ import pytest
 
 import jetgaudin as jg
 from jetgaudin import run as rl
-from jetgaudin.cli import main
 from jetgaudin.ensemble import BatchBacklund
 from jetgaudin.run.files import write_run
+from test_data_safety import one_line, source  # noqa: F401  (source: the fixture orbit_run uses)
+from test_run import run_cli
 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0
 
 X0 = np.array(APPENDIX2_X0)
 JG = [sys.executable, "-m", "jetgaudin"]
-
-
-def run_cli(capsys, *args):
-    try:
-        code = main([str(a) for a in args])
-    except SystemExit as exc:
-        code = exc.code
-    out = capsys.readouterr()
-    return (0 if code is None else code), out.out, out.err
-
-
-def one_line(err: str) -> bool:
-    return len([ln for ln in err.splitlines() if ln.strip()]) == 1 and "Traceback" not in err
 
 
 def cli(*args, limits=(), timeout=180):
@@ -194,10 +182,9 @@ def test_input_csv_is_read_in_blocks_with_the_same_result(tmp_path, capsys, monk
 
 # --------------------------------------------------------------------------------------------- item 7
 @pytest.fixture
-def orbit_run(tmp_path, capsys):
-    a = tmp_path / "a"
-    assert run_cli(capsys, "orbit", "--steps", 20, "--kernel", "numpy", "--no-plots", "--out", a)[0] == 0
-    return a
+def orbit_run(source):  # noqa: F811 - pytest resolves the fixture by name
+    """A completed 10-step orbit run (``tests/test_data_safety.py::source``)."""
+    return source
 
 
 def test_plot_of_a_run_whose_data_file_is_a_fifo_is_refused_at_once(orbit_run):
