@@ -12,7 +12,8 @@ Categories (what "held" means):
   resolution of a double changes nothing).
 * ``tmpfs``: ``jetgaudin orbit``/``ensemble`` on a tmpfs of random size (200 kB - 3 MB; skipped without ``mount``);
   held = exit 0 completed, or exit 1 with ``failed: disk full`` then, after the tmpfs is enlarged, a resume that
-  completes bit for bit.  Never a signal death.
+  completes bit for bit, or (a disk too small for the run's first files) exit 1, one line and nothing left but the
+  lock file.  Never a signal death.
 * ``fsize``: the same under a random ``RLIMIT_FSIZE`` (50 kB - 2 MB), the resume without the limit.
 * ``overwrite``: a directory of random files and one subdirectory, ``orbit --overwrite``; held = exit 2 and every
   entry unchanged.
@@ -143,7 +144,16 @@ def _disk_trial(out: Path, command: list[str], limits: list, enlarge) -> bool:
     if r.returncode != 1 or "Traceback" in r.stderr:
         print(f"  not held: {command} {limits}: exit {r.returncode}: {r.stderr.strip()[-300:]}", flush=True)
         return False
-    run = rl.read_run(out, verify=True)
+    if not (out / "run.json").exists():  # the files could not even be created: one line, nothing declared, nothing
+        left = [p for p in os.listdir(out) if p != ".jetgaudin.lock"] if out.exists() else []  # left but the lock
+        if not left and len(r.stderr.strip().splitlines()) == 1 and ("disk full" in r.stderr or "limit" in r.stderr):
+            return True
+    try:
+        run = rl.read_run(out, verify=True)
+    except jg.RecordingError as exc:
+        print(f"  not held: {command} {limits}: {exc}; files {sorted(os.listdir(out)) if out.exists() else None}; "
+              f"{r.stderr.strip()[-300:]}", flush=True)
+        return False
     if not (run["status"].startswith("failed: disk full") or run["status"].startswith("failed: file size limit")):
         print(f"  not held: {command} {limits}: status {run['status']!r}", flush=True)
         return False

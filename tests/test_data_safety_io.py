@@ -128,11 +128,13 @@ def test_the_file_size_limit_ends_an_orbit_cleanly_and_resumably(tmp_path):
     assert np.array_equal(rl.read_csv(out / "orbit.csv")[1], d.X)
 
 
-def test_the_file_size_limit_ends_an_ensemble_cleanly(tmp_path):
+@pytest.mark.parametrize("orbits, rows", [(500, "some"), (1000, "none")])  # 1000: no room for the first row
+def test_the_file_size_limit_ends_an_ensemble_cleanly(tmp_path, orbits, rows):
     out = tmp_path / "e"
-    r = cli("ensemble", "--orbits", 500, "--steps", 40, "--no-progress", "--checkpoint-seconds", 0, "--out", out,
+    r = cli("ensemble", "--orbits", orbits, "--steps", 40, "--no-progress", "--checkpoint-seconds", 0, "--out", out,
             limits=FSIZE)
     _failed_cleanly(r, out, "file size limit reached (ulimit -f)")
+    assert (rl.read_run(out)["checkpoint"]["rows"] == 0) == (rows == "none")
     assert cli("ensemble", "--resume", out, "--no-progress").returncode == 0
     d = rl.load(out)
     assert np.array_equal(d.X, BatchBacklund(d.b, d.eta).iterate(d.X0, 40)[d.n])
