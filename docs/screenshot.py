@@ -4,9 +4,12 @@ Usage (after ``sphinx-build -W --keep-going -b html docs docs/_build/html``)::
 
     python docs/screenshot.py [--site docs/_build/html] [--out docs/screenshots]
 
-Takes ``index.png`` and ``tutorial.png`` (the Appendix 2 tutorial) with Debian's ``chromium``
-(``apt-get install -y chromium``) and checks each: the HTML page has text and, for the tutorial, embedded PNG
-figures; the screenshot is a real image that is not one flat colour (an empty or failed page renders blank).
+Takes ``index.png``, ``tutorial.png`` (the Appendix 2 tutorial) and ``math.png`` (the foundation page, typeset
+formulas) with Debian's ``chromium`` (``apt-get install -y chromium``), offline (no network is used: MathJax is
+served by the site itself), giving the page's scripts 10 s of virtual time so that MathJax has typeset before the
+shot, and checks each: the HTML page has text and, for the tutorial, embedded PNG figures, for the math page
+MathJax from ``_static``; the screenshot is a real image that is not one flat colour (an empty or failed page
+renders blank).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-PAGES = {"index": "index.html", "tutorial": "tutorials/appendix2.html"}
+PAGES = {"index": "index.html", "tutorial": "tutorials/appendix2.html", "math": "foundation.html"}
 FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -26,11 +29,13 @@ FLAGS = [
     "--no-first-run",
     "--hide-scrollbars",
     "--window-size=1280,1600",
+    "--virtual-time-budget=10000",  # let deferred scripts (MathJax) finish before the screenshot
 ]
 
 
-def check_html(path: Path, want_images: bool) -> list[str]:
-    """Problems of a built page: missing, almost no text, or (for a tutorial) no embedded PNG figure."""
+def check_html(path: Path, want_images: bool, want_math: bool = False) -> list[str]:
+    """Problems of a built page: missing, almost no text, (for a tutorial) no embedded PNG figure, (for a math
+    page) no formula or MathJax not served from the site."""
     if not path.is_file():
         return [f"{path} does not exist (build the site first)"]
     html = path.read_text(encoding="utf-8")
@@ -39,6 +44,8 @@ def check_html(path: Path, want_images: bool) -> list[str]:
         problems.append(f"{path} looks empty ({len(html)} bytes, no <h1>)")
     if want_images and ".png" not in html:
         problems.append(f"{path} embeds no PNG figure")
+    if want_math and ('class="math' not in html or "_static/mathjax/tex-chtml.js" not in html):
+        problems.append(f"{path} has no formula typeset by the site's own MathJax")
     return problems
 
 
@@ -67,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     problems = []
     for name, page in PAGES.items():
         html = site / page
-        problems += check_html(html, want_images=name == "tutorial")
+        problems += check_html(html, want_images=name == "tutorial", want_math=name == "math")
         png = out / f"{name}.png"
         png.unlink(missing_ok=True)
         try:

@@ -64,16 +64,20 @@ def test_chain_y0_figure_plots_each_sites_y0(orbit_dir):
     from jetgaudin import plotting as pc
 
     d = rl.load(orbit_dir)
-    fig = pc.figure_chain_y0(MODEL, d.X)
-    ax = fig.axes[0]
-    lines = [ln for ln in ax.get_lines() if ln.get_label().startswith("y_0 of site")]
-    assert len(lines) == 3
-    for i, ln in enumerate(lines):
-        x, y, z = ln.get_data_3d()
+    fig = pc.figure_chain_y0(MODEL, d.X, n=d.n)
+    # one row per site: the e1-e2 projection coloured by the step (a colour bar), and the three components
+    panels = [ax for ax in fig.axes if ax.get_label() != "<colorbar>"]
+    assert len(panels) == 2 * 3 and sum(ax.get_label() == "<colorbar>" for ax in fig.axes) == 3
+    for i in range(3):
+        proj, comps = panels[2 * i], panels[2 * i + 1]
         o = 3 * MODEL.offsets[i]
-        assert np.array_equal(np.column_stack([x, y, z]), d.X[:, o:o + 3])
-        assert f"site {i + 1}" in ln.get_label()
-    assert "dimensionless" in ax.get_xlabel() and "e₃" in ax.get_zlabel()
+        assert f"site {i + 1}" in proj.get_title()
+        pts = proj.collections[0]
+        assert np.array_equal(pts.get_offsets(), d.X[:, o:o + 2]) and np.array_equal(pts.get_array(), d.n)
+        assert len(comps.lines) == 3
+        for a, ln in enumerate(comps.lines):
+            assert np.array_equal(ln.get_xdata(), d.n) and np.array_equal(ln.get_ydata(), d.X[:, o + a])
+    assert sum("dimensionless" in t.get_text() for t in fig.texts) == 1
     fig2 = pc.figure_chain_integral_drift(d.n, MODEL, d.X)
     labels = [ln.get_label() for ln in fig2.axes[0].get_lines()]
     assert len(labels) == 2 * MODEL.M and sum("Casimir" in s for s in labels) == MODEL.M

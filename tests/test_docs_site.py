@@ -61,6 +61,37 @@ def test_api_page_names_every_public_name(site):
     assert "TwoPointBacklund" in api
 
 
+def test_api_lists_methods_and_the_public_modules(site):
+    api = (site / "site" / "_generated" / "api.html").read_text(encoding="utf-8")
+    # classes come with their methods and properties (autodoc members), e.g. the maps' driver methods
+    for method in ("TwoPointBacklund.iterate", "TwoPointBacklund.advance", "TwoPointBacklund.prepare_kernels",
+                   "ChainTwoPointBacklund.iterate", "GaudinModel.integrals"):
+        assert f'id="jetgaudin.{method}"' in api, method
+    for module in ("jetgaudin.run", "jetgaudin.ensemble", "jetgaudin.ensemble_recording", "jetgaudin.recording",
+                   "jetgaudin.plotting"):
+        page = (site / "site" / "_generated" / f"{module}.html").read_text(encoding="utf-8")
+        assert f'id="module-{module}"' in page, module
+    ens = (site / "site" / "_generated" / "jetgaudin.ensemble.html").read_text(encoding="utf-8")
+    assert 'id="jetgaudin.ensemble.EnsembleResult.drift_quantiles"' in ens
+    assert ">&gt;&gt;&gt;" in (site / "site" / "api.html").read_text(encoding="utf-8")  # the examples
+
+
+def test_no_page_loads_a_remote_script_and_math_is_served_locally(site):
+    """Offline reading: no <script src> and no stylesheet from another host; MathJax from _static/mathjax."""
+    remote = re.compile(r'<(?:script|link)\b[^>]*(?:src|href)="(?:https?:)?//[^"]*"', re.IGNORECASE)
+    pages = list(site.rglob("*.html"))
+    assert len(pages) > 20
+    for page in pages:
+        html = page.read_text(encoding="utf-8")
+        bad = [m for m in remote.findall(html) if "stylesheet" in m or "<script" in m.lower()]
+        assert not bad, (page, bad[:3])
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    assert (site / "_static" / "mathjax" / "output" / "chtml" / "fonts" / "woff-v2").is_dir()
+    for page in ("foundation", "backlund", "tutorials/map-as-flow"):  # typeset math, served from the site
+        html = (site / f"{page}.html").read_text(encoding="utf-8")
+        assert 'class="math' in html and "_static/mathjax/tex-chtml.js" in html, page
+
+
 def test_cli_reference_is_generated_from_the_app(site):
     import typer.main
 

@@ -24,6 +24,15 @@ from jetgaudin.recording import OrbitSpec, RecordOptions, load_orbit, run_orbit 
 from conftest import APPENDIX2_B, APPENDIX2_ETA, APPENDIX2_X0  # noqa: E402
 
 
+def _says_dimensionless_once(fig):
+    """'dimensionless' is said once per figure (a figure text), on no axis label or title."""
+    texts = [t.get_text() for t in fig.texts]
+    assert sum("dimensionless" in t for t in texts) == 1, texts
+    for ax in fig.axes:
+        labels = [ax.get_xlabel(), ax.get_ylabel(), ax.get_title()] + ([ax.get_zlabel()] if ax.name == "3d" else [])
+        assert not any("dimensionless" in lab for lab in labels), labels
+
+
 @pytest.fixture(scope="module")
 def orbit():
     return jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA).iterate(APPENDIX2_X0, 1000)
@@ -89,7 +98,7 @@ def test_figure1_shows_material_point_and_centre_of_mass_with_the_sphere_on_top(
         point_sets = [c for c in ax.collections if c.get_label() in ("material point x − z", "centre of mass z")]
         assert len(point_sets) == 2 and wire.get_zorder() > max(c.get_zorder() for c in point_sets)
         assert (ax.get_xlabel(), ax.get_ylabel(), ax.get_zlabel()) == plotting._orbit.AXIS_LABELS
-        assert all("dimensionless" in lab for lab in plotting._orbit.AXIS_LABELS)
+        _says_dimensionless_once(fig)
         # the legend is outside the axes (below them): it cannot cover a point
         (leg,) = fig.legends
         assert fig.transFigure.inverted().transform(leg.get_window_extent(fig.canvas.get_renderer()))[1, 1] < 0.12
@@ -127,7 +136,7 @@ def test_integral_drift_figure_has_the_2N_curves(orbit):
             x, y = ln.get_data()
             np.testing.assert_array_equal(y, d[d[:, k] > 0, k])
             np.testing.assert_array_equal(x, n[d[:, k] > 0])
-        assert "dimensionless" in ax.get_ylabel() and "dimensionless" in ax.get_xlabel()
+        _says_dimensionless_once(fig)
     finally:
         plt.close(fig)
 
@@ -192,7 +201,7 @@ def test_redraw_of_a_run_draws_its_rows(run_dir, tmp_path, monkeypatch):
     np.testing.assert_array_equal(np.unique(pts["centre of mass z"], axis=0), np.unique(X_all[rows, 6:9], axis=0))
     assert len(pts["centre of mass z"]) == len(rows)
     title = seen["figure1.pdf"]._suptitle.get_text()
-    assert "b = 1" in title and "η = 5 + 0.1i" in title and "1000 steps" in title
+    assert "b = 1" in title and "η = 5 + 0.1i" in title and "1,000 steps" in title  # thousands separator
     assert f"one saved row in {k} drawn" in seen["figure1.pdf"].axes[0].get_title()
 
 
@@ -322,11 +331,11 @@ def test_spectral_plane_marks_branch_points_site_eta_and_segment():
             np.testing.assert_array_equal(seg.get_ydata(), [-0.1, 0.1])
             assert list(lines["site λ = 0 (pole)"].get_xdata()) == [0.0]
             assert list(lines["η = 5 + 0.1i"].get_ydata()) == [0.1] and list(lines["η̄"].get_ydata()) == [-0.1]
-            assert "dimensionless" in ax.get_xlabel()
             x0, x1 = ax.get_xlim()
             y0, y1 = ax.get_ylim()
             assert x0 < bp.real.min() and x1 > 5 and y0 < bp.imag.min() and y1 > bp.imag.max()
         # the |ν²| panel shows log10 |ν²| of the grid
+        _says_dimensionless_once(fig)
         img = ax0.images[0].get_array()
         assert img.shape[0] == 40 and np.isfinite(img).mean() > 0.99
     finally:
@@ -343,15 +352,21 @@ def test_compare_figures_show_the_flow_as_lines_and_the_map_as_points(tmp_path, 
     seen = _capture(monkeypatch)
     paths = plotting.save_compare_figures(tmp_path, t, flow, np.arange(steps + 1), orb, b)
     assert [p.name for p in paths] == ["compare_drift.png", "compare_distance.png"]
-    ax = seen["compare_drift.png"].axes[0]
+    fig = seen["compare_drift.png"]
     df = np.abs(jg.integrals(flow, b) - jg.integrals(flow[0], b))
     dm = np.abs(jg.integrals(orb, b) - jg.integrals(orb[0], b))
-    by_label = {ln.get_label(): ln for ln in ax.lines}
-    for k, name in enumerate(plotting.integral_labels(3)):
-        fl, mp = by_label[f"{name}: flow of G_η (line)"], by_label[f"{name}: map (points)"]
+    # one panel per integral (H_k above, C_k below), each with exactly the flow's line and the map's points
+    assert len(fig.axes) == 6
+    assert [ax.get_title().split(" ")[0] for ax in fig.axes] == plotting.integral_labels(3)
+    for k, ax in enumerate(fig.axes):
+        fl, mp = ax.lines
+        assert fl.get_label() == "flow of G_η (line)" and mp.get_label() == "map (points)"
         assert fl.get_linestyle() == "-" and mp.get_linestyle() == "None" and mp.get_marker() == "."
         np.testing.assert_array_equal(fl.get_ydata(), df[df[:, k] > 0, k])
         np.testing.assert_array_equal(mp.get_ydata(), dm[dm[:, k] > 0, k])
+        assert ax.get_yscale() == "log"
+    assert [ax.get_ylabel() for ax in fig.axes] == ["|I − I(0)|", "", "", "|I − I(0)|", "", ""]
+    _says_dimensionless_once(fig)
     ax = seen["compare_distance.png"].axes[0]
     dist = np.linalg.norm(orb - flow, axis=-1)
     np.testing.assert_array_equal(ax.lines[0].get_ydata(), dist[dist > 0])
@@ -416,3 +431,108 @@ def test_figures_are_never_written_through_a_symlink(tmp_path, planted):
     assert (out / "figure1.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert not (out / "figure1.png.tmp").exists() and not (out / "figure1.png.tmp").is_symlink()
     assert {f.name for f in files} >= {"figure1.png", "figure2.png", "integrals.png"}
+
+
+# ------------------------------------------------------------------------------------------------ formatting
+def test_step_counts_are_written_as_people_read_them():
+    from jetgaudin.plotting._orbit import count_text
+
+    # expected strings written by hand: separators below 10^6, powers of ten from 10^6 on, non-integers as %g
+    assert [count_text(v) for v in (0, 999, 1000, 12345, 999_999)] == ["0", "999", "1,000", "12,345", "999,999"]
+    assert [count_text(v) for v in (1e6, 2.5e7, 10**8, 123_456_789)] == ["10⁶", "2.5×10⁷", "10⁸", "1.23×10⁸"]
+    assert count_text(0.5) == "0.5"
+    fig = plotting.figure_integral_drift(np.array([0, 500_000, 1_000_000]), drift=np.full((3, 6), 1e-15))
+    fig.canvas.draw()
+    ticks = [t.get_text() for t in fig.axes[0].get_xticklabels() if t.get_text()]
+    assert "10⁶" in ticks and not any("e+" in t or "1e6" in t for t in ticks), ticks
+
+
+# ------------------------------------------------------------------------------------------------ ensembles
+def test_drift_quantiles_per_integral():
+    from jetgaudin import InvalidParameterError
+    from jetgaudin.ensemble import drift_quantiles, iterate_ensemble, sample_on_leaf
+
+    # column m holds (1..5) * 10^-m: linear interpolation between orbits gives, by hand, median 3, 90 % 4.6,
+    # 99 % 4.96 and the maximum 5 (times 10^-m); exact up to the rounding of the interpolation (rtol 1e-15)
+    d = np.arange(1.0, 6.0)[:, None] * 10.0 ** -np.arange(6.0)
+    want = np.array([3.0, 4.6, 4.96, 5.0])[:, None] * 10.0 ** -np.arange(6.0)
+    np.testing.assert_allclose(drift_quantiles(d[::-1]), want, rtol=1e-15)
+    res = iterate_ensemble(sample_on_leaf(3, [0.4, -0.3, 1.5], 6, seed=2), 1.0, 5 + 0.1j, 20)
+    assert np.array_equal(res.drift_quantiles((0.5, 1.0))[1], res.drift.max(axis=0))
+    assert np.array_equal(res.drift_quantiles()[0], np.median(res.drift, axis=0))
+    for bad in ((0.5, 1.5), (), (-0.1,)):
+        with pytest.raises(InvalidParameterError, match="quantiles in"):
+            res.drift_quantiles(bad)
+
+
+def test_drift_histogram_counts_every_orbit_and_marks_the_quantiles():
+    from jetgaudin.ensemble import drift_quantiles
+    from jetgaudin.plotting._ensemble import figure_drift_histogram
+
+    rng = np.random.default_rng(3)
+    d = 10.0 ** rng.uniform(-16, -12, size=(200, 6))
+    d[:7, 0] = 0.0  # seven orbits keep H_1 exactly: not on a log axis, counted in the title
+    fig = figure_drift_histogram(d)
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    assert len(axes) == 6 and [ax.get_title().split(" ")[0] for ax in axes] == plotting.integral_labels(3)
+    q = drift_quantiles(d)
+    for m, ax in enumerate(axes):
+        heights = sum(p.get_height() for p in ax.patches)
+        assert heights == 200 - (7 if m == 0 else 0)  # every orbit with a nonzero drift is in a bar
+        np.testing.assert_array_equal(sorted(ln.get_xdata()[0] for ln in ax.lines), sorted(q[:, m]))
+        assert ax.get_xscale() == "log"
+    assert "7 orbits with drift 0" in axes[0].get_title()
+    _says_dimensionless_once(fig)
+
+
+@pytest.fixture(scope="module")
+def ensemble_dir(tmp_path_factory):
+    from jetgaudin.cli import main
+
+    out = tmp_path_factory.mktemp("ens") / "e"
+    with pytest.raises(SystemExit) as exc:
+        main(["ensemble", "--orbits", "20", "--steps", "40", "--save-every", "4", "--out", str(out), "--no-progress"])
+    assert exc.value.code in (0, None)
+    return out
+
+
+def test_ensemble_summary_reports_quantiles_and_writes_the_histogram(tmp_path, capsys):
+    import json
+
+    from jetgaudin.cli import main
+
+    out = tmp_path / "e"
+    with pytest.raises(SystemExit):
+        main(["ensemble", "--orbits", "30", "--steps", "50", "--out", str(out), "--no-progress", "--show", "2"])
+    text = capsys.readouterr().out
+    assert "quantiles per integral" in text and (out / "drift_hist.png").read_bytes()[:4] == b"\x89PNG"
+    rows = {ln.split("│")[1].strip(): ln.split("│")[2:-1] for ln in text.splitlines()
+            if ln.startswith("│") and ln.split("│")[1].strip() in ("50 %", "90 %", "99 %", "max")}
+    assert list(rows) == ["50 %", "90 %", "99 %", "max"]
+    # the max row is the run layer's own per-integral maximum over the orbits (run.json), written independently
+    rec = json.loads((out / "run.json").read_text())
+    assert [float(v) for v in rows["max"]] == [float(f"{v:.2e}") for v in rec["max_drift_per_integral"]]
+
+
+def test_plot_of_an_ensemble_shows_several_orbits_and_the_drift_histogram(ensemble_dir, tmp_path, monkeypatch):
+    from jetgaudin.plotting._ensemble import spread_orbits
+    from jetgaudin.run import load
+
+    seen = _capture(monkeypatch)
+    paths = plotting.save_run_figures(ensemble_dir, tmp_path)
+    assert {p.name for p in paths} >= {"ensemble_orbits.png", "drift_hist.png", "figure1.png"}
+    assert spread_orbits(20) == [0, 2, 5, 7, 10, 12, 14, 17, 19] and spread_orbits(3) == [0, 1, 2]
+    fig = seen["ensemble_orbits.png"]
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    assert [int(ax.get_title().split(",")[0].split()[1]) for ax in panels] == spread_orbits(20)
+    data = load(ensemble_dir)
+    for ax, i in zip(panels, spread_orbits(20), strict=True):
+        com = ax.collections[1].get_offsets()  # the centre of mass z of orbit i, every saved row
+        np.testing.assert_array_equal(np.asarray(com), data.states[:, i, 6:8])
+    # the histogram of the drift over the saved rows counts every orbit
+    hist = seen["drift_hist.png"]
+    assert sum(p.get_height() for p in hist.axes[1].patches) == 20
+    _says_dimensionless_once(fig)
+    # one orbit asked for: only that orbit's figures
+    assert [p.name for p in plotting.save_run_figures(ensemble_dir, tmp_path / "k", orbit=3)] == [
+        "figure1.png", "figure2.png", "integrals.png"]

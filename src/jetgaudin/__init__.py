@@ -5,6 +5,9 @@ from . import _errors, _startup, hamiltonians  # noqa: F401  (_startup before Nu
 from ._errors import *  # noqa: F403  (the exception hierarchy: all of _errors.__all__ is public)
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund
+from .events import find_events, poincare_section
+from .exact import ExactFlow, exact_parameters
+from .exact_chain import ChainExactFlow
 from .flows import FlowMap, Trajectory, integrate
 from .gaudin import (
     ChainHamiltonian,
@@ -19,6 +22,7 @@ from .gaudin import (
 from .hamiltonians import *  # noqa: F403  (all of hamiltonians.__all__ is public)
 from .lax import lax_matrix, r_matrix, uvw
 from .maps import Advance, Backend, Branch, Map, map_from_description
+from .solve import solve
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
 from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material_point
 
@@ -59,6 +63,12 @@ __all__ = [
     "Branch",
     "map_from_description",
     "FlowMap",
+    "ExactFlow",
+    "exact_parameters",
+    "ChainExactFlow",
+    "solve",
+    "find_events",
+    "poincare_section",
     "OnePointBacklund",
     "TwoPointBacklund",
     "Trajectory",

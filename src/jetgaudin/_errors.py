@@ -16,6 +16,7 @@ __all__ = [
     "BranchPointError",
     "OffLeafError",
     "IntegrationError",
+    "StepTooLargeError",
     "RecordingError",
     "RunDirectoryError",
     "RunLockedError",
@@ -54,6 +55,16 @@ class OffLeafError(JetGaudinError):
 
 class IntegrationError(JetGaudinError):
     """A continuous-time integration failed (step size underflow, backend error, ...)."""
+
+
+class StepTooLargeError(InvalidParameterError):
+    """An exact time step (:class:`jetgaudin.ExactFlow`) has no well-conditioned set of Bäcklund parameters on this
+    orbit's leaf: ``dt`` is larger than ``dt_max`` (the attribute; ``None`` where it was not computed).  Give a
+    smaller ``dt`` or more ``substeps``."""
+
+    def __init__(self, message: str, dt_max: float | None = None):
+        super().__init__(message)
+        self.dt_max = dt_max
 
 
 class RecordingError(JetGaudinError):

@@ -26,11 +26,28 @@ from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
 from .spectral import integrals as _jg_integrals
 
 __all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
-           "sample_on_energy_shell", "DEFAULT_CASIMIRS"]
+           "sample_on_energy_shell", "DEFAULT_CASIMIRS", "DRIFT_QUANTILES", "drift_quantiles"]
 
 #: the leaf ``ensemble`` samples when given neither ``--input`` nor ``--sample`` (N = 3): the Casimirs of the
 #: Appendix 2 initial state rounded, ``C = (0.4, -0.3, 1.5)`` (any leaf with ``C_N > 0`` works)
 DEFAULT_CASIMIRS = (0.4, -0.3, 1.5)
+
+#: the quantiles of the drift that ``EnsembleResult.drift_quantiles`` and ``jetgaudin ensemble`` report
+DRIFT_QUANTILES = (0.5, 0.9, 0.99, 1.0)
+
+
+def drift_quantiles(drift, q=DRIFT_QUANTILES) -> np.ndarray:
+    """Quantiles over the orbits (axis 0) of a drift table ``(B, 2N)``: shape ``(len(q), 2N)``.  ``q`` in [0, 1];
+    an empty table (no orbit) gives NaN rows.  Shared by :class:`EnsembleResult` and the recorded ensembles."""
+    qq = np.atleast_1d(np.asarray(q, dtype=float))
+    if qq.ndim != 1 or qq.size == 0 or not np.all((qq >= 0) & (qq <= 1)):
+        raise InvalidParameterError(f"q must be quantiles in [0, 1] (e.g. 0.5, 0.9, 0.99, 1), got {q!r}")
+    d = np.asarray(drift, dtype=float)
+    if d.ndim != 2:
+        raise InvalidParameterError(f"drift must have shape (B, 2N), got shape {d.shape}")
+    if d.shape[0] == 0:
+        return np.full((qq.size, d.shape[1]), np.nan)
+    return np.quantile(d, qq, axis=0)
 
 
 @dataclass(frozen=True)
@@ -57,6 +74,12 @@ class EnsembleResult:
     def max_drift(self) -> np.ndarray:
         """Largest relative integral drift of each orbit, shape ``(B,)``."""
         return np.max(self.drift, axis=-1)
+
+    def drift_quantiles(self, q=DRIFT_QUANTILES) -> np.ndarray:
+        """Quantiles over the orbits of each integral's relative drift, shape ``(len(q), 2N)``: row ``j`` is the
+        ``q[j]`` quantile of ``drift[:, m]`` for each integral ``m`` (``q = 1`` is the largest drift; default the
+        median, 90 %, 99 % and the maximum).  Linear interpolation between orbits (:func:`numpy.quantile`)."""
+        return drift_quantiles(self.drift, q)
 
 
 def _per_orbit(value, B, name, dtype):

@@ -38,12 +38,51 @@ class Method(StrEnum):
 
 @dataclass(frozen=True)
 class Trajectory:
-    """Samples of a flow: ``t`` (shape ``(T,)``), ``X`` (``(T, ..., 3N)``), ``integrals`` (``(T, ..., 2N)``)."""
+    """Samples of a flow or of a map's orbit: ``t`` (shape ``(T,)``), ``X`` (``(T, ..., 3N)``), ``integrals``
+    (``(T, ..., 2N)``), the ``method`` and ``info`` (what the method did: e.g. the time step used and the exact
+    flow's sub-steps, see :func:`jetgaudin.solve`).  :meth:`to_xarray` (needs ``xarray``), :meth:`to_hdf5` /
+    :meth:`from_hdf5` (datasets ``t``, ``X``, ``integrals``, as the run layer's files)."""
 
     t: np.ndarray
     X: np.ndarray
     integrals: np.ndarray
     method: str
+    info: dict = field(default_factory=dict)
+
+    def to_xarray(self):
+        """An ``xarray.Dataset`` with ``X`` (time, ..., component) and ``integrals`` (time, ..., integral);
+        :class:`InvalidParameterError` when xarray is not installed (an optional dependency)."""
+        try:
+            import xarray as xr
+        except ImportError:
+            raise InvalidParameterError("to_xarray() needs the optional package xarray: pip install xarray") from None
+        lead = [f"orbit{k}" for k in range(self.X.ndim - 2)]
+        return xr.Dataset(
+            {"X": (["t", *lead, "component"], self.X), "integrals": (["t", *lead, "integral"], self.integrals)},
+            coords={"t": self.t}, attrs={"method": self.method, **{k: str(v) for k, v in self.info.items()}})
+
+    def to_hdf5(self, path) -> None:
+        """Write ``t``, ``X``, ``integrals`` and the attributes ``method``, ``info`` (JSON) to an HDF5 file."""
+        import json
+
+        import h5py
+
+        with h5py.File(path, "w") as f:
+            for name in ("t", "X", "integrals"):
+                f.create_dataset(name, data=getattr(self, name))
+            f.attrs["method"] = self.method
+            f.attrs["info"] = json.dumps(self.info)
+
+    @classmethod
+    def from_hdf5(cls, path) -> Trajectory:
+        """The trajectory :meth:`to_hdf5` wrote."""
+        import json
+
+        import h5py
+
+        with h5py.File(path, "r") as f:
+            return cls(np.asarray(f["t"]), np.asarray(f["X"]), np.asarray(f["integrals"]), str(f.attrs["method"]),
+                       json.loads(f.attrs["info"]))
 
     @property
     def drift(self) -> np.ndarray:

@@ -51,7 +51,7 @@ CheckpointOption = Annotated[
     float, typer.Option("--checkpoint-seconds", help="write a checkpoint at most this often (seconds)")
 ]
 SaveEveryOption = Annotated[
-    str | None, typer.Option("--save-every", help="save every k-th step (and the last) [default: 1]")
+    str | None, typer.Option("--save-every", metavar="INTEGER", help="save every k-th step (and the last) [default: 1]")
 ]
 InitFromOption = Annotated[
     str | None,
@@ -389,10 +389,17 @@ def compile_message(msg: str) -> None:
 
 def timing_text(res) -> str:
     """``<s> s stepping (<rate> steps/s)[; kernels compiled or loaded in <s> s, not in the rate]`` of a
-    :class:`jetgaudin.run.RunResult` (the rate of this session: compile/load time excluded)."""
+    :class:`jetgaudin.run.RunResult`: the time and rate of this session's stepping (compile/load time excluded).
+    A resumed run says so: ``<s> s stepping <k> steps in this session (<rate>), <s> s over the whole run``, so
+    that the rate is never the whole run's steps over this session's time or the reverse."""
     unit = "steps/s" if res.spec.B == 1 and res.spec.X0.ndim == 1 else "orbit-steps/s"
     rate = res.step_rate
-    text = f"{res.elapsed:.3g} s stepping" + (f" ({rate:.3g} {unit})" if math.isfinite(rate) else "")
+    rate_text = f" ({rate:.3g} {unit})" if math.isfinite(rate) else ""
+    if 0 <= res.session_steps < res.last_safe_step:  # resumed: earlier sessions did the other steps
+        text = (f"{res.session_seconds:.3g} s stepping {res.session_steps:,} steps in this session{rate_text}, "
+                f"{res.elapsed:.3g} s over the whole run")
+    else:
+        text = f"{res.elapsed:.3g} s stepping{rate_text}"
     if res.compile_seconds > 0:
         text += f"; kernels compiled or loaded in {res.compile_seconds:.1f} s, not in the rate"
     return text

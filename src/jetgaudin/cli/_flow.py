@@ -26,14 +26,20 @@ class Hamiltonian(StrEnum):
 class Method(StrEnum):
     DOP853 = "DOP853"
     heyoka = "heyoka"
+    exact = "exact"
+    midpoint = "midpoint"
 
 
 @app.command()
 def flow(
-    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = str(cm.APPENDIX2_B),
-    eta: Annotated[str, typer.Option("--eta", help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
-    steps: Annotated[str, typer.Option("--steps", help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
-    init: Annotated[str, typer.Option("--init", help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
+    b: Annotated[str, typer.Option("--b", metavar="FLOAT",
+            help="field strength b (field b e_3), real, nonzero")] = str(cm.APPENDIX2_B),
+    eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX",
+            help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
+    steps: Annotated[str, typer.Option("--steps", metavar="INTEGER",
+            help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
+    init: Annotated[str, typer.Option("--init", metavar="X1,...,X3N",
+            help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
     hamiltonian: Annotated[
         Hamiltonian,
         typer.Option(
@@ -44,8 +50,11 @@ def flow(
     ] = Hamiltonian.interpolating,
     dt: Annotated[float, typer.Option("--dt", help="time between samples (1 = one step of the map for G_η)")] = 1.0,
     method: Annotated[
-        Method, typer.Option("--method", help="integrator: DOP853 (SciPy) or heyoka (Taylor)")
+        Method, typer.Option("--method", help="integrator: DOP853 (SciPy), heyoka (Taylor), exact (every step the "
+                             "exact time-dt flow: jg.ExactFlow) or midpoint (implicit midpoint rule)")
     ] = Method.DOP853,
+    substeps: Annotated[int, typer.Option("--substeps", help="--method exact: exact sub-steps per step (for a dt "
+                                                             "larger than the leaf's largest feasible step)")] = 1,
     rtol: Annotated[float, typer.Option("--rtol", help="integrator tolerance (relative and absolute)")] = 1e-12,
     compare: Annotated[
         bool,
@@ -114,7 +123,7 @@ def flow(
             H = jg.physical_hamiltonian(N, bf)
         if model is None:
             with cm.blame("--dt"):
-                fm = FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
+                fm = _flow_map(H, dt, method, rtol, substeps, X0)
         with cm.blame("--init"):
             spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
                                     program="jetgaudin flow")
@@ -184,3 +193,20 @@ def flow(
         con.print("wrote: " + ", ".join(str(f) for f in files))
         if res.failed:
             cm.fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", cm.EXIT_FAILED)
+
+
+def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0):
+    """The run's map: the adaptive integrators' FlowMap, or a fixed-step map (ExactFlow, ImplicitMidpoint), whose
+    feasibility is checked on X0 before the run (an exact step too large for the leaf names the largest dt)."""
+    if method is Method.exact:
+        if not isinstance(substeps, int) or substeps < 1:
+            raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
+        fm = jg.ExactFlow(H, dt, substeps)
+        with cm.blame("--dt"):
+            fm.parameters(X0)
+        return fm
+    if method is Method.midpoint:
+        from ..midpoint import ImplicitMidpoint
+
+        return ImplicitMidpoint(H, dt)
+    return FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)

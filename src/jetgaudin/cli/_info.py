@@ -52,11 +52,13 @@ def _fmt(z) -> str:
 
 @app.command()
 def info(
-    b: Annotated[float, typer.Option("--b", help="field strength b (field b e_3), nonzero (0 allowed with --sites)")
+    b: Annotated[float, typer.Option("--b", metavar="FLOAT",
+            help="field strength b (field b e_3), nonzero (0 allowed with --sites)")
                  ] = APPENDIX2_B,
-    eta: Annotated[str, typer.Option("--eta", help="spectral parameter η, e.g. 5+0.1i")] = APPENDIX2_ETA,
+    eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX",
+            help="spectral parameter η, e.g. 5+0.1i")] = APPENDIX2_ETA,
     init: Annotated[
-        str, typer.Option("--init", help="the state: 3N comma-separated numbers y_0, y_1, ...")
+        str, typer.Option("--init", metavar="X1,...,X3N", help="the state: 3N comma-separated numbers y_0, y_1, ...")
     ] = APPENDIX2_INIT,
     tol: Annotated[float, typer.Option("--tol", help="tolerance of the canonical-leaf test")] = 1e-10,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,

@@ -103,21 +103,23 @@ def init_from(path: str, option: str = "--init-from"):
 def orbit(
     b: Annotated[
         str | None,
-        typer.Option("--b", help=f"field strength b (field b e_3), real, nonzero [default: {APPENDIX2_B:g}]"),
+        typer.Option("--b", metavar="FLOAT",
+                help=f"field strength b (field b e_3), real, nonzero [default: {APPENDIX2_B:g}]"),
     ] = None,
     eta: Annotated[
         str | None,
         typer.Option(
-            "--eta",
+            "--eta", metavar="COMPLEX",
             help=f"Bäcklund parameter η, e.g. 5+0.1i or 5+0.1j; Im η is the time "
             f"step and must be nonzero [default: {APPENDIX2_ETA}]",
         ),
     ] = None,
-    steps: Annotated[str | None, typer.Option("--steps", help=f"number of steps [default: {APPENDIX2_STEPS}]")] = None,
+    steps: Annotated[str | None, typer.Option("--steps", metavar="INTEGER",
+            help=f"number of steps [default: {APPENDIX2_STEPS}]")] = None,
     init: Annotated[
         str | None,
         typer.Option(
-            "--init",
+            "--init", metavar="X1,...,X3N",
             help="3N comma-separated numbers y_0, y_1, ... (N inferred), e.g. "
             f"--init={APPENDIX2_INIT} [default: Appendix 2]",
         ),

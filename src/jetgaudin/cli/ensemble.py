@@ -90,15 +90,18 @@ def ensemble_command(
             help="draw the initial states: on a leaf (--casimirs) or on the energy shell H_2/2 = E (--energy)",
         ),
     ] = None,
-    orbits: Annotated[str, typer.Option("--orbits", help="number of sampled orbits")] = "100",
-    seed: Annotated[str, typer.Option("--seed", help="seed of the sampler (an integer >= 0)")] = "0",
+    orbits: Annotated[str, typer.Option("--orbits", metavar="INTEGER", help="number of sampled orbits")] = "100",
+    seed: Annotated[str, typer.Option("--seed", metavar="INTEGER", help="seed of the sampler (an integer >= 0)")] = "0",
     n: Annotated[int, typer.Option("--n", help="jet order N of the sampled states")] = 3,
-    casimirs: Annotated[str | None, typer.Option("--casimirs", help="C_1,...,C_N of the leaf (C_N > 0)")] = None,
+    casimirs: Annotated[str | None, typer.Option("--casimirs", metavar="C1,...,CN",
+            help="C_1,...,C_N of the leaf (C_N > 0)")] = None,
     energy: Annotated[float | None, typer.Option("--energy", help="energy E of the shell H_2/2 = E")] = None,
     scale: Annotated[float, typer.Option("--scale", help="spread of the sampled components")] = 1.0,
-    b: Annotated[str, typer.Option("--b", help="field strength b (field b e_3), real, nonzero")] = "1.0",
-    eta: Annotated[str, typer.Option("--eta", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
-    steps: Annotated[str | None, typer.Option("--steps", help="number of steps [default: 100]")] = None,
+    b: Annotated[str, typer.Option("--b", metavar="FLOAT",
+            help="field strength b (field b e_3), real, nonzero")] = "1.0",
+    eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
+    steps: Annotated[str | None, typer.Option("--steps", metavar="INTEGER",
+            help="number of steps [default: 100]")] = None,
     save_every: SaveEveryOption = None,
     init_from_dir: InitFromOption = None,
     out: Annotated[
@@ -117,7 +120,8 @@ def ensemble_command(
         str | None,
         typer.Option("--scheduler", help="Dask scheduler address tcp://host:port (needs jetgaudin[distributed])"),
     ] = None,
-    chunk_size: Annotated[str | None, typer.Option("--chunk-size", help="orbits per Dask task")] = None,
+    chunk_size: Annotated[str | None, typer.Option("--chunk-size", metavar="INTEGER",
+            help="orbits per Dask task")] = None,
     branch: Annotated[
         Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
     ] = None,
@@ -292,4 +296,26 @@ def _report(res, show):
         f"max drift {md.max():.2e} (orbit {int(np.argmax(md))}), median {np.median(md):.2e}" if B else
         f"{B} orbits: nothing to iterate"
     )
+    if B:
+        _report_quantiles(con, res.drift, names, res.out_dir)
     con.print(f"status: {res.status}; {res.rows} saved rows of {B} states in {res.out_dir / 'ensemble.h5'}")
+
+
+def _report_quantiles(con, drift, names, out_dir) -> None:
+    """The drift's quantiles over the orbits, per integral (:func:`jetgaudin.ensemble.drift_quantiles`), and the
+    histogram figure ``drift_hist.png`` beside the run's files."""
+    from rich.table import Table
+
+    from jetgaudin import ensemble as ens
+    from jetgaudin.plotting._ensemble import save_drift_histogram
+
+    q = ens.DRIFT_QUANTILES
+    table = ens.drift_quantiles(drift, q)
+    t = Table(title=f"relative drift over the {drift.shape[0]} orbits: quantiles per integral", title_justify="left")
+    t.add_column("quantile", justify="right")
+    for name in names:
+        t.add_column(name, justify="right")
+    for qq, row in zip(q, table, strict=True):
+        t.add_row("max" if qq == 1 else f"{100 * qq:g} %", *[f"{d:.2e}" for d in row])
+    con.print(t)
+    con.print(f"drift histogram: {save_drift_histogram(out_dir, drift, names)}")

@@ -22,11 +22,33 @@ def _chain_warmup(notify):
     return jg.ChainTwoPointBacklund(model, 0.9 + 0.05j, backend="compiled").prepare_kernels(X, 1, notify)
 
 
+#: run in a child process: the chains' kernel compiled for Numba's default CPU target, the target it gets when a
+#: process imports it before the Bäcklund kernels have chosen theirs (``backlund/kernels/_target.py``:
+#: ``configure`` adds ``prefer-256-bit`` only while Numba's target does not exist yet), as ``ensemble --sites``
+#: does.  Numba caches one version per target, so this warm-up serves those runs.
+_CHILD = "import jetgaudin.gaudin._kernels; from jetgaudin.cli.warmup import _chain_warmup; _chain_warmup(None)"
+
+
+def _chain_warmup_default_target() -> float:
+    """Seconds to compile (or load) the chains' kernel for Numba's default target, in a child process."""
+    import subprocess
+    import sys
+    import time
+
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", _CHILD], capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        last = (proc.stderr.strip().splitlines() or ["(no message)"])[-1]
+        typer.echo(f"jetgaudin warmup: the chains' kernel for ensembles failed to compile: {last}", err=True)
+        raise typer.Exit(1)
+    return time.perf_counter() - t0
+
+
 @app.command("warmup")
 def warmup_command() -> None:
-    """Compile every Numba kernel once (N = 3 and generic routes, lanes, batch, branch rule, the chains' kernel) so
-    that later runs start at full speed; prints what it compiled and the time.  Compiled kernels are cached on
-    disk."""
+    """Compile every Numba kernel once (N = 3 and generic routes, lanes, batch, branch rule, the chains' kernel for
+    orbits and ensembles) so that later runs start at full speed; prints what it compiled and the time.  Compiled
+    kernels are cached on disk."""
     from ..backlund import kernels
 
     def say(msg: str) -> None:
@@ -37,4 +59,7 @@ def warmup_command() -> None:
         typer.echo("jetgaudin: kernels already loaded in this process")
     typer.echo(f"warmup: {len(report.kernels)} kernels {report.state} before; {report.seconds:.1f} s")
     chain = _chain_warmup(say)
-    typer.echo(f"warmup: the chains' kernel {chain.state}; {chain.seconds:.1f} s")
+    say("jetgaudin: compiling (or loading) the chains' kernel for ensembles (Numba's default CPU target) ...")
+    ens_s = _chain_warmup_default_target()
+    typer.echo(f"warmup: the chains' kernel {chain.state}; {chain.seconds:.1f} s for orbits, "
+               f"{ens_s:.1f} s for ensembles")

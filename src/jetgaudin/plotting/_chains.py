@@ -1,5 +1,5 @@
-r"""Figures of chain orbits (issue 12): the trajectory of each site's ``y_0`` in 3D (one colour per site) and the
-drift of the ``2M`` integrals ``h_{i,m}`` on a log scale.
+r"""Figures of chain orbits (issue 12): each site's ``y_0`` (its e₁–e₂ projection coloured by the step, and its
+components against the step) and the drift of the ``2M`` integrals ``h_{i,m}`` on a log scale.
 
 Uses the Agg backend (no display needed).  No mathematics here: the site layout comes from
 :meth:`jetgaudin.gaudin.GaudinModel.labels` / ``offsets``, the integrals from
@@ -12,9 +12,10 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib import colormaps
+from matplotlib.ticker import FuncFormatter
 
 from ._files import save_figure
-from ._orbit import AXIS_LABELS, new_figure
+from ._orbit import AXIS_LABELS, count_text, mark_dimensionless, new_figure, step_axis
 
 __all__ = ["site_y0", "figure_chain_y0", "figure_chain_integral_drift", "save_chain_figures"]
 
@@ -40,25 +41,65 @@ def site_y0(model, X) -> np.ndarray:
     return y[..., list(model.offsets), :]
 
 
-def figure_chain_y0(model, X, *, title: str = ""):
-    """The trajectories of the sites' ``y_0`` in 3D (dimensionless components ``e_1, e_2, e_3``), one colour per
-    site; the start of each trajectory is marked with a ring."""
+#: most sites drawn by :func:`figure_chain_y0` (one row of panels each)
+MAX_SITES = 6
+
+
+def figure_chain_y0(model, X, *, title: str = "", n=None):
+    """Each site's ``y_0`` along the orbit, one row of panels per site (at most :data:`MAX_SITES`): left, its
+    projection on the e₁–e₂ plane coloured by the step (colour bar), the start ringed; right, its three
+    components ``y_0^1, y_0^2, y_0^3`` against the step.  (A 3D cloud of all sites hides both the order of the
+    points and which site moves how.)
+
+    Parameters
+    ----------
+    model : GaudinModel
+    X : array_like, shape (T, 3M)
+    title : str
+    n : array_like, shape (T,), optional
+        The step of each row (default ``0, 1, …``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     X = np.asarray(X, dtype=float)
-    _, X = _thin(np.arange(len(X)), X)
+    n = np.arange(len(X)) if n is None else np.asarray(n)
+    n, X = _thin(n, X)
     Y = site_y0(model, X)
-    fig = new_figure(figsize=(7.5, 7))
-    ax = fig.add_subplot(projection="3d")
-    colors = colormaps["tab10"]
-    for i in range(Y.shape[1]):
+    S = min(Y.shape[1], MAX_SITES)
+    fig = new_figure(figsize=(10, 2.9 * S + 0.9))
+    axes = np.asarray(fig.subplots(S, 2, squeeze=False, gridspec_kw={"width_ratios": (1, 1.6)}))
+    comp_colors = ("tab:blue", "tab:orange", "tab:green")
+    for i in range(S):
         P = Y[:, i]
-        c = colors(i % 10)
-        ax.plot(P[:, 0], P[:, 1], P[:, 2], ".", markersize=2, color=c, label=f"y_0 of {_site_name(model, i)}")
-        ax.scatter(*P[0], s=40, facecolors="none", edgecolors=[c], linewidths=1.2)
-    ax.set_xlabel(AXIS_LABELS[0])
-    ax.set_ylabel(AXIS_LABELS[1])
-    ax.set_zlabel(AXIS_LABELS[2])
-    ax.legend(loc="upper left", fontsize=8, markerscale=4)
-    ax.set_title((title + "\n" if title else "") + "chain: y_0 of each site (ring: start)", fontsize=8)
+        ax, ax_t = axes[i]
+        sc = ax.scatter(P[:, 0], P[:, 1], c=n, cmap="viridis", s=max(0.5, min(8.0, 1500.0 / len(P))), linewidths=0)
+        ax.scatter(*P[0, :2], s=60, facecolors="none", edgecolors="red", linewidths=1.2, label="start")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(AXIS_LABELS[0], fontsize=8)
+        ax.set_ylabel(AXIS_LABELS[1], fontsize=8)
+        ax.tick_params(labelsize=7)
+        ax.set_title(f"y_0 of {_site_name(model, i)}", fontsize=8)
+        cb = fig.colorbar(sc, ax=ax, shrink=0.85)
+        cb.set_label("step n", fontsize=7)
+        cb.ax.tick_params(labelsize=6)
+        cb.formatter = FuncFormatter(lambda v, _pos: count_text(v))
+        cb.update_ticks()
+        for a in range(3):
+            ax_t.plot(n, P[:, a], linewidth=0.9, color=comp_colors[a], label=f"y_0^{a + 1}")
+        ax_t.set_ylabel("component", fontsize=8)
+        ax_t.tick_params(labelsize=7)
+        ax_t.grid(True, alpha=0.3)
+        step_axis(ax_t)
+        if i == 0:
+            ax_t.legend(fontsize=7, ncol=3, loc="upper right")
+            ax.legend(fontsize=7, loc="upper left")
+    axes[-1, 1].set_xlabel("step n", fontsize=8)
+    more = f" (first {S} of {Y.shape[1]} sites)" if Y.shape[1] > S else ""
+    fig.suptitle((title + "\n" if title else "") + f"chain: y_0 of each site{more}", fontsize=8)
+    fig.tight_layout()
+    mark_dimensionless(fig)
     return fig
 
 
@@ -79,10 +120,12 @@ def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "
         ax.semilogy(n[mask], d[mask, k], "x" if cas[k] else ".", markersize=3 if cas[k] else 2, color=colors(k % 20),
                     label=f"$h_{{{name[1:]}}}$" + (" (Casimir)" if cas[k] else ""))
     ax.set_xlabel(xlabel)
-    ax.set_ylabel(r"$|h_{i,m}(n) - h_{i,m}(0)|$ (dimensionless)")
+    step_axis(ax)
+    ax.set_ylabel(r"$|h_{i,m}(n) - h_{i,m}(0)|$")
     ax.legend(ncol=1 + len(names) // 13, fontsize=7, markerscale=3, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title((title + "\n" if title else "") + "drift of the chain integrals", fontsize=8)
+    mark_dimensionless(fig)
     return fig
 
 
@@ -90,7 +133,7 @@ def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "
     """Write ``chain_y0.png`` and ``chain_integrals.png`` into ``out_dir``; return their paths."""
     out_dir = Path(out_dir)
     paths = []
-    for name, fig in (("chain_y0.png", figure_chain_y0(model, X, title=title)),
+    for name, fig in (("chain_y0.png", figure_chain_y0(model, X, title=title, n=n)),
                       ("chain_integrals.png", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
         paths.append(save_figure(fig, out_dir / name, 130))  # atomic, never through a symlink
     return paths

@@ -14,7 +14,7 @@ import numpy as np
 import jetgaudin as jg
 
 from ._files import save_figure
-from ._orbit import integral_labels, new_figure
+from ._orbit import integral_labels, mark_dimensionless, new_figure, step_axis
 
 __all__ = ["figure_compare_drift", "figure_map_flow_distance", "save_compare_figures"]
 
@@ -25,8 +25,10 @@ def _drift(X, b):
 
 
 def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
-    """The integral drifts ``|I_k − I_k(0)|`` of the flow of ``G_η`` (lines) and of the map (points), one colour
-    per integral, on a log scale.
+    """The integral drifts ``|I_k − I_k(0)|`` of the flow of ``G_η`` (grey line) and of the map (coloured
+    points), one panel per integral (``H_1..H_N`` on the top row, ``C_1..C_N`` below), log scale, shared axes.
+
+    One panel per integral keeps the 2N pairs of series apart (on one axis their 4N curves overlap).
 
     Parameters
     ----------
@@ -45,27 +47,35 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
 
     Notes
     -----
-    Exact zeros cannot be drawn on a log scale and are left out.
+    Exact zeros cannot be drawn on a log scale and are left out; a panel says so when a series is all zeros.
     """
     df, dm = _drift(X_flow, b), _drift(X_map, b)
     t_flow, n_map = np.asarray(t_flow, dtype=float), np.asarray(n_map, dtype=float)
     N = df.shape[-1] // 2
-    fig = new_figure(figsize=(9.5, 5))
-    ax = fig.subplots()
+    fig = new_figure(figsize=(3.2 * N + 1.0, 5.6))
+    axes = np.asarray(fig.subplots(2, N, sharex=True, sharey=True, squeeze=False))
     colors = mpl.rcParams["axes.prop_cycle"].by_key()["color"]
     for k, name in enumerate(integral_labels(N)):
-        c = colors[k % len(colors)]
+        ax = axes[k // N, k % N]
         mf, mm = df[:, k] > 0, dm[:, k] > 0
-        ax.semilogy(t_flow[mf], df[mf, k], "-", color=c, linewidth=1.0, label=f"{name}: flow of G_η (line)")
-        ax.semilogy(n_map[mm], dm[mm, k], ".", color=c, markersize=3, label=f"{name}: map (points)")
-    ax.set_xlabel("step n of the map = time t of the flow (dimensionless)")
-    ax.set_ylabel("|I_k − I_k(0)| (dimensionless)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, markerscale=2)
-    ax.set_title(
-        (title + "\n" if title else "") + "drift of the 2N integrals: flow of G_η (lines) and map (points)", fontsize=8
-    )
-    fig.tight_layout()
+        ax.semilogy(t_flow[mf], df[mf, k], "-", color="0.55", linewidth=0.8, label="flow of G_η (line)")
+        ax.semilogy(n_map[mm], dm[mm, k], ".", color=colors[k % len(colors)], markersize=3, label="map (points)")
+        zero = [w for w, m in (("flow", mf), ("map", mm)) if not m.any()]
+        ax.set_title(name + (f" ({' and '.join(zero)}: exactly conserved)" if zero else ""), fontsize=9)
+        ax.grid(True, which="both", alpha=0.3)
+        step_axis(ax)
+    for ax in axes[-1]:
+        ax.set_xlabel("step n = time t")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("|I − I(0)|")
+    handles = [mpl.lines.Line2D([], [], color="0.55", linewidth=1.0),
+               mpl.lines.Line2D([], [], color=colors[0], marker=".", linestyle="none", markersize=6)]
+    fig.legend(handles, ["flow of G_η at t = n (line)", "map, step n (points)"], loc="lower left", ncol=2,
+               fontsize=8, frameon=False)
+    fig.suptitle((title + "\n" if title else "") + "drift of the 2N integrals: the map against the flow it "
+                 "interpolates", fontsize=8)
+    fig.tight_layout(rect=(0, 0.04, 1, 1))
+    mark_dimensionless(fig)
     return fig
 
 
@@ -91,12 +101,14 @@ def figure_map_flow_distance(n, distance, *, title: str = ""):
     )
     if m.any():
         ax.axhline(distance.max(), color="0.4", linestyle=":", linewidth=0.8, label=f"maximum {distance.max():.2e}")
-    ax.set_xlabel("step n (dimensionless)")
-    ax.set_ylabel("Euclidean distance of the states (dimensionless)")
+    ax.set_xlabel("step n")
+    step_axis(ax)
+    ax.set_ylabel("Euclidean distance of the states")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     ax.set_title((title + "\n" if title else "") + "distance between the map and the time-n flow of G_η", fontsize=8)
     fig.tight_layout()
+    mark_dimensionless(fig)
     return fig
 
 

@@ -16,7 +16,7 @@ import numpy as np
 import jetgaudin as jg
 
 from .._errors import InvalidParameterError
-from ._orbit import figure_integral_drift, figure_points_3d, figure_projection
+from ._orbit import count_text, figure_integral_drift, figure_points_3d, figure_projection
 from ._runs import RunRows, open_run, thin_step, thinned_rows
 
 __all__ = ["FigureFormat", "save_orbit_figures", "save_run_figures", "run_title", "save_figure", "DEFAULT_MAX_POINTS"]
@@ -39,6 +39,10 @@ def _eta_text(eta: complex | None) -> str:
     return f"{eta.real:g} {'+' if eta.imag >= 0 else '−'} {abs(eta.imag):g}i"
 
 
+def _steps_text(steps) -> str:
+    return "?" if steps is None else count_text(steps)
+
+
 def run_title(run: RunRows) -> str:
     """A title a reader understands: what was iterated, with which parameters, from which state."""
     inp = run.inputs
@@ -49,11 +53,12 @@ def run_title(run: RunRows) -> str:
         if run.kind == "ensemble":
             what += f", orbit {run.orbit} of an ensemble of {inp.get('B')}"
         steps = inp.get("steps")
-        return f"{what} (N = {run.N}): b = {run.b:g}, η = {_eta_text(run.eta)}, {steps} steps{start}"
+        return f"{what} (N = {run.N}): b = {run.b:g}, η = {_eta_text(run.eta)}, {_steps_text(steps)} steps{start}"
     ham = "G_η" if run.eta is not None else "H₂/2"
     eta = f", η = {_eta_text(run.eta)}" if run.eta is not None else ""
     return (
-        f"Flow of {ham} (N = {run.N}): b = {run.b:g}{eta}, dt = {inp.get('dt', 1):g}, {inp.get('steps')} samples{start}"
+        f"Flow of {ham} (N = {run.N}): b = {run.b:g}{eta}, dt = {inp.get('dt', 1):g}, {_steps_text(inp.get('steps'))} "
+        f"samples{start}"
     )
 
 
@@ -151,7 +156,9 @@ def save_run_figures(
     """Redraw the figures of a finished or interrupted run from its files, in constant memory.
 
     Writes ``figure1``, ``figure2`` and ``integrals`` for an orbit run, one orbit of an ensemble (``orbit``) or
-    a flow run; for a ``flow --compare`` run also ``compare_drift`` and ``compare_distance``.
+    a flow run; for a ``flow --compare`` run also ``compare_drift`` and ``compare_distance``; for an ensemble
+    without ``orbit`` also ``ensemble_orbits`` (up to nine orbits side by side) and ``drift_hist`` (the
+    distribution of the orbits' drift over the saved rows).
 
     Parameters
     ----------
@@ -194,9 +201,10 @@ def save_run_figures(
     title = run_title(run)
     unit = "time t" if run.index_name == "t" else "step n"
     note = (
-        f"all {run.rows} saved rows drawn"
+        f"all {count_text(run.rows)} saved rows drawn"
         if k == 1
-        else f"one saved row in {k} drawn (rows 0, {k}, {2 * k}, … and the last of {run.rows}); status: {run.status}"
+        else f"one saved row in {count_text(k)} drawn (rows 0, {count_text(k)}, {count_text(2 * k)}, … and the last "
+        f"of {count_text(run.rows)}); status: {run.status}"
     )
     if k == 1:
         note += f"; status: {run.status}"
@@ -224,6 +232,11 @@ def save_run_figures(
             dpi,
         )
     )
+    if run.kind == "ensemble" and orbit is None:  # several orbits and the drift of all of them
+        from ._ensemble import save_ensemble_figures
+
+        paths += save_ensemble_figures(run, out_dir, max_points=max_points, dpi=dpi, fmt=fmt, title=run_title(run)
+                                       .split(", orbit")[0] + f" (N = {run.N})")
     if overlay is not None:
         from ._compare import save_compare_figures
 

@@ -27,9 +27,15 @@ __all__ = [
     "AXIS_LABELS",
     "POINT_COLORS",
     "new_figure",
+    "DIMENSIONLESS_NOTE",
+    "mark_dimensionless",
+    "count_text",
+    "step_axis",
 ]
 
-AXIS_LABELS = ("e₁ (dimensionless)", "e₂ (dimensionless)", "e₃ (dimensionless)")
+#: the axes' names; that every quantity is dimensionless is said once per figure (:func:`mark_dimensionless`)
+AXIS_LABELS = ("e₁", "e₂", "e₃")
+DIMENSIONLESS_NOTE = "all quantities are dimensionless"
 POINT_COLORS = ("tab:blue", "tab:red")
 SPHERE_STYLE: dict[str, Any] = {"color": "0.15", "linewidth": 0.6, "alpha": 0.55}
 
@@ -40,6 +46,34 @@ def new_figure(**kwargs) -> Figure:
     fig = Figure(**kwargs)
     FigureCanvasAgg(fig)
     return fig
+
+
+def mark_dimensionless(fig) -> None:
+    """Say once, in the figure's bottom-right corner, that every quantity drawn is dimensionless (the paper's
+    variables carry no units), instead of on every axis."""
+    fig.text(0.995, 0.005, DIMENSIONLESS_NOTE, ha="right", va="bottom", fontsize=7, color="0.35")
+
+
+def count_text(n) -> str:
+    """A step count as people read it: thousands separators below 10⁶ (``12,345``), powers of ten from 10⁶ on
+    (``10⁶``, ``2.5×10⁷``); non-integers as ``%g``."""
+    x = float(n)
+    if not np.isfinite(x) or x != round(x):
+        return f"{x:g}"
+    if abs(x) < 1e6:
+        return f"{int(x):,}"
+    e = int(np.floor(np.log10(abs(x))))
+    m = x / 10.0**e
+    sup = str(e).translate(str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹"))
+    return (f"10{sup}" if m == 1 else f"{m:.3g}×10{sup}").replace("-10", "−10")
+
+
+def step_axis(ax, axis: str = "x") -> None:
+    """Tick labels of a step (or time) axis formatted by :func:`count_text` (``1,000``, ``10⁶``) instead of
+    Matplotlib's ``1e6`` offset text."""
+    from matplotlib.ticker import FuncFormatter
+
+    getattr(ax, f"{axis}axis").set_major_formatter(FuncFormatter(lambda v, _pos: count_text(v)))
 
 
 def point_sets(X) -> list[tuple[str, np.ndarray]]:
@@ -168,6 +202,7 @@ def figure_points_3d(X, *, title: str = "", overlay=None, overlay_label: str = "
     if note:
         ax.set_title(note, fontsize=7, color="0.3")
     fig.subplots_adjust(bottom=0.12, top=0.9)
+    mark_dimensionless(fig)
     return fig
 
 
@@ -202,6 +237,7 @@ def figure_projection(X, *, title: str = "", overlay=None, overlay_label: str = 
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, markerscale=3)
     ax.set_title(title + (f"\n{note}" if note else ""), fontsize=8)
     fig.tight_layout()
+    mark_dimensionless(fig)
     return fig
 
 
@@ -242,10 +278,12 @@ def figure_integral_drift(n, X=None, b=None, *, title: str = "", xlabel: str = "
         mask = d[:, k] > 0
         label = name if mask.any() else f"{name} (exactly conserved)"
         ax.semilogy(n[mask], d[mask, k], ".", markersize=2.5, label=label)
-    ax.set_xlabel(xlabel + " (dimensionless)")
-    ax.set_ylabel("|I_k(n) − I_k(0)| (dimensionless)")
+    ax.set_xlabel(xlabel)
+    step_axis(ax)
+    ax.set_ylabel("|I_k(n) − I_k(0)|")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, markerscale=4)
     ax.grid(True, which="both", alpha=0.3)
     ax.set_title(title + (f"\n{note}" if note else ""), fontsize=8)
     fig.tight_layout()
+    mark_dimensionless(fig)
     return fig

@@ -14,7 +14,7 @@ import numpy as np
 
 import jetgaudin as jg
 
-from ._orbit import new_figure
+from ._orbit import mark_dimensionless, new_figure
 
 __all__ = ["nu_on_grid", "figure_spectral_plane", "default_region"]
 
@@ -107,7 +107,7 @@ def figure_spectral_plane(X, b, eta, *, region=None, resolution: int = 241, site
     finite = logabs[np.isfinite(logabs)]
     vmin, vmax = (np.percentile(finite, 1), np.percentile(finite, 99)) if finite.size else (None, None)
     im_a = axes[0].imshow(logabs, origin="lower", extent=ext, aspect="auto", cmap="viridis", vmin=vmin, vmax=vmax)
-    fig.colorbar(im_a, ax=axes[0], label="log₁₀ |ν²(λ)| (dimensionless)", shrink=0.85)
+    fig.colorbar(im_a, ax=axes[0], label="log₁₀ |ν²(λ)|", shrink=0.85)
     axes[0].contour(re, im, logabs, levels=12, colors="white", linewidths=0.4, alpha=0.6)
     axes[0].set_title("log₁₀ |ν²(λ)|: zeros at the branch points, pole at the site", fontsize=9)
     im_b = axes[1].imshow(
@@ -156,12 +156,13 @@ def figure_spectral_plane(X, b, eta, *, region=None, resolution: int = 241, site
             label=f"η = {eta.real:g} {'+' if eta.imag >= 0 else '−'} {abs(eta.imag):g}i",
         )
         ax.plot([eta.real], [-eta.imag], "v", color="cyan", markersize=8, zorder=6, label="η̄")
-        ax.set_xlabel("Re λ (dimensionless)")
+        ax.set_xlabel("Re λ")
         ax.set_xlim(ext[0], ext[1])
         ax.set_ylim(ext[2], ext[3])
-    axes[0].set_ylabel("Im λ (dimensionless)")
+    axes[0].set_ylabel("Im λ")
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, frameon=False)
     fig.suptitle(title or f"Spectral curve in the λ-plane (N = {N}, b = {b:g}): ν² = u² + vw", fontsize=10)
     fig.subplots_adjust(bottom=0.17, top=0.88, wspace=0.12)
+    mark_dimensionless(fig)
     return fig

@@ -1,0 +1,155 @@
+r"""One entry point for the flow of an integral Hamiltonian: ``jg.solve(H, X0, t_span, dt=…, method=…)``.
+
+Methods (``docs/integrators.md``):
+
+* ``"exact"`` -- :class:`jetgaudin.ExactFlow`: every step is the exact time-``dt`` flow (commuting Bäcklund maps and
+  a rotation); ``substeps="auto"`` splits a step the leaf cannot take in one into exact sub-steps, recorded in
+  ``Trajectory.info["substeps"]`` (an exact composition, not an approximation);
+* ``"bt"`` -- :class:`jetgaudin.exact.MatchedBacklund`: the plain Bäcklund map (one map per step, H_2 weight and
+  rotation matched; exact for N = 2, the exact flow of a *modified* Hamiltonian for N ≥ 3);
+* ``"dop853"`` -- SciPy's DOP853 (adaptive; ``dt`` only sets the output grid), tolerances ``rtol``/``atol``;
+* ``"heyoka"`` -- heyoka's Taylor method (adaptive; tolerance ``rtol``), extra ``jetgaudin[heyoka]``;
+* ``"midpoint"`` -- :class:`jetgaudin.midpoint.ImplicitMidpoint`, order 2, fixed step.
+
+The fixed-step methods take ``n = ⌈|t1 − t0|/|dt|⌉`` steps of ``(t1 − t0)/n`` (so the grid ends at ``t1``; the step
+used is ``info["dt"]``).  The result is a :class:`jetgaudin.Trajectory` (``t``, ``X``, the integrals and their drift).
+"""
+
+from __future__ import annotations
+
+import math
+from enum import StrEnum
+from typing import Any
+
+import numpy as np
+
+from ._errors import InvalidParameterError, StepTooLargeError
+from ._validate import as_state, parse_choice, real_number
+from .exact import ExactFlow, MatchedBacklund
+from .flows import Method, Trajectory, integrate
+from .hamiltonians import IntegralHamiltonian
+from .maps import Backend, check_count
+from .midpoint import ImplicitMidpoint
+from .spectral import integrals
+
+__all__ = ["SolveMethod", "solve", "time_grid"]
+
+
+class SolveMethod(StrEnum):
+    """The methods of :func:`solve`."""
+
+    EXACT = "exact"
+    BT = "bt"
+    DOP853 = "dop853"
+    HEYOKA = "heyoka"
+    MIDPOINT = "midpoint"
+
+    @classmethod
+    def parse(cls, value: SolveMethod | str) -> SolveMethod:
+        return parse_choice(cls, value.lower() if isinstance(value, str) else value, "method")
+
+
+def time_grid(t_span, dt) -> tuple[float, float, int]:
+    """``(t0, step, n)``: ``n = ⌈|t1 − t0|/|dt|⌉`` steps of ``(t1 − t0)/n`` (the grid ends at ``t1``)."""
+    try:
+        t0, t1 = (real_number(v, "t_span") for v in t_span)
+    except TypeError:
+        raise InvalidParameterError(f"t_span must be a pair (t0, t1), got {t_span!r}") from None
+    if t1 == t0:
+        raise InvalidParameterError("t_span must have t1 != t0")
+    dt = real_number(dt, "dt")
+    if dt == 0:
+        raise InvalidParameterError("dt must be nonzero")
+    T = t1 - t0
+    n = max(1, math.ceil(abs(T) / abs(dt) * (1 - 1e-12)))
+    return t0, T / n, n
+
+
+def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
+    if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
+        from .exact_chain import ChainExactFlow
+
+        if substeps != 1:
+            raise InvalidParameterError("a chain's exact flow takes no substeps: give a smaller dt")
+        return ChainExactFlow(H, dt)
+    if method is SolveMethod.MIDPOINT:
+        return ImplicitMidpoint(H, dt)
+    cls = ExactFlow if method is SolveMethod.EXACT else MatchedBacklund
+    return cls(H, dt, substeps, Backend.parse(backend))
+
+
+def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(steps, states)``: the states after ``0, every, 2 every, …`` steps and after ``n``."""
+    adv = m.advance(X0, None, n, every)
+    idx = list(range(0, n + 1, every))
+    rows = [X0[None], adv.rows]
+    if n % every:
+        idx.append(n)
+        rows.append(adv.X[None])
+    return np.array(idx), np.concatenate(rows, axis=0)
+
+
+def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
+          rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
+          backend: str = "auto") -> Trajectory:
+    r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
+    ``model.hamiltonian(weights)`` (methods ``"exact"``: :class:`jetgaudin.ChainExactFlow`, ``"dop853"``,
+    ``"heyoka"``) from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
+    over ``t_span = (t0, t1)`` (either direction), sampled every ``save_every`` steps of ``dt`` (module doc).
+
+    ``dt``: the time step (required by ``"exact"``, ``"bt"``, ``"midpoint"``; for ``"dop853"``/``"heyoka"`` the
+    output spacing, default: the end points only).  ``substeps``: for ``"exact"``/``"bt"``, ``"auto"`` (split a step
+    the leaf cannot take at once; :class:`jetgaudin.StepTooLargeError` never reaches you) or an integer (an
+    infeasible step then raises).  ``backend``: ``"auto"``/``"compiled"``/``"numpy"`` for the map methods.
+
+    >>> import jetgaudin as jg
+    >>> H = jg.physical_hamiltonian(3, 1.0)
+    >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
+    >>> tr = jg.solve(H, X0, (0.0, 1.0), dt=0.25)
+    >>> tr.t.tolist(), bool(tr.drift.max() < 1e-13)
+    ([0.0, 0.25, 0.5, 0.75, 1.0], True)
+    """
+    method = SolveMethod.parse(method)
+    chain = getattr(H, "model", None) is not None and callable(getattr(H, "record_integrals", None))
+    if not isinstance(H, IntegralHamiltonian) and not chain:
+        raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b)) or a chain "
+                                    "Hamiltonian model.hamiltonian(weights)")
+    if chain:
+        if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA):
+            raise InvalidParameterError(f"method={method.value!r} is for the tops; a chain Hamiltonian takes "
+                                        "'exact', 'dop853' or 'heyoka'")
+        X0 = np.asarray(H.model.check_state(X0), dtype=float)
+    else:
+        X0, _ = as_state(X0)
+        H._check(X0)
+    every = check_count(save_every, "save_every", 1)
+    if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
+        t0, t1 = (real_number(v, "t_span") for v in t_span)
+        if dt is None:
+            t_eval = np.array([0.0, t1 - t0])
+        else:
+            _, h, n = time_grid(t_span, dt)
+            k = np.arange(0, n + 1, every)
+            t_eval = np.unique(np.concatenate([k, [n]])) * h
+        mth = Method.DOP853 if method is SolveMethod.DOP853 else Method.HEYOKA
+        tr = integrate(H, X0, t1 - t0, t_eval=t_eval, method=mth, rtol=rtol, atol=atol)
+        return Trajectory(t0 + tr.t, tr.X, tr.integrals, method.value, {"rtol": rtol, "atol": atol})
+    if dt is None:
+        raise InvalidParameterError(f"method={method.value!r} is a fixed-step method: give dt")
+    t0, h, n = time_grid(t_span, dt)
+    auto = substeps == "auto"
+    s = 1 if auto else check_count(substeps, "substeps", 1)
+    info: dict = {"dt": h, "steps": n}
+    while True:
+        m = _map(method, H, h, s, backend)
+        try:
+            idx, Xs = _orbit(m, X0, n, every)
+            break
+        except StepTooLargeError as exc:
+            if not auto or exc.dt_max is None or exc.dt_max == 0:
+                raise
+            s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
+    if method is not SolveMethod.MIDPOINT:
+        info["substeps"] = s
+    recorded = H.record_integrals(Xs) if chain else integrals(Xs, H.b, H.c)
+    return Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)

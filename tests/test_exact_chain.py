@@ -1,0 +1,76 @@
+"""ChainExactFlow: the exact time-dt flow of a chain Hamiltonian (jetgaudin.exact_chain).
+
+Tolerances: a step is M − 1 chain maps and a rotation (round-off ~1e-15 for states of size ~1); the reference is
+DOP853 at rtol = atol = 1e-13 over |T| <= 0.2 (its error ~1e-14): 1e-12 asserted.  (Planted: the rotation's
+opposite sign fails by > 1e-3.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import jetgaudin as jg
+from jetgaudin.exact import rotate_about_field
+from jetgaudin.exact_chain import ChainExactFlow
+
+CASES = {
+    "magnet": (jg.gaudin_magnet(1.0, [0.0, 1.0, 2.5]), [0.3, 0.0, -0.2, 0.0, 0.5, 0.0], (0.05, -0.05)),
+    "lagrange chain": (jg.lagrange_chain(1.0, [0.0, 1.5]), [0, 0.5, 0, 0, 0, 0.5, 0, 0], (0.02, -0.01)),
+    "twisted top as a chain": (jg.twisted_chain(0.8, [0.0]), [0.1, 0.5, 0.2, 0, 0, 0], (0.05, -0.2)),
+}
+
+
+def _state(model, seed=2):
+    return np.random.default_rng(seed).standard_normal(model.n_state) * 0.6
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_chain_step_is_the_flow(case):
+    """One step equals the DOP853 flow of the chain Hamiltonian (1e-12); −dt inverts it (1e-13)."""
+    model, w, dts = CASES[case]
+    H = model.hamiltonian(np.array(w, dtype=float))
+    X = _state(model)
+    for dt in dts:
+        E = ChainExactFlow(H, dt)
+        X1 = E(X)
+        ref = jg.integrate(H, X, dt, rtol=1e-13, atol=1e-13).X[-1]
+        assert np.max(np.abs(X1 - ref)) < 1e-12
+        assert np.max(np.abs(X1 - X)) > 1e-3  # it moves
+        assert np.max(np.abs(E.inverse()(X1) - X)) < 1e-13
+
+
+def test_sum_of_first_integrals_is_the_rotation():
+    """Σ_i h_{i,1} generates the rotation of every spin about e_3 at rate 2b (the rotation the construction undoes):
+    DOP853 over τ = 0.3, 1e-11."""
+    model = jg.lagrange_chain(0.7, [0.0, 1.5])
+    m = np.concatenate([np.arange(1, 2 * n + 1) for n in model.orders])
+    X = _state(model)
+    ref = jg.integrate(model.hamiltonian((m == 1).astype(float)), X, 0.3, rtol=1e-13, atol=1e-13).X[-1]
+    assert np.max(np.abs(rotate_about_field(X, 2 * 0.7 * 0.3) - ref)) < 1e-11
+
+
+def test_chain_step_too_large_and_description():
+    model, w, _ = CASES["lagrange chain"]
+    H = model.hamiltonian(np.array(w, dtype=float))
+    with pytest.raises(jg.StepTooLargeError, match="smaller dt"):
+        ChainExactFlow(H, 0.5)(_state(model))
+    E = ChainExactFlow(H, 0.02)
+    F = jg.map_from_description(E.describe())
+    assert F.describe() == E.describe() and np.array_equal(F(_state(model)), E(_state(model)))
+    with pytest.raises(jg.InvalidParameterError, match="chain Hamiltonian"):
+        ChainExactFlow(jg.physical_hamiltonian(3, 1.0), 0.1)
+
+
+def test_solve_takes_a_chain_hamiltonian():
+    """jg.solve(chain H, method="exact") returns the trajectory of ChainExactFlow with the chain's integrals, equal to
+    DOP853 at the end (1e-12, T = 0.1: five exact steps); the top-only methods are refused for a chain."""
+    model, w, _ = CASES["magnet"]
+    H = model.hamiltonian(np.array(w, dtype=float))
+    X = _state(model)
+    tr = jg.solve(H, X, (0.0, 0.1), dt=0.02)
+    assert tr.X.shape == (6, model.n_state) and tr.integrals.shape == (6, 2 * model.M)
+    assert tr.drift.max() < 1e-13
+    assert np.max(np.abs(tr.X[-1] - jg.solve(H, X, (0.0, 0.1), method="dop853", rtol=1e-13, atol=1e-13).X[-1])) < 1e-12
+    with pytest.raises(jg.InvalidParameterError, match="for the tops"):
+        jg.solve(H, X, (0.0, 0.1), dt=0.02, method="midpoint")
