@@ -418,7 +418,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         m = map_from_description(run["map"]) if "map" in run else BatchBacklund(b, eta, rec["branch"], **map_options)
         spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
         if "file" not in ck and int(ck["rows"]) == 0 and int(ck["step"]) == 0:  # stopped before its first slot
-            d = {"step": np.int64(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
+            d: dict[str, np.ndarray] = {"step": np.array(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
                  "drift": np.zeros((X0.shape[0], 2 * (X0.shape[1] // 3)))}
         else:
             d = read_checkpoint_npz(out_dir, ck, X0.shape)

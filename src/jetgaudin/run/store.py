@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _fs
+from .. import _fs, _space
 from .._errors import RecordingError, RunIOError
 from .files import (
     ENSEMBLE_H5,
@@ -111,7 +111,7 @@ class Store:
         if not fresh and self.h_rows.hexdigest() != self.run["checkpoint"].get("rows_sha256"):
             _fs.remove_file(self.out_dir, tmp)
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
-        _fs.release_space(self.out_dir, tmp)
+        _space.release_space(self.out_dir, tmp)
         try:
             _fs.check_regular_or_absent(self.out_dir, self.h5_name)
             os.replace(tmp_path, path)
@@ -128,7 +128,7 @@ class Store:
         row_values = int(np.prod(self.shape))
         with h5py.File(path, "w", libver="latest") as f:
             extra_bytes = sum(int(np.asarray(v).nbytes) for v in extra.values())
-            _fs.reserve_space(path.parent, path.name, extra_bytes + self._h5_bytes(0, rows), what="writing")
+            _space.reserve_space(path.parent, path.name, extra_bytes + self._h5_bytes(0, rows), what="writing")
             for k, v in extra.items():
                 f.create_dataset(k, data=v)
             per_chunk = self._h5_chunks()
@@ -156,7 +156,7 @@ class Store:
         if k == 0:
             return
         r = self.rows
-        _fs.reserve_space(self.out_dir, self.h5_name, self._h5_bytes(r, k), what="appending rows to")
+        _space.reserve_space(self.out_dir, self.h5_name, self._h5_bytes(r, k), what="appending rows to")
         try:
             self.dn.resize((r + k,))
             self.dS.resize((r + k,) + self.shape)
@@ -189,7 +189,7 @@ class Store:
         return touched * per_row * 8 * int(np.prod(chunks)) + n_touched * 8 * 4096 + H5_META_BYTES
 
     def _sync_data(self) -> None:
-        _fs.reserve_space(self.out_dir, self.h5_name, H5_META_BYTES, what="flushing")
+        _space.reserve_space(self.out_dir, self.h5_name, H5_META_BYTES, what="flushing")
         try:
             self.dn.flush()
             self.dS.flush()
@@ -198,7 +198,7 @@ class Store:
             self._abandon()
             raise RunIOError(f"{_fs.io_failure(exc)} while flushing {self.out_dir / self.h5_name}") from exc
         _fs.fsync_file(self.out_dir, self.h5_name)
-        _fs.release_space(self.out_dir, self.h5_name)
+        _space.release_space(self.out_dir, self.h5_name)
 
     def _abandon(self) -> None:
         """After a failed HDF5 write, never touch the file's objects again: HDF5 may crash closing them (a real
@@ -235,16 +235,16 @@ class Store:
 
     def begin(self, fresh: bool) -> None:
         """Start a session of writing: a new run's first ``run.json`` (no row yet: a failure at the first append
-        leaves a run that resumes from ``X0``), then the reserve (:func:`jetgaudin._fs.make_reserve`) that
+        leaves a run that resumes from ``X0``), then the reserve (:func:`jetgaudin._space.make_reserve`) that
         :meth:`mark` frees to record a full disk."""
         if fresh:
             write_run(self.out_dir, copy.deepcopy(self.run))
-        _fs.make_reserve(self.out_dir, RESERVE_BYTES + 2 * len(json.dumps(self.run)))
+        _space.make_reserve(self.out_dir, RESERVE_BYTES + 2 * len(json.dumps(self.run)))
 
     def mark(self, status: str, **fields: Any) -> None:
         """Best effort: record ``status`` (and ``fields``) over the last durable checkpoint (the disk may be what
         failed: the reserve is freed first)."""
-        _fs.release_reserve(self.out_dir)
+        _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             new = copy.deepcopy(self.run)
             new.update(fields, status=status, updated=now())
@@ -252,7 +252,7 @@ class Store:
             self.run = new
 
     def close(self) -> None:
-        _fs.release_reserve(self.out_dir)
+        _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             if self.f is not None:
                 self.f.close()
