@@ -293,6 +293,15 @@ def test_init_from_a_chain_takes_its_sites(tmp_path, capsys, command):
     assert code == 0, err
     m = rl.read_run(tmp_path / "d")["map"]
     assert m["kind"].startswith("chain_") and m["sites"] == json.loads(json.dumps(rl.read_run(c)["map"]["sites"]))
+    # a chain of another family keeps its family too (sites, family and anisotropy from the source)
+    t = tmp_path / "t"
+    assert run_cli(capsys, "orbit", "--sites", "0:1,1:1", "--family", "trigonometric", "--gamma", 0.5, "--init",
+                   "0.1,0.2,1,0.3,-0.2,0.9", "--eta", "0.3+0.1i", "--steps", 3, "--no-plots", "--out", t)[0] == 0
+    code, _, err = run_cli(capsys, command, "--init-from", t, "--eta", "0.3+0.1i", "--steps", 2, "--out",
+                           tmp_path / "u", *extra)
+    assert code == 0, err
+    m = rl.read_run(tmp_path / "u")["map"]
+    assert (m["family"], m["gamma"], m["sites"]) == ("trigonometric", 0.5, [[0.0, 1], [1.0, 1]])
 
 
 def test_library_refuses_strings_bools_and_extra_jet_constants():

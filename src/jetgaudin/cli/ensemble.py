@@ -156,8 +156,10 @@ def ensemble_command(
             expect["max_drift"] = max_drift
         common: dict[str, Any] = dict(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
                       checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk)
+        source = None  # a chain continues as that chain: its sites and family
         if resume is None and sites is None and init_from_dir is not None and str(init_from_dir).strip():
-            sites = _chains.sites_of(runlayer.read_run(init_from_dir))  # a chain continues as that chain
+            source = runlayer.read_run(init_from_dir)
+            sites = _chains.sites_of(source)
         if resume is not None:
             if input is not None or sample is not None or init_from_dir is not None:
                 raise CliInputError("--resume continues a recorded ensemble: do not give --input, --sample or "
@@ -172,7 +174,7 @@ def ensemble_command(
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma, modulus=modulus))
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma, source, modulus=modulus))
         else:
             _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
