@@ -59,11 +59,11 @@ def _root(
 def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
-    bad = _bad_number(args)
-    if bad is not None:
-        typer.echo(bad, err=True)
-        sys.exit(2)
     try:
+        bad = _bad_number(args)
+        if bad is not None:
+            typer.echo(bad, err=True)
+            sys.exit(2)
         code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
     except SystemExit as exc:
         # Click answers a closed stdout (EPIPE) with exit 1 after wrapping stdout in PacifyFlushWrapper; our exit
@@ -170,6 +170,9 @@ def entry() -> None:
         code: Any = 0
     except SystemExit as exc:
         code = exc.code
+    except KeyboardInterrupt:  # Ctrl-C between the start-up guard and the command (runs handle it themselves)
+        print("jetgaudin: interrupted", file=sys.stderr)
+        code = 130
     except (MemoryError, ImportError) as exc:  # out of memory (ulimit -v) while importing or allocating
         text = " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
         print(f"jetgaudin: error: {text} (out of memory? check ulimit -v)", file=sys.stderr)
