@@ -6,7 +6,8 @@
 * SIGINT/SIGTERM handlers that print ``jetgaudin: interrupted`` and end the process at once with 130/143 (nothing
   has been written yet), and
 * a :data:`sys.excepthook` that prints one line for an exception escaping the imports (``MemoryError``, an
-  ``ImportError`` "failed to map segment" under ``ulimit -v``), exit 1;
+  ``ImportError`` "failed to map segment" under ``ulimit -v``), exit 1; under an address-space limit, one OpenBLAS
+  thread (``OPENBLAS_NUM_THREADS=1`` unless set: OpenBLAS's start-up otherwise hangs in ``mmap`` retries);
 
 :func:`release` (called by :func:`jetgaudin.cli.entry`) restores both.  In any other process (a library user, the
 tests) it does nothing.  Standard library only: it must be importable first.
@@ -53,6 +54,13 @@ def _hook(exc_type: type[BaseException], exc: BaseException, tb: object) -> None
 def install() -> None:
     if _old or not is_command_line():
         return
+    import resource
+
+    if resource.getrlimit(resource.RLIMIT_AS)[0] != resource.RLIM_INFINITY:
+        # under an address-space limit (ulimit -v) OpenBLAS's thread start-up (loaded with NumPy/SciPy) retries its
+        # per-thread 32 MB buffers in mmap without end once memory is short: measured, ulimit -v 200 MB hung the
+        # command; with one BLAS thread it fails (one line) or runs.  The kernels' threads are Numba's, not BLAS's.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _old["hook"] = sys.excepthook
     sys.excepthook = _hook
     for s in (signal.SIGINT, signal.SIGTERM):

@@ -330,7 +330,7 @@ class OrbitStore(Store):
             raise RecordingError(f"{path} is truncated (shorter than run.json records); cannot resume")
         if self.h_csv.hexdigest() != ck.get("csv_sha256"):
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
-        if lines != self.rows + 1 or not tail.endswith(self._row_text(self.rows - 1)):
+        if lines != self.rows + 1 or (self.rows and not tail.endswith(self._row_text(self.rows - 1))):
             # the declared CSV must hold the header and exactly the declared rows (a resume never cuts a durable row)
             raise RecordingError(f"{path}: run.json's csv_bytes does not cover exactly the {self.rows} saved rows "
                                  "(edited or corrupted); cannot resume")
@@ -338,9 +338,7 @@ class OrbitStore(Store):
         os.ftruncate(self.csv_fh.fileno(), self.csv_bytes)
 
     def _row_text(self, i: int) -> bytes:
-        """The CSV line of saved row ``i`` (the header for ``i = -1``)."""
-        if i < 0:
-            return self._header().encode()
+        """The CSV line of saved row ``i``."""
         return self._csv_text(np.array([self.dn[i]]), np.array(self.dS[i : i + 1]))
 
     def _csv_text(self, n_idx: np.ndarray, S: np.ndarray) -> bytes:
