@@ -56,6 +56,35 @@ def _root(
         raise typer.Exit(0)
 
 
+def _app_noting_interrupts(args: list[str]):
+    """Run the Typer app; a SIGINT outside a run (runs and figure writing install their own handlers, which print
+    their own line) is reported here in one line.  Typer turns KeyboardInterrupt into a silent ``Exit(130)``, so
+    the signal is noted by a handler that then raises KeyboardInterrupt as Python's default handler would."""
+    import signal
+    import threading
+
+    seen: list[int] = []
+
+    def note(signum, _frame):
+        seen.append(signum)
+        raise KeyboardInterrupt
+
+    old = None
+    if threading.current_thread() is threading.main_thread():
+        old = signal.signal(signal.SIGINT, note)
+    try:
+        code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+    except KeyboardInterrupt:
+        seen.append(signal.SIGINT)
+        code = 130
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
+    if seen and code == 130:
+        typer.echo("jetgaudin: interrupted", err=True)
+    return code
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
@@ -64,7 +93,7 @@ def main(argv: list[str] | None = None) -> None:
         if bad is not None:
             typer.echo(bad, err=True)
             sys.exit(2)
-        code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+        code = _app_noting_interrupts(args)
     except SystemExit as exc:
         # Click answers a closed stdout (EPIPE) with exit 1 after wrapping stdout in PacifyFlushWrapper; our exit
         # code 1 means a failed run, and a reader that left early (`jetgaudin info | head`) is not one
