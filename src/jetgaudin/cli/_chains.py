@@ -131,9 +131,12 @@ def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
 def sites_of(record: dict) -> str | None:
     """The ``--sites`` text of a recorded chain run (its map description), else ``None``."""
     m = record.get("map", {})
-    if not str(m.get("kind", "")).startswith("chain_"):
+    if not isinstance(m, dict) or not str(m.get("kind", "")).startswith("chain_"):
         return None
-    return ",".join(f"{float(p)!r}:{int(N)}" for p, N in m["sites"])
+    try:
+        return ",".join(f"{float(p)!r}:{int(N)}" for p, N in m["sites"])
+    except (KeyError, TypeError, ValueError):
+        raise CliInputError("--init-from: the run's map description has no usable sites; give --sites") from None
 
 
 def multi_site(model) -> bool:

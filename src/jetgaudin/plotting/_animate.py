@@ -39,11 +39,16 @@ class AnimationFormat(StrEnum):
     mp4 = "mp4"
 
 
+#: most frames of one animation (a GIF keeps every frame in memory, ~0.4 MB each at the default size: ~4 GB)
+MAX_FRAMES = 10_000
+
+
 def frame_rows(rows: int, frames: int, stride: int | None) -> tuple[int, int]:
     """``(stride, count)``: frame ``j`` shows saved row ``j·stride``.  The default stride spreads ``frames``
-    frames over the run, ``max(1, floor((rows − 1) / (frames − 1)))``; ``count = min(frames, ceil(rows / stride))``."""
-    if frames < 2:
-        raise InvalidParameterError(f"frames must be >= 2, got {frames}")
+    frames over the run, ``max(1, floor((rows − 1) / (frames − 1)))``; ``count = min(frames, ceil(rows / stride))``.
+    ``frames`` is at most :data:`MAX_FRAMES`."""
+    if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or not 2 <= frames <= MAX_FRAMES:
+        raise InvalidParameterError(f"frames must be an integer between 2 and {MAX_FRAMES}, got {frames!r}")
     if stride is None:
         stride = max(1, (rows - 1) // (frames - 1))
     if stride < 1:

@@ -56,15 +56,12 @@ class RunRows:
 
     def read(self, start: int, stop: int, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """``(index, X)`` of the rows ``start:stop:step`` (clipped to the safe rows); ``X`` of shape ``(k, 3N)``."""
-        import h5py
+        from ..run.files import open_h5_read
 
         stop = min(stop, self.rows)
         try:
-            try:
-                f = h5py.File(self.path, "r")
-            except OSError:  # a run killed while writing leaves the SWMR flag set: read as a SWMR reader
-                f = h5py.File(self.path, "r", swmr=True)
-            with f:
+            # a regular file only (a FIFO or a link is refused, never waited on), complete; SWMR after a kill
+            with open_h5_read(self.path) as f:
                 idx = np.asarray(f[self.index_name][start:stop:step])
                 ds = f[self.dataset]
                 X = ds[start:stop:step] if self.orbit is None else ds[start:stop:step, self.orbit, :]
@@ -150,10 +147,10 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
         B = int(inp["B"])
         if not 0 <= k < B:
             raise RecordingError(f"--orbit: the ensemble in {run_dir} has orbits 0..{B - 1}, got {orbit}")
-        import h5py
+        from ..run.files import open_h5_read
 
         try:
-            with h5py.File(run_dir / ENSEMBLE_H5, "r") as f:
+            with open_h5_read(run_dir / ENSEMBLE_H5) as f:
                 b, eta = float(f["b"][k]), complex(f["eta"][k])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {run_dir / ENSEMBLE_H5}: {exc}") from None
@@ -162,12 +159,12 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     if program == "jetgaudin flow":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is a flow run: --orbit must be 0 or omitted, got {orbit}")
-        import h5py
+        from ..run.files import open_h5_read
 
         path = run_dir / ("orbit.h5" if map_of_flow else "flow.h5")
         index_name = "n" if map_of_flow else "t"
         try:
-            with h5py.File(path, "r") as f:
+            with open_h5_read(path) as f:
                 rows = int(f["X"].shape[0])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {path}: {exc}") from None
