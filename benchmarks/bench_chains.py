@@ -54,7 +54,7 @@ def main():
         m = make()
         X = rng.normal(size=m.n_state)
         eta = 0.9 + 0.05j
-        Bn = m.two_point_backlund(eta)
+        Bn = m.two_point_backlund(eta, backend="numpy")
         Bc = jg.ChainTwoPointBacklund(m, eta, backend="compiled")
         Bc.iterate(X, 10)  # compile or load from Numba's cache
         rn = rate(Bn, X, a.numpy_steps, 1)

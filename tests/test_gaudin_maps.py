@@ -315,8 +315,9 @@ def test_bad_input(rng):
 def test_describe_and_surface(rng):
     m = GaudinModel(0.8, [(-1.0, 2), (0.5, 3), (2.0, 1)])
     B = m.two_point_backlund(5 + 0.1j)
+    # issue 23: one default backend rule for every map ("auto")
     assert B.describe() == {"kind": "chain_two_point", "b": 0.8, "eta": [5.0, 0.1], "branch": "default",
-                            "sites": [[-1.0, 2], [0.5, 3], [2.0, 1]], "backend": "numpy"}
+                            "sites": [[-1.0, 2], [0.5, 3], [2.0, 1]], "backend": "auto"}
     assert B.n_state == 18 and B.inverse().branch == "opposite" and B.inverse().inverse() == B
     X = rng.normal(size=(2, 18))
     nu1 = B.start(X)

@@ -51,6 +51,11 @@ class ChainExactFlow(Map):
         if model is None or not callable(getattr(model, "two_point_backlund", None)) or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("H must be a chain Hamiltonian model.hamiltonian(weights) with one set of "
                                         "weights (shape (2M,))")
+        if getattr(getattr(model, "family", None), "name", "rational") != "rational":
+            raise InvalidParameterError(
+                f"the exact chain flow is built for the rational family (its weights use (lambda - lambda_i)^-m); the "
+                f"{model.family.name} family is not supported: integrate its Hamiltonian with method 'dop853' or "
+                "'heyoka'")
         object.__setattr__(self, "dt", nonzero_step(self.dt))
         rf = real_number(self.rho_factor, "rho_factor")
         if rf <= 1:

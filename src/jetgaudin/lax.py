@@ -149,7 +149,13 @@ def lax_matrix(lam, X, b, c=None) -> np.ndarray:
 def ell_coefficients(X, b, c=None) -> np.ndarray:
     r"""Laurent coefficients :math:`\ell_m` of :math:`\ell(\lambda) = [[u, v], [w, -u]]
     = \sum_{m=0}^N \ell_m \lambda^{-m} = -2 i L(\lambda)`, shape ``(..., N+1, 2, 2)``."""
-    xi = lax_coefficients(X, b, c).astype(complex)
+    return ell_from_xi(lax_coefficients(X, b, c))
+
+
+def ell_from_xi(xi) -> np.ndarray:
+    r"""``ℓ = Σ_a ξ^a (−2iσ^a) = [[ξ^3, ξ^1 − iξ^2], [ξ^1 + iξ^2, −ξ^3]]`` from vectors ``ξ`` ``(..., 3)``, shape
+    ``(..., 2, 2)`` (complex)."""
+    xi = np.asarray(xi).astype(complex)
     out = np.empty(xi.shape[:-1] + (2, 2), dtype=complex)
     out[..., 0, 0] = xi[..., 2]
     out[..., 1, 1] = -xi[..., 2]

@@ -18,6 +18,57 @@ SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer
               "N = len(--init)/3]")
 
 
+FAMILY_HELP = ("the Gaudin family of --sites: 'rational' (XXX, the paper's), 'trigonometric' (XXZ, anisotropy "
+               "--gamma) or 'elliptic' (XYZ, modulus --modulus, b = 0) [default: rational]")
+GAMMA_HELP = "anisotropy γ > 0 of --family trigonometric (sites distinct modulo π/γ) [default: 1]"
+MODULUS_HELP = ("modulus k in [0, 1) of --family elliptic (sites distinct modulo 2K(k), |Im η| < 0.9 K'(k)); "
+                "required by it")
+
+
+def family_kw(sites: str | None, family: str | None, gamma: str | None, record: dict | None = None, *,
+              modulus: str | None = None) -> dict:
+    """``{"family": …, "gamma": …, "modulus": …}`` for :func:`chain_model` from ``--family`` / ``--gamma`` /
+    ``--modulus`` (or, when all are absent, from a recorded run's map description, ``record``); one line naming the
+    option otherwise."""
+    if family is None and gamma is None and modulus is None:
+        m = (record or {}).get("map", {})
+        return {k: m[k] for k in ("family", "gamma", "modulus") if k in m}
+    if sites is None:
+        opt = "--family" if family is not None else "--gamma" if gamma is not None else "--modulus"
+        raise CliInputError(f"{opt}: the Gaudin families are chains; give --sites (e.g. --sites 0:1,1:1)")
+    from jetgaudin.families import family_names
+
+    fam = family or ("elliptic" if modulus is not None else "trigonometric")
+    if fam not in family_names():
+        raise CliInputError(f"--family: unknown family {fam!r}; give one of {', '.join(family_names())}")
+    if modulus is not None or fam == "elliptic":
+        return _elliptic_kw(fam, gamma, modulus)
+    if gamma is None:
+        return {"family": fam}
+    if fam != "trigonometric":
+        raise CliInputError(f"--gamma: the {fam} family has no anisotropy; give --family trigonometric or drop --gamma")
+    try:
+        g = float(gamma)
+    except (TypeError, ValueError):
+        raise CliInputError(f"--gamma: the anisotropy must be a real number > 0, got {gamma!r}") from None
+    return {"family": fam, "gamma": g}
+
+
+def _elliptic_kw(fam: str, gamma: str | None, modulus: str | None) -> dict:
+    if fam != "elliptic":
+        raise CliInputError(f"--modulus: the {fam} family has no elliptic modulus; give --family elliptic or drop "
+                            "--modulus")
+    if gamma is not None:
+        raise CliInputError("--gamma: the elliptic family has no anisotropy (its parameter is --modulus)")
+    if modulus is None:
+        raise CliInputError("--modulus: --family elliptic needs its modulus k in [0, 1), e.g. --modulus 0.5")
+    try:
+        k = float(modulus)
+    except (TypeError, ValueError):
+        raise CliInputError(f"--modulus: the modulus must be a real number in [0, 1), got {modulus!r}") from None
+    return {"family": fam, "modulus": k}
+
+
 def parse_chain_b(text: Any, option: str = "--b") -> float:
     """The field of a chain: real and finite; ``b = 0`` (the magnet without field) is allowed for the two-point map."""
     try:
@@ -28,15 +79,23 @@ def parse_chain_b(text: Any, option: str = "--b") -> float:
     return parse_b(text, option)
 
 
-def chain_model(sites: str, b: float):
-    """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3``."""
+def chain_model(sites: str, b: float, family: str = "rational", gamma: float | None = None,
+                modulus: float | None = None):
+    """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3`` (``--family``, ``--gamma``,
+    ``--modulus``: :func:`family_kw`)."""
     import jetgaudin as jg
     from jetgaudin.gaudin import GaudinModel, parse_sites
 
     try:
-        return GaudinModel(b, tuple(parse_sites(sites)))
+        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus)
     except jg.JetGaudinError as exc:
         msg = one_line(exc)
+        if "gamma" in msg and "sites" not in msg:
+            raise CliInputError("--gamma: " + msg) from None
+        if "modulus" in msg:
+            raise CliInputError("--modulus: " + msg) from None
+        if "has no field" in msg:
+            raise CliInputError("--b: " + msg) from None
         raise CliInputError("--sites: " + (msg[len("sites: "):] if msg.startswith("sites: ") else msg)) from None
 
 
@@ -82,7 +141,7 @@ def multi_site(model) -> bool:
     return len(model.sites) > 1 or model.sites[0][1] != 3
 
 
-def info(sites: str, b: Any, eta: str, init: str, as_json: bool) -> None:
+def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | None = None) -> None:
     """``jetgaudin info --sites``: the chain's integrals ``h_{i,m}`` (Casimir / Hamiltonian), ``ν(η)`` on both roots,
     ``G_η`` and the branch points of the state."""
     import json
@@ -96,13 +155,13 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool) -> None:
 
     bb = parse_chain_b(b)
     eta_c = parse_eta(eta, pole_at_zero=False)
-    model = chain_model(sites, bb)
+    model = chain_model(sites, bb, **(fam or {}))
     X = check_chain_state(model, parse_init(init))
     with blame("--init"):
         h = model.integrals(X)
     kinds = ["Casimir" if c else "Hamiltonian" for c in model.casimir_mask()]
-    d: dict[str, Any] = {"sites": [[p, N] for p, N in model.sites], "M": model.M, "b": bb, "eta": [eta_c.real,
-                         eta_c.imag], "state": dict(zip(model.labels(), X.tolist(), strict=True)),
+    d: dict[str, Any] = {**model.describe(), "M": model.M, "eta": [eta_c.real, eta_c.imag],
+                         "state": dict(zip(model.labels(), X.tolist(), strict=True)),
                          "integrals": [{"name": n, "kind": k, "value": float(v)}
                                        for n, k, v in zip(model.integral_labels(), kinds, h, strict=True)]}
     for key, fn in (("nu_default", lambda: model.nu(X, eta_c)), ("nu_opposite", lambda: model.nu(X, eta_c, sheet=-1)),
@@ -125,8 +184,11 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool) -> None:
 
     con = console()
     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
-    t = Table(title=f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals h_(i,m) of ν² = b² + "
-                    "Σ h_(i,m) (λ − λ_i)^(−m)", title_justify="left")
+    expansion = "b² + Σ h_(i,m) (λ − λ_i)^(−m)" if model.family.name == "rational" else (
+        f"c0 + Σ h_(i,m) ψ_m(λ − λ_i), elliptic, k = {model.modulus:g}" if model.family.name == "elliptic" else
+        f"b² − γ²J² + Σ h_(i,m) ψ_m(λ − λ_i), {model.family.name}, γ = {model.gamma:g}")
+    t = Table(title=f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals of ν² = {expansion}",
+              title_justify="left")
     for col in ("integral", "kind", "value"):
         t.add_column(col, justify="right" if col == "value" else "left")
     for row in d["integrals"]:

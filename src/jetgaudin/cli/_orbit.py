@@ -177,6 +177,9 @@ def orbit(
     substeps: Annotated[int | None, typer.Option(
         "--substeps", help="with --dt: exact sub-steps per step (for a dt larger than the leaf's largest feasible "
                            "step) [default: 1]")] = None,
+    family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
+    gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map; with no options, reproduce Appendix 2 of the paper.
 
@@ -230,7 +233,7 @@ def orbit(
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
             if init_from_dir is not None:
                 raise CliInputError("--init-from starts a new run; it cannot be combined with --resume")
-            if sites is not None:
+            if sites is not None or family is not None or gamma is not None or modulus is not None:
                 raise CliInputError("--sites: a resumed run keeps its recorded sites; drop --sites with --resume")
             out_dir = resume_dir(resume)
             if not (out_dir / runlayer.RUN_JSON).exists():
@@ -244,6 +247,7 @@ def orbit(
             out_dir = out_path(out, "jetgaudin-orbit")
             defaults: dict[str, Any] = {"b": APPENDIX2_B, "eta": parse_eta(APPENDIX2_ETA), "branch": "default",
                         "init": parse_init(APPENDIX2_INIT)}
+            rec = None
             if init_from_dir is not None:
                 X_last, rec = init_from(init_from_dir)
                 defaults["init"] = X_last.tolist()
@@ -258,9 +262,10 @@ def orbit(
             ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
             model = None
             if sites is not None:
-                model = _chains.chain_model(sites, bb)
+                model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec, modulus=modulus))
                 X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
             else:
+                _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
                 check_state_scale(X0, bb)
             if timed is not None:
                 m = _exact(timed, np.array(X0, dtype=float), bb, model, kernel)

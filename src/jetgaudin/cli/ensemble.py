@@ -160,6 +160,9 @@ def ensemble_command(
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; needs --input or "
                                               "--init-from")] = None,
     progress: ProgressOption = None,
+    family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
+    gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens
@@ -196,8 +199,9 @@ def ensemble_command(
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress)
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma, modulus=modulus))
         else:
+            _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
                 raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
             bb = parse_b(b)
@@ -242,7 +246,7 @@ def ensemble_command(
 
 
 def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir, overwrite,
-                    progress):
+                    progress, fam=None):
     """``ensemble --sites``: the chain's two-point map on the states of ``--input`` or ``--init-from``."""
     if sample is not None:
         raise CliInputError("--sites: the samplers (--sample) draw states of one site; give the chain's states with "
@@ -254,7 +258,7 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
                             "--init-from DIR")
     bb = _chains.parse_chain_b(b)
     ee = parse_eta(eta, pole_at_zero=False)
-    model = _chains.chain_model(sites, bb)
+    model = _chains.chain_model(sites, bb, **(fam or {}))
     if input is not None:
         X0, b_file, eta_file = _read_input(input)
         if b_file is not None or eta_file is not None:

@@ -53,9 +53,20 @@ def _component_poles(sites) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lax_vector(model, X, lam) -> np.ndarray:
-    r"""``ξ(λ) = b e_3 + Σ_i Σ_k y^{(i)}_k (λ − λ_i)^{-(k+1)}``, shape ``(..., 3)``."""
+    r"""``ξ^a(λ) = b δ_{a3} + Σ_i Σ_k y^{(i)a}_k φ_{a,k}(λ − λ_i)``, shape ``(..., 3)`` (rational:
+    ``φ_{a,k}(x) = x^{−(k+1)}``; other families: :meth:`jetgaudin.families.Family.phi`)."""
     X = model.check_state(X, allow_complex=True)
     lam = _points(model, lam)
+    if not model.family.uniform:
+        shape = np.broadcast_shapes(X.shape[:-1], lam.shape)
+        xi = np.zeros(shape + (3,), dtype=complex)
+        for i, (p, N) in enumerate(model.sites):
+            o = model.offsets[i]
+            y = X[..., 3 * o:3 * (o + N)].reshape(X.shape[:-1] + (N, 3))
+            for a in range(3):
+                xi[..., a] += np.einsum("k...,...k->...", model.family.phi(a + 1, lam - p, N), y[..., a])
+        xi[..., 2] += model.b
+        return xi
     pos, power = _component_poles(model.sites)
     f = (lam[..., None] - pos) ** (-power)  # (..., M)
     y = X.reshape(X.shape[:-1] + (model.M, 3))
@@ -81,6 +92,25 @@ def _basis(sites) -> tuple[np.ndarray, np.ndarray]:
     return B, D2
 
 
+def _uniform_polynomial(model, X) -> np.ndarray:
+    """``Q(z) = ν²(λ(z)) Π_j (z − z_j)^{2N_j}`` (``z`` the family's uniformizer), ascending powers ``(..., 2M + 1)``,
+    from ``2M + 1`` samples on the circle ``|z| = e^{−0.3}`` (``Im λ = 0.15/γ``, off the sites' unit circle): the
+    discrete Fourier transform of the samples gives the coefficients times ``|z|^k`` exactly (degree ``≤ 2M``:
+    ``ν²`` is bounded at ``z = 0`` and ``∞``)."""
+    fam = model.family
+    K = 2 * model.M + 1
+    T = fam.period
+    gamma = np.pi / T
+    lam = np.arange(K) * T / K + 0.15j / gamma
+    z = fam.uniformizer(lam)
+    zs = fam.uniformizer(model.positions)
+    vals = np.sum(lax_vector(model, X[..., None, :], lam) ** 2, axis=-1)
+    for zj, (_, N) in zip(zs, model.sites, strict=True):
+        vals = vals * (z - zj) ** (2 * N)
+    coef = np.fft.fft(vals, axis=-1) / K
+    return coef / np.abs(z[0]) ** np.arange(K)
+
+
 def curve_polynomial(model, X) -> np.ndarray:
     """Coefficients of ``Q(λ) = D² ν²`` in descending powers, shape ``(..., 2M + 1)`` (``(..., 2M − 1)`` for
     ``b = 0``: the two leading coefficients vanish identically and are dropped)."""
@@ -99,8 +129,18 @@ def curve_polynomial(model, X) -> np.ndarray:
 
 
 def branch_points(model, X) -> np.ndarray:
-    """Roots of :func:`curve_polynomial`, shape ``(..., 2M)`` (``(..., 2M − 2)`` for ``b = 0``)."""
-    return _roots(curve_polynomial(model, X))
+    """Roots of :func:`curve_polynomial`, shape ``(..., 2M)`` (``(..., 2M − 2)`` for ``b = 0``); other families:
+    the zeros of ``ν²`` as roots ``z_k`` of :func:`_uniform_polynomial` (in the uniformizer ``z``)."""
+    if model.family.uniform:
+        return _roots(curve_polynomial(model, X))
+    if model.family.uniformizer(0.0) is None:  # no exact rule: the continuation is numerical (no roots needed)
+        return np.zeros(np.shape(X)[:-1] + (0,), dtype=complex)
+    Q = _uniform_polynomial(model, X)[..., ::-1]
+    if np.any(np.abs(Q[..., 0]) <= 1e-13 * np.max(np.abs(Q), axis=-1)):
+        raise BranchPointError(
+            "nu^2 vanishes at Im(lambda) -> -infinity (b + i gamma J = 0: b = 0 and J = sum of the y_0^3 = 0); the "
+            "branch rule of nu needs b != 0 or J != 0")
+    return _roots(Q)
 
 
 def _D_phase(model, lam):
@@ -112,8 +152,61 @@ def _D_phase(model, lam):
     return out
 
 
+def _nu_uniformized(model, X, lam, roots, sheet):
+    """The branch rule in the uniformizer ``z`` (module docstring with ``λ → z``):
+    ``ν(λ) = ν(a) [D(z_a)/D(z)] Π_k √((z − r_k)/(z_a − r_k))``, ``D(z) = Π_j (z − z_j)^{N_j}``; the vertical
+    segment ``[a, λ]`` maps to a straight segment (a ray of ``z = e^{2iγλ}``)."""
+    fam = model.family
+    a = lam.real.astype(complex)
+    z, za = fam.uniformizer(lam), fam.uniformizer(a)
+    nu2 = np.sum(lax_vector(model, X, lam) ** 2, axis=-1)
+    nu_a = np.sqrt(np.sum(lax_vector(model, X, a) ** 2, axis=-1))
+    ratio = np.ones(lam.shape, dtype=complex)
+    for zj, (_, N) in zip(fam.uniformizer(model.positions), model.sites, strict=True):
+        ratio = ratio * ((za - zj) / (z - zj)) ** N
+    roots = np.broadcast_to(roots, lam.shape + (roots.shape[-1],))
+    ref = nu_a * ratio * _segment_factor(z, za, roots, nu_a)
+    direct = np.sqrt(nu2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        test = (np.conj(direct / np.abs(direct)) * ref / np.abs(ref)).real
+    if not np.all(np.isfinite(test)):
+        raise BranchPointError("nu(lambda) is zero or not representable at this lambda (a branch point); move it")
+    return sheet * np.where(test >= 0, 1.0, -1.0) * direct
+
+
+def _nu_numerical(model, X, lam, sheet, n0: int = 64, n_max: int = 2**16):
+    """The branch rule by numerical continuation (families without a uniformizer): ``±√ν²`` at ``n`` equally spaced
+    points of the segment from ``Re λ`` (``ν > 0`` there for a real state), each time the root nearer to the
+    previous one; ``n`` doubles until no step moves ``ν`` by more than a quarter of its size (then the nearer
+    root is unambiguous), else :class:`BranchPointError` (a branch point on or near the segment)."""
+    a = lam.real
+    n = n0
+    while n <= n_max:
+        t = np.linspace(0.0, 1.0, n + 1)
+        pts = a[..., None] + 1j * lam.imag[..., None] * t
+        nu2 = np.sum(lax_vector(model, X[..., None, :], pts) ** 2, axis=-1)
+        r = np.sqrt(nu2)
+        v = r[..., 0]
+        ok = np.ones(lam.shape, dtype=bool)
+        for k in range(1, n + 1):
+            rk = r[..., k]
+            rk = np.where(np.abs(rk - v) <= np.abs(rk + v), rk, -rk)
+            ok &= np.abs(rk - v) <= 0.25 * np.maximum(np.abs(rk), np.abs(v))
+            v = rk
+        if np.all(ok) and np.all(v != 0):
+            return sheet * v
+        n *= 2
+    raise BranchPointError("nu could not be continued along the vertical segment from Re(eta) (a branch point on or "
+                           "near it); move eta")
+
+
 def nu_with_roots(model, X, lam, roots, sheet: int = 1):
     """``ν(λ)`` on the default branch given the roots of ``Q`` (``X``, ``lam``, ``roots`` broadcast)."""
+    if not model.family.uniform:
+        _check_start(model, lam)
+        if model.family.uniformizer(0.0) is None:
+            return _nu_numerical(model, X, lam, sheet)
+        return _nu_uniformized(model, X, lam, roots, sheet)
     a = lam.real
     for p, _ in model.sites:
         if np.any(a == p):
@@ -134,6 +227,16 @@ def nu_with_roots(model, X, lam, roots, sheet: int = 1):
     if not np.all(np.isfinite(test)):
         raise BranchPointError("nu(lambda) is zero or not representable at this lambda (a branch point); move it")
     return sheet * np.where(test >= 0, 1.0, -1.0) * direct
+
+
+def _check_start(model, lam):
+    T = model.family.period
+    for p, _ in model.sites:
+        r = (lam.real - p) / T
+        if np.any(np.abs(r - np.round(r)) < 1e-14):
+            raise BranchPointError(
+                f"the default branch of nu starts at the real point Re(eta), equal to the site {p} modulo the "
+                f"period {T} (a pole of L); move Re(eta) off the sites")
 
 
 def _D_real(model, a):
@@ -181,7 +284,20 @@ def interpolating_hamiltonian(model, X, eta):
 
 
 def interpolating_weights(model, X, eta):
-    r"""``ω_{i,m} = −2∫_0^{Im η} Re[(λ − λ_i)^{-m} / (2ν)] ds``, shape ``(..., 2M)``, order of the integrals."""
+    r"""``ω_I = ∂G_η/∂I = −2∫_0^{Im η} Re[(∂ν²/∂I)(λ) / (2ν)] ds``, shape ``(..., n_integrals)``, order of the
+    integrals: ``∂ν²/∂h_{i,m} = ψ_m(λ − λ_i)`` (:meth:`jetgaudin.families.Family.nu2_basis`; rational
+    ``(λ − λ_i)^{−m}``) and, for the extras, the derivative of the constant term of ``ν²``."""
+    if not model.family.uniform:
+        fam = model.family
+        extra = model.integrals(X)[..., 2 * model.M:]
+        dconst = fam.nu2_constant_gradient(model.b, extra)
+
+        def integrand(lam, v):
+            cols = [fam.nu2_basis(m, lam - p) for p, N in model.sites for m in range(1, 2 * N + 1)]
+            d = np.concatenate([np.stack(cols, -1), np.broadcast_to(dconst, lam.shape + dconst.shape[-1:])], -1)
+            return d / (2.0 * v[..., None])
+
+        return -2.0 * _segment_integral(model, X, eta, integrand)
     pos = np.array([p for p, N in model.sites for _ in range(2 * N)])
     m = np.array([m for _, N in model.sites for m in range(1, 2 * N + 1)])
     return -2.0 * _segment_integral(

@@ -65,13 +65,13 @@ class ChainFlowMap(FlowMap):
         return ChainFlowMap(self.H, -self.dt, self.method, self.rtol, self.atol)
 
     def describe(self) -> dict:
-        return {"kind": "chain_flow", "b": self.H.model.b, "sites": [[p, N] for p, N in self.H.model.sites],
+        return {"kind": "chain_flow", **self.H.model.describe(),
                 "weights": np.asarray(self.H.weights).tolist(), "dt": self.dt, "method": self.method.value,
                 "rtol": self.rtol, "atol": self.atol}
 
 
 def _chain_flow_from(d: dict) -> ChainFlowMap:
-    model = GaudinModel(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]))
+    model = GaudinModel.from_description(d)
     return ChainFlowMap(ChainHamiltonian(model, np.asarray(d["weights"], dtype=float)), float(d["dt"]),
                         Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
 

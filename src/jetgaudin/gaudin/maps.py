@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import glob
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -35,8 +36,10 @@ from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
 from ..lax import ell_coefficients, state_from_ell
+from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
 from ._curve import _component_poles, nu_with_roots
+from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
 __all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
@@ -56,6 +59,30 @@ _AUTO_MIN_WORK = 20000
 _CHAIN_COMPILE_S = 10.0
 
 
+def resolve_backend(backend: Backend, has_compiled: bool, steps: int, X, kind: str = "map") -> Backend:
+    """The one rule of the chain maps (every family): ``NUMPY`` as given; ``COMPILED`` needs a compiled route
+    (:class:`InvalidParameterError` otherwise); ``AUTO`` is the compiled route from ``_AUTO_MIN_WORK`` orbit-steps
+    on where the map has one, NumPy otherwise."""
+    if backend is Backend.COMPILED and not has_compiled:
+        raise InvalidParameterError(f"the {kind} map of this family has no compiled route; use backend='numpy' or "
+                                    "'auto'")
+    if backend is not Backend.AUTO:
+        return backend
+    work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
+    return Backend.COMPILED if has_compiled and work >= _AUTO_MIN_WORK else Backend.NUMPY
+
+
+@lru_cache(maxsize=64)
+def _orbit_constants(model: GaudinModel, eta: complex) -> tuple:
+    """The compiled kernels' per-orbit constants, computed once per ``(model, η)`` (a run calls ``advance`` chunk by
+    chunk; the kernels only read them)."""
+    if model.family.uniform:
+        from ._kernels import orbit_constants
+    else:
+        from ._family_kernel import orbit_constants
+    return orbit_constants(model, eta)
+
+
 def _check_model(model) -> None:
     if not isinstance(model, GaudinModel):
         raise InvalidParameterError(f"model must be a GaudinModel, got {type(model).__name__}")
@@ -63,12 +90,15 @@ def _check_model(model) -> None:
 
 def _check_eta(model: GaudinModel, eta) -> complex:
     eta = spectral_parameter(eta)
+    T = model.family.period
     for p, _ in model.sites:
-        if eta.real == p:
+        if (eta.real == p if T is None else abs((r := (eta.real - p) / T) - round(r)) < 1e-14):
             raise InvalidParameterError(
-                f"Re(eta) = {p} is a site: the branch rule of nu starts at the real point Re(eta), a pole of the "
-                "Lax matrix there; choose Re(eta) off the sites"
+                f"Re(eta) = {eta.real} is a site" + ("" if T is None else f" ({p} modulo the period {T:.6g})") +
+                ": the branch rule of nu starts at the real point Re(eta), a pole of the Lax matrix there; choose "
+                "Re(eta) off the sites"
             )
+    model.family.check_xi(eta)
     return eta
 
 
@@ -91,25 +121,35 @@ def dress_parts(model, parts, K0, E, A0, Ea, zeros):
     r"""Principal parts of ``K ℓ adj(K)/Π_r(λ − ζ_r)`` at every site (module docstring), ``(B, M, 2, 2)``.
 
     ``K = λE + K0``, ``adj K = λE_a + A0`` (``K0``, ``A0``: ``(B, 2, 2)``), ``zeros``: the scalars ``ζ_r``."""
-    out = np.empty_like(parts)
-    for i, (lam_i, N) in enumerate(model.sites):
-        o = model.offsets[i]
-        Ka = (K0 + lam_i * E, np.broadcast_to(E, K0.shape))
-        Aa = (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape))
+    series = []
+    for lam_i, N in model.sites:
         g = np.zeros(N, dtype=complex)
         g[0] = 1.0
         for z in zeros:
             g = np.convolve(g, _inv_series(lam_i - z, N))[:N]
+        series.append(((K0 + lam_i * E, np.broadcast_to(E, K0.shape)),
+                       (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape)), g))
+    return dress_sites(model, parts, series)
+
+
+def dress_sites(model, parts, series):
+    r"""Principal parts of ``D ℓ adj(D) / det D`` at every site, ``(B, M, 2, 2)``, from ``series[i] = (Ka, Aa, g)``:
+    the Taylor coefficients at ``λ_i`` of ``D`` and ``adj D`` (sequences of ``(B, 2, 2)``) and of ``1/det D``
+    (``(N_i,)`` or ``(N_i, B)``): ``ℓ̆_k = Σ_{j ≥ k} Σ_{a+c+e = j−k} D_a ℓ_j A_c g_e`` (module docstring)."""
+    out = np.empty_like(parts)
+    for i, (_, N) in enumerate(model.sites):
+        o = model.offsets[i]
+        Ka, Aa, g = series[i]
+        g = np.asarray(g)[..., None, None] if np.ndim(g) > 1 else g  # (N, B): one series per batch member
         for k in range(N):
             acc = np.zeros(parts.shape[:-3] + (2, 2), dtype=complex)
             for j in range(k, N):
                 Pj = parts[..., o + j, :, :]
-                for a in (0, 1):
+                for a in range(min(len(Ka), j - k + 1)):
                     KP = mm(Ka[a], Pj)
-                    for c in (0, 1):
+                    for c in range(min(len(Aa), j - k - a + 1)):
                         e = j - k - a - c
-                        if e >= 0:
-                            acc = acc + g[e] * mm(KP, Aa[c])
+                        acc = acc + g[e] * mm(KP, Aa[c])
             out[..., o + k, :, :] = acc
     return out
 
@@ -134,6 +174,7 @@ class _ChainMap(Map):
     branch: Branch
     properties: MapProperties
     kind: str
+    kernel: Any  # the alias of backend given to the constructor (then equal to backend)
 
     def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
@@ -142,6 +183,30 @@ class _ChainMap(Map):
         _check_model(self.model)
         object.__setattr__(self, "eta", _check_eta(self.model, self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
+        backend = Backend.parse(self.backend if self.kernel is None else self.kernel)  # kernel=: an alias
+        object.__setattr__(self, "backend", backend)
+        object.__setattr__(self, "kernel", backend)
+
+    @property
+    def has_compiled(self) -> bool:
+        """Whether the map has a compiled route (the one backend rule, :func:`resolve_backend`, reads it)."""
+        return False
+
+    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
+        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
+        (:func:`resolve_backend`)."""
+        return resolve_backend(self.backend, self.has_compiled, steps, X, self.kind)
+
+    def with_backend(self, backend=None, kernel=None):
+        """This map on another route (``kernel`` an alias of ``backend``; both ``None``: itself)."""
+        pick = backend if kernel is None else kernel
+        return self if pick is None else replace(self, backend=Backend.parse(pick), kernel=None)
+
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry: Any = None, return_carry: bool = False,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None):
+        """:meth:`jetgaudin.maps.Map.iterate`, on the route ``backend`` (alias ``kernel``; default the map's)."""
+        m = self.with_backend(backend, kernel)
+        return Map.iterate(m, X0, steps, save_every=save_every, carry=carry, return_carry=return_carry)
 
     @property
     def b(self) -> float:
@@ -197,15 +262,18 @@ class _ChainMap(Map):
                 raise InvalidParameterError("carry (nu1) must be finite")
         return X, carry, steps, save_every
 
-    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Advance:
         """``steps`` steps from ``X`` ``(..., 3M)`` continuing from ``carry = ν1`` (``None``: the branch rule at
-        ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`)."""
+        ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`);
+        ``backend`` / ``kernel``: checked by the backend rule (NumPy is this map's only route)."""
+        self.with_backend(backend, kernel).resolved_backend(steps, X)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
 
     def describe(self) -> dict:
-        return {"kind": self.kind, "b": self.model.b, "eta": [self.eta.real, self.eta.imag],
-                "branch": self.branch.value, "sites": [[p, N] for p, N in self.model.sites]}
+        return {"kind": self.kind, **self.model.describe(), "eta": [self.eta.real, self.eta.imag],
+                "branch": self.branch.value}
 
 
 @dataclass(frozen=True)
@@ -219,8 +287,9 @@ class ChainTwoPointBacklund(_ChainMap):
         ``Re η`` off the sites, ``Im η ≠ 0``.
     branch : Branch or {"default", "opposite"}
         ``ν1 = ±ν(η)`` by the branch rule; ``"opposite"`` is the inverse map.
-    backend : Backend or {"numpy", "compiled", "auto"}
-        Route of :meth:`advance` / :meth:`iterate` (default NumPy, the reference route).
+    backend, kernel : Backend or {"numpy", "compiled", "auto"}
+        Route of :meth:`advance` / :meth:`iterate` (``kernel`` is an alias; default ``"auto"``, the rule of
+        :func:`resolve_backend`).
 
     Raises
     ------
@@ -231,7 +300,8 @@ class ChainTwoPointBacklund(_ChainMap):
     model: GaudinModel
     eta: complex
     branch: Branch = Branch.DEFAULT
-    backend: Backend = field(default=Backend.NUMPY, compare=False)
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_two_point"
     properties: MapProperties = field(
         default=MapProperties(
@@ -244,7 +314,6 @@ class ChainTwoPointBacklund(_ChainMap):
 
     def __post_init__(self) -> None:
         self._init_common()
-        object.__setattr__(self, "backend", Backend.parse(self.backend))
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 f"Im(eta) = 0 (eta = {self.eta.real}): the real two-point map needs eta1 = eta != eta2 = conj(eta) "
@@ -259,13 +328,23 @@ class ChainTwoPointBacklund(_ChainMap):
     def describe(self) -> dict:
         return {**super().describe(), "backend": self.backend.value}
 
-    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
-        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``: ``AUTO`` is the
-        compiled kernel from ``_AUTO_MIN_WORK`` orbit-steps on, NumPy below."""
-        if self.backend is not Backend.AUTO:
-            return self.backend
-        work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
-        return Backend.COMPILED if work >= _AUTO_MIN_WORK else Backend.NUMPY
+    @property
+    def has_compiled(self) -> bool:
+        """The rational family's map runs in :mod:`jetgaudin.gaudin._kernels`, the others' in the one family kernel
+        of :mod:`jetgaudin.gaudin._family_kernel` (where the family declares its ``kernel_rule``)."""
+        return self.model.family.uniform or self.model.family.kernel_rule is not None
+
+    def _kernel(self):
+        """``(module name, dispatcher, run(x, ν, steps, save_every))`` of the compiled route."""
+        b = float(self.model.b)
+        c = _orbit_constants(self.model, self.eta)
+        if self.model.family.uniform:  # the rational chain kernel (its speed and bits kept)
+            from . import _kernels as K
+
+            return "_kernels", K.run_orbit, lambda x, nu, n, se: K.run_orbit(x, b, self.eta, nu, *c, n, se)
+        from . import _family_kernel as F
+
+        return "_family_kernel", F.run_orbit, lambda x, nu, n, se: F.run_orbit(x, b, nu, *c, n, se)
 
     def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
         """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
@@ -275,60 +354,78 @@ class ChainTwoPointBacklund(_ChainMap):
         if self.resolved_backend(steps, X) is not Backend.COMPILED or np.size(X) == 0:
             return None
         from ..backlund._compiled import kernels
-        from . import _kernels
 
         x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[:1]
-        loaded = bool(getattr(_kernels.run_orbit, "signatures", None))
-        where = getattr(getattr(_kernels.run_orbit, "_cache", None), "_cache_path", None)  # Numba's cache directory
-        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, "_kernels.run_orbit-*.nbi")))
+        name, disp, _ = self._kernel()
+        loaded = bool(getattr(disp, "signatures", None))
+        where = getattr(getattr(disp, "_cache", None), "_cache_path", None)  # Numba's cache directory
+        cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, f"{name}.run_orbit-*.nbi")))
         compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
-        return kernels().prepare_call(("gaudin.run_orbit",), loaded, _CHAIN_COMPILE_S,
+        return kernels().prepare_call((f"gaudin.{name}.run_orbit",), loaded, _CHAIN_COMPILE_S,
                                       lambda: compiled.advance(x0, None, 0), notify, cached)
 
-    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        """As :meth:`_ChainMap.advance`; on the compiled route (``backend``, :meth:`resolved_backend`) the steps run
-        in the Numba kernel of :mod:`jetgaudin.gaudin._kernels` (the same orbits to round-off; ``ν1`` at ``X`` by the
-        NumPy branch rule; the residual check is not made and ``imag_max`` is zeros: the imaginary residue is not
-        computed).  A batch member equals its single run, and a split run the unsplit one, bit for bit (both
-        routes)."""
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Advance:
+        """As :meth:`_ChainMap.advance` (``backend`` / ``kernel``: this call's route); on the compiled route
+        (``backend``, :meth:`resolved_backend`) the steps run in the Numba kernel of :mod:`jetgaudin.gaudin._kernels`
+        (rational) or :mod:`jetgaudin.gaudin._family_kernel` (other families): the same orbits to round-off; ``ν1``
+        at ``X`` by the NumPy branch rule; the residual check is not made and ``imag_max`` is zeros (the imaginary
+        residue is not computed).  A batch member equals its single run, and a split run the unsplit one, bit for
+        bit (both routes)."""
+        if backend is not None or kernel is not None:
+            return self.with_backend(backend, kernel).advance(X, carry, steps, save_every)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         if self.resolved_backend(steps, X) is not Backend.COMPILED or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
-        from . import _kernels
-
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
-        consts = _kernels.orbit_constants(self.model, self.eta)
-        run_orbit: Any = _kernels.run_orbit  # a Numba dispatcher
-        b = float(self.model.b)
+        name, _, run_orbit = self._kernel()
+        if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
+            from . import _family_kernel
+
+            run_batch: Any = _family_kernel.run_batch  # a Numba dispatcher
+            rows, final, last = run_batch(np.ascontiguousarray(Xb), float(self.model.b), nu.astype(complex),
+                                          *_orbit_constants(self.model, self.eta), steps, save_every)
+            return self._finish(rows, final, last, shape)
         rows = np.empty((steps // save_every,) + Xb.shape)
         final = np.empty_like(Xb)
         last = np.empty(Xb.shape[0], dtype=complex)
         for n in range(Xb.shape[0]):
-            out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), b, self.eta, complex(nu[n]),
-                                                        *consts, steps, save_every)
+            out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
+        return self._finish(rows, final, last, shape)
+
+    @staticmethod
+    def _finish(rows, final, last, shape) -> Advance:
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled chain orbit produced non-finite values; change eta")
         return Advance(rows=rows.reshape((rows.shape[0],) + shape), X=final.reshape(shape),
                        carry=last.reshape(shape[:-1]), imag_max=np.zeros(shape[:-1]))
 
     def _setup(self, X, carry):
-        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X``."""
+        """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X`` (other families: the dressing coefficients ``c``
+        ``(B, P)`` of :mod:`jetgaudin.gaudin._dressing` in place of ``M0``)."""
         ell = ell_coefficients(X, self.model.b)
-        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta)
+        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta) if self.model.family.uniform else \
+            _matrix(self.model.xi(X, self.eta))
         # the root of ν(η)² (from ℓ(η)) closest to the carry, or to the branch rule's value: step(X) and
         # step(X, start(X)) are the same bits
         ref = self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1)
         nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], ref)
+        if not self.model.family.uniform:
+            return ell, L, nu1, real_coefficients(self.model, self.eta, L, nu1)
         k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
         return ell, L, nu1, real_two_point_M0(self.eta, k1, k2)
 
     def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
-        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``."""
+        """``M(λ) = λ + M0`` of eq. (mm) at ``X`` (real reduction), shape ``(..., 2, 2)``; ``M ℓ(X) = ℓ(X̆) M``
+        (other families: ``D(λ) = Σ_p c_p B_p(λ)``, scalar ``λ``)."""
         X = self.model.check_state(X)
-        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3].reshape(X.shape[:-1] + (2, 2))
+        M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3]
+        if not self.model.family.uniform:
+            return dressing_at(self.model, M0, lam, self.eta).reshape(X.shape[:-1] + (2, 2))
+        M0 = M0.reshape(X.shape[:-1] + (2, 2))
         return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
 
     def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -339,15 +436,24 @@ class ChainTwoPointBacklund(_ChainMap):
         shape = X.shape
         X = X.reshape(-1, shape[-1])  # 2-D batch: a single orbit equals its ensemble member bit for bit
         ell, L, nu1, M0 = self._setup(X, carry)
-        A0 = adj(M0)
         scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
-        res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
+        if self.model.family.uniform:
+            A0 = adj(M0)
+            res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
+            series = None
+        else:  # the family's dressing: residual relative to |D(η)|², principal parts from its Taylor series
+            D1 = dressing_at(self.model, M0, self.eta, self.eta)
+            res = _residual(D1, L, adj(D1), scale) / np.max(np.abs(D1), axis=(-2, -1)) ** 2
+            series = site_series(self.model, M0, self.eta)
         if np.any(res > _RESIDUAL_TOL):
             raise SingularStepError(
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
-        new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        if series is None:
+            new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+        else:
+            new = dress_sites(self.model, ell[..., 1:, :, :], series)
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
         Xr = Xc.real
         if not np.all(np.isfinite(Xr)):
@@ -370,6 +476,8 @@ class ChainOnePointBacklund(_ChainMap):
     eta: complex
     branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_one_point"
     properties: MapProperties = field(
         default=MapProperties(
@@ -382,6 +490,10 @@ class ChainOnePointBacklund(_ChainMap):
 
     def __post_init__(self) -> None:
         _check_model(self.model)
+        if not self.model.family.uniform:
+            raise InvalidParameterError(
+                f"the one-point map is implemented for the rational family only (not {self.model.family.name}); "
+                "use the real two-point map two_point_backlund(eta)")
         if self.model.b == 0.0:
             raise InvalidParameterError(
                 "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "
@@ -449,7 +561,7 @@ class ChainOnePointBacklund(_ChainMap):
 
 
 def _sites(d: dict) -> GaudinModel:
-    return GaudinModel(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]))
+    return GaudinModel.from_description(d)
 
 
 def _two_point_from(d: dict) -> ChainTwoPointBacklund:

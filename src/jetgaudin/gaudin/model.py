@@ -30,13 +30,14 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from math import comb
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..algebra import structure_constants
+from ..families import make_family
 from ..maps import Backend, Branch
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -49,6 +50,7 @@ __all__ = [
     "gaudin_magnet",
     "lagrange_chain",
     "twisted_chain",
+    "clebsch_top",
 ]
 
 
@@ -126,23 +128,39 @@ def _taylor_coefficient(k: int, n: int, d: float) -> float:
 
 @dataclass(frozen=True)
 class GaudinModel:
-    r"""The chain with ``sites = [(λ_i, N_i), …]`` in the field ``b e_3`` (see the module docstring).
+    r"""The chain with ``sites = [(λ_i, N_i), …]`` in the field ``b e_3`` (see the module docstring), of the
+    Gaudin family ``family`` (``docs/families.md``: the formulas above are the rational family's; the
+    trigonometric one replaces ``(λ − λ_i)^{−(k+1)}`` by ``φ_{a,k}(λ − λ_i)`` built on ``γ/sin(γx)``,
+    ``γ cot(γx)``, :mod:`jetgaudin.families.trigonometric`).
 
     Parameters
     ----------
     b : float
         Field strength (any real; ``b = 0`` is the magnet without field, see ``docs/chains.md``).
     sites : sequence of (float, int)
-        Distinct real positions and integer orders ``N_i ≥ 1``.
+        Distinct real positions (modulo the family's period, ``π/γ`` for the trigonometric family) and integer
+        orders ``N_i ≥ 1``.
+    family : {"rational", "trigonometric", "elliptic"} or jetgaudin.families.Family
+        The family (default rational: the paper's chains).
+    gamma : float, optional
+        The anisotropy ``γ > 0`` of the trigonometric family (default 1); the rational family has none.
+    modulus : float, optional
+        The modulus ``k ∈ [0, 1)`` of the elliptic (XYZ) family (required by it; ``b`` must be 0 there,
+        :mod:`jetgaudin.families.elliptic`).
 
     Raises
     ------
     InvalidParameterError
-        Non-real, non-finite or repeated positions; orders not integers ``≥ 1``; ``b`` not a finite real.
+        Non-real, non-finite or repeated positions; orders not integers ``≥ 1``; ``b`` not a finite real; an
+        unknown family; ``gamma`` not a finite real ``> 0``, or given to the rational family; sites equal modulo
+        the period.
     """
 
     b: float
     sites: tuple = field(default=((0.0, 1),))
+    family: Any = "rational"
+    gamma: float | None = None
+    modulus: float | None = None
 
     def __post_init__(self):
         if np.iscomplexobj(self.b) or isinstance(self.b, bool):
@@ -155,6 +173,11 @@ class GaudinModel:
             raise InvalidParameterError(f"the field strength b must be finite, got {b}")
         object.__setattr__(self, "b", b)
         object.__setattr__(self, "sites", _check_sites(self.sites))
+        fam = make_family(self.family, gamma=self.gamma, modulus=self.modulus)
+        fam.check(b, self.sites)
+        object.__setattr__(self, "family", fam)
+        object.__setattr__(self, "gamma", fam.describe().get("gamma"))
+        object.__setattr__(self, "modulus", fam.describe().get("modulus"))
 
     # ---- layout ---------------------------------------------------------------------------
 
@@ -196,12 +219,32 @@ class GaudinModel:
         return X
 
     def describe(self) -> dict:
-        return {"b": self.b, "sites": [[p, N] for p, N in self.sites]}
+        """``{"b", "sites"}`` and, for a family other than the rational one, ``"family"`` and its parameters."""
+        d: dict = {"b": self.b, "sites": [[p, N] for p, N in self.sites]}
+        if self.family.name != "rational":
+            d.update({"family": self.family.name, **self.family.describe()})
+        return d
+
+    @classmethod
+    def from_description(cls, d: dict) -> GaudinModel:
+        """The model :meth:`describe` (or a map's description) describes."""
+        extra = {k: d[k] for k in ("gamma", "modulus") if k in d}
+        return cls(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]), d.get("family", "rational"), **extra)
 
     # ---- integrals as quadratic forms --------------------------------------------------------
 
     @cached_property
     def _forms(self):
+        """The integrals as forms in the ``y``'s: today's closed formula for the rational family, the generic
+        Laurent tables of :mod:`jetgaudin.gaudin._forms` for the others."""
+        if self.family.uniform:
+            return self._rational_forms
+        from ._forms import generic_forms
+
+        return generic_forms(self)
+
+    @cached_property
+    def _rational_forms(self):
         """``(q, l)``: ``h_{i,m}(X) = Σ_{c,d} q[I, c, d] ⟨y_c, y_d⟩ + 2 b Σ_c l[I, c] y_c^3`` over the ``M``
         3-vectors ``y_c`` (``I`` runs over ``(i, m)`` in the order of :meth:`integrals`)."""
         M = self.M
@@ -231,14 +274,29 @@ class GaudinModel:
         lin.setflags(write=False)
         return q, lin
 
+    def _extra_labels(self) -> list[str]:
+        """The integrals after the ``h_{j,m}``: the constant term of ``ν²`` when it is one (elliptic ``c0``), then
+        the family's linear extras (trigonometric ``J``)."""
+        c = self.family.constant_integral
+        return ([c] if c else []) + self.family.extra_integrals(self.sites)[0]
+
+    @property
+    def n_integrals(self) -> int:
+        """``2M`` plus the family's extra integrals (trigonometric: ``J``; elliptic: ``c0``)."""
+        return 2 * self.M + len(self._extra_labels())
+
     def integral_labels(self) -> list[str]:
-        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1)."""
-        return [f"h{i + 1},{m}" for i, (_, N) in enumerate(self.sites) for m in range(1, 2 * N + 1)]
+        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1), then the family's extras (``J``,
+        ``c0``)."""
+        return [f"h{i + 1},{m}" for i, (_, N) in enumerate(self.sites) for m in range(1, 2 * N + 1)] + \
+            self._extra_labels()
 
     def casimir_mask(self) -> np.ndarray:
-        """Boolean ``(2M,)``: ``True`` for the Casimirs ``h_{i,m}``, ``m > N_i``; ``False`` for the ``M``
-        commuting Hamiltonians ``h_{i,m}``, ``m ≤ N_i``."""
-        return np.array([m > N for _, N in self.sites for m in range(1, 2 * N + 1)])
+        """Boolean ``(n_integrals,)``: ``True`` for the Casimirs ``h_{i,m}``, ``m > N_i``; ``False`` for the ``M``
+        commuting Hamiltonians ``h_{i,m}``, ``m ≤ N_i`` and the extras (``J`` generates the rotations about
+        ``e_3``)."""
+        n_extra = self.n_integrals - 2 * self.M
+        return np.array([m > N for _, N in self.sites for m in range(1, 2 * N + 1)] + [False] * n_extra)
 
     def integrals(self, X) -> np.ndarray:
         r"""``(h_{1,1}, …, h_{1,2N_1}, h_{2,1}, …)``, shape ``(..., 2M)``: the exact partial-fraction
@@ -255,8 +313,13 @@ class GaudinModel:
         X = self.check_state(X, allow_complex=True)
         y = X.reshape(X.shape[:-1] + (self.M, 3))
         q, lin = self._forms
-        gram = np.einsum("...ca,...da->...cd", y, y)
-        out = np.einsum("Icd,...cd->...I", q, gram) + 2.0 * self.b * np.einsum("Ic,...c->...I", lin, y[..., 2])
+        if self.family.uniform:
+            gram = np.einsum("...ca,...da->...cd", y, y)
+            out = np.einsum("Icd,...cd->...I", q, gram) + 2.0 * self.b * np.einsum("Ic,...c->...I", lin, y[..., 2])
+        else:
+            from ._forms import evaluate
+
+            out = evaluate(self, q, lin, X)
         return finite_result(out, "the chain integrals h_{i,m}")
 
     def integral_gradients(self, X) -> np.ndarray:
@@ -264,6 +327,10 @@ class GaudinModel:
         X = self.check_state(X, allow_complex=True)
         y = X.reshape(X.shape[:-1] + (self.M, 3))
         q, lin = self._forms
+        if not self.family.uniform:
+            from ._forms import gradients
+
+            return gradients(self, q, lin, X)
         g = 2.0 * np.einsum("Icd,...da->...Ica", q, y)
         g[..., 2] += 2.0 * self.b * lin
         return g.reshape(X.shape[:-1] + (2 * self.M, 3 * self.M))
@@ -326,10 +393,13 @@ class GaudinModel:
 
     def branch_points(self, X) -> np.ndarray:
         """The zeros of ``ν²``: roots of ``D(λ)² ν²(λ)``, ``D = Π (λ − λ_i)^{N_i}``, shape ``(..., 2M)``
-        (``(..., 2M − 2)`` for ``b = 0``)."""
+        (``(..., 2M − 2)`` for ``b = 0``).  Trigonometric: the ``2M`` zeros in one period, ``λ = log(z_k)/(2iγ)``
+        with ``Re λ`` in ``(−π/(2γ), π/(2γ)]``, ``z_k`` the roots in ``z = e^{2iγλ}``; a family without a
+        uniformizer: none (``(..., 0)``; its branch rule is numerical)."""
         from ._curve import branch_points
 
-        return branch_points(self, X)
+        r = branch_points(self, X)
+        return r if self.family.uniform else self.family.uniformizer_inverse(r)
 
     def hamiltonian(self, weights) -> ChainHamiltonian:
         """``H = Σ w_{i,m} h_{i,m}`` as an object for :func:`jetgaudin.integrate`."""
@@ -353,21 +423,23 @@ class GaudinModel:
 
     # ---- maps ---------------------------------------------------------------------------------
 
-    def two_point_backlund(self, eta, branch: Branch | str = "default",
-                           backend: Backend | str = "numpy") -> ChainTwoPointBacklund:
+    def two_point_backlund(self, eta, branch: Branch | str = "default", backend: Backend | str = "auto",
+                           kernel: Backend | str | None = None) -> ChainTwoPointBacklund:
         """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
-        ``backend="compiled"``: ``advance`` / ``iterate`` run in the Numba kernel)."""
+        ``backend`` / its alias ``kernel``: the route of ``advance`` / ``iterate``, default ``"auto"``)."""
         from .maps import ChainTwoPointBacklund
 
-        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend))
+        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend), kernel)
 
     def one_point_backlund(
-        self, eta, branch: Branch | str = "default", inverse_map: bool = False
+        self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
+        kernel: Backend | str | None = None,
     ) -> ChainOnePointBacklund:
-        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0``."""
+        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0`` and
+        the rational family."""
         from .maps import ChainOnePointBacklund
 
-        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map)
+        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
 
 
 @dataclass(frozen=True)
@@ -385,10 +457,12 @@ class ChainHamiltonian:
             w = np.asarray(self.weights, dtype=float)
         except (TypeError, ValueError):
             raise InvalidParameterError(f"weights must be real numbers, got {self.weights!r}") from None
-        if w.ndim == 0 or w.shape[-1] != 2 * self.model.M:
+        n = self.model.n_integrals
+        if w.ndim == 0 or w.shape[-1] != n:
             raise InvalidParameterError(
-                f"weights must have a trailing axis of length 2M = {2 * self.model.M} (one per h_(i,m)), "
-                f"got shape {w.shape}"
+                f"weights must have a trailing axis of length {n} (2M = {2 * self.model.M} h_(i,m)"
+                f"{' and J' if n > 2 * self.model.M else ''}: one per integral "
+                f"{', '.join(self.model.integral_labels()[:3])}, ...), got shape {w.shape}"
             )
         if not np.all(np.isfinite(w)):
             raise InvalidParameterError("weights must be finite")
@@ -440,3 +514,19 @@ def lagrange_chain(b: float, positions) -> GaudinModel:
 def twisted_chain(b: float, positions) -> GaudinModel:
     """The twisted (generalised Lagrange) chain: ``N_i = 3`` at each position."""
     return _uniform(b, positions, 3, "twisted_chain")
+
+
+def clebsch_top(modulus: float, position: float = 0.0) -> GaudinModel:
+    r"""The Clebsch top: one elliptic (XYZ) jet site of order 2 at ``position`` (modulus ``k``), the coalescence of two
+    order-1 sites (``docs/tutorials/xyz.md``).  State ``(M, p) = (y_0, y_1)`` with the bracket of ``e(3)`` (``g^(2)``):
+    ``{M_a, M_b} = ε_{abc} M_c``, ``{M_a, p_b} = ε_{abc} p_c``, ``{p_a, p_b} = 0``.  Integrals (``integrals(X)``):
+    ``h_{1,1} = 0``, ``h_{1,2} = |M|² − 2 Σ_a r_a p_a²``, the Casimirs ``h_{1,3} = 2 M·p``, ``h_{1,4} = |p|²``, and
+    ``c0 = Σ_a A_a M_a² + Σ_a B_a p_a²`` with ``A = (1, k'², 0) − E/K``, ``r_a`` the ``x`` coefficients of ``w_a − 1/x``
+    (``(1+k²)/6``, ``(1−2k²)/6``, ``−(2−k²)/6``).  Every ``H_μ = c0 + μ h_{1,2} = Σ a_i M_i² + Σ b_i p_i²``
+    (``a_i = A_i + μ``) is a Kirchhoff Hamiltonian (a rigid body in an ideal fluid) in **Clebsch's case**
+    ``b_i = a_j a_k + const`` (``(i, j, k)`` cyclic; equivalently ``Σ_cyc (b_j − b_k)/a_i = 0``), with
+    ``k² = (a_1 − a_2)/(a_1 − a_3)``.  Conversely a Clebsch Hamiltonian ``Σ a_i M_i² + Σ (θ a_j a_k + c) p_i²`` with
+    ``a_1 > a_2 > a_3`` and ``θ > 0`` is a member of this pencil plus Casimirs after rescaling time (``H → sH``,
+    ``s = 1/(a_1 − a_3)``) and ``p`` (``p → λp``, ``λ² = s/θ``, an automorphism of ``e(3)``), with that ``k``
+    (derived in the tutorial; the pencil's Clebsch form and ``k`` are tested in ``tests/test_elliptic.py``)."""
+    return GaudinModel(0.0, ((position, 2),), family="elliptic", modulus=modulus)

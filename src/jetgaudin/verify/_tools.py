@@ -77,6 +77,13 @@ def is_zero(expr) -> bool:
     return sp.simplify(num) == 0
 
 
+def linear_identity(diff, syms) -> bool:
+    """Whether the matrix ``diff``, affine in the symbols ``syms``, vanishes identically: each coefficient and the
+    constant term (rational functions of the remaining symbols) cancel to zero (cheap to decide)."""
+    return all(sp.cancel(sp.diff(e, x)) == 0 for x in syms for e in diff) and all(
+        sp.cancel(e.subs({x: 0 for x in syms})) == 0 for e in diff)
+
+
 def matrix_is_zero(Mx) -> bool:
     return all(is_zero(e) for e in Mx)
 

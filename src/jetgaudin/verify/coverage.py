@@ -57,10 +57,12 @@ _MAP = r"""
 - C Prop1, Prop2-involution, LP-rank | Abstract/Intro: a hierarchy of Liouville completely integrable models with a
   linear r-matrix structure
 - C Intro-algebras | Intro: N = 1 is the Euler top on su(2); N = 2 the Lagrange top on e(3) = su(2) (+)_s R^3
-- P Chain-r, Chain-integrals | Intro: direct sums give n-body chains (Gaudin model, Lagrange chain) with rational,
-  trigonometric, elliptic r-matrices
-  reason: the rational case is checked (r-matrix structure of the sum over sites, integrals in involution); the
-  trigonometric and elliptic cases are cited, not derived in this paper
+- P Chain-r, Chain-integrals, Trig-r, Trig-integrals, XYZ-w, XYZ-r, XYZ-nu2, XYZ-Clebsch | Intro: direct sums give
+  n-body chains (Gaudin model, Lagrange chain) with rational, trigonometric, elliptic r-matrices
+  reason: the rational, trigonometric and elliptic cases are checked (r-matrix structure of the sum over sites,
+  integrals in involution; jetgaudin's trigonometric family, issue 23; the elliptic family, issue 24: the addition
+  identity of ns, ds, cs and the r-matrix relation, the exact expansion of nu^2, the Clebsch case of the order-2
+  site); the constructions themselves are cited, not derived in this paper
 - NC | Intro: the construction generalises to any simple Lie algebra
   reason: $CITED
 - P Sec3-structure, Sec3-cocycle | Intro: the N = 3 algebra includes su(2) and R^3 as proper subalgebras but is no
@@ -243,6 +245,10 @@ _MAP = r"""
 - C Sec3-cocycle | Conclusions: a rigid body on an extension of the two-field top's Lie-Poisson structure
 - C Prop1, Prop-Lax, Prop-canonical, mp, 2p | Conclusions: r-matrix formulation, Lax formulation, canonical
   realisation, explicit BTs
+- P Trig-r, Trig-integrals, Trig-gauge | Conclusions: n-body chains from each N-th jet extension with
+  trigonometric and elliptic dependences on the spectral parameter
+  reason: announced, not done in the paper; the trigonometric family (XXZ) with jet sites is built and checked by
+  jetgaudin (issue 23: r-matrix, integrals, the gauge rule of its real two-point map); the elliptic one is not yet
 - P Chain-r, Chain-integrals | Conclusions: n-body chains for each N (done for N = 2 in [MPRS])
   reason: the rational chains of any sites and orders are built and checked (jetgaudin.GaudinModel); the content of
   [MPRS] is cited

@@ -1,0 +1,209 @@
+r"""The trigonometric (XXZ) Gaudin family (issue 23; ``docs/families.md``).
+
+Basis functions, anisotropy ``γ > 0``: ``w_1 = w_2 = γ/sin(γx)``, ``w_3 = γ cot(γx)``, so for order-1 sites
+
+.. math:: u = b + \sum_j \gamma\cot(\gamma(\lambda-\lambda_j))\, s_j^3, \qquad
+          v = \sum_j \frac{\gamma\, s_j^-}{\sin(\gamma(\lambda-\lambda_j))}, \qquad
+          w = \sum_j \frac{\gamma\, s_j^+}{\sin(\gamma(\lambda-\lambda_j))},
+
+``ℓ_γ(λ) = γ ℓ_1(γλ; γλ_j, b/γ)``, which tends to the rational chain with the same sites, ``b`` and spins as
+``γ → 0``.  A jet site carries ``y_k`` multiplying ``φ_{a,k}(x) = (−1)^k w_a^{(k)}(x)/k!``.
+
+**Integrals.**  ``ν² = u² + vw`` is ``π/γ``-periodic (``v, w`` change sign under ``λ → λ + π/γ``), has poles of
+order ``≤ 2N_j`` at the sites and tends to ``(b ∓ iγJ)²`` as ``Im λ → ±∞`` (``J = Σ_j y^{(j)3}_0``; the
+derivative terms vanish there).  Hence, exactly,
+
+.. math:: \nu^2(\lambda) = b^2 - \gamma^2 J^2 + \sum_j \sum_{m=1}^{2N_j} h_{j,m}\, \psi_m(\lambda-\lambda_j),
+          \qquad \psi_m(x) = \frac{(-1)^{m-1}}{(m-1)!} \frac{d^{m-1}}{dx^{m-1}}\, \gamma\cot(\gamma x),
+
+(``ψ_m = x^{−m} + regular``; the difference is bounded, periodic and tends to 0 at ``±i∞`` after the constant is
+removed), and comparing the limits at ``+i∞``: ``Σ_j h_{j,1} = 2bJ``.  For order-1 sites and ``γ = 1``:
+``ψ_1 = cot``, ``ψ_2 = 1/sin²``, ``h_{j,2} = C_j = |s_j|²`` and ``h_{j,1} = 2H_j`` with
+``H_j = b s_j^3 + Σ_{k≠j} [cot(λ_j − λ_k) s_j^3 s_k^3 + (s_j^1 s_k^1 + s_j^2 s_k^2)/sin(λ_j − λ_k)]``, so
+``Σ_j H_j = bJ``.  The integrals are the ``h_{j,m}`` (as for rational chains) and ``J`` last.
+
+**Dressing** (``z = e^{2iγλ}``): ``D(λ) = [[α e^{iγλ} + α_0 e^{−iγλ}, β], [γ', δ e^{iγλ} + δ_0 e^{−iγλ}]]``
+satisfies ``D(λ + π/γ) = −σ_3 D(λ) σ_3`` like ``ℓ(λ + π/γ) = σ_3 ℓ(λ) σ_3``, is diagonal at ``±i∞`` and
+``det D`` is ``e^{−2iγλ}`` times a quadratic in ``z``: with spectrality at ``ξ, ξ̄`` the only poles of
+``ℓ̃ = D ℓ D^{-1}`` are at the sites, it is bounded at ``±i∞`` with the same limits ``b ∓ iγJ``, hence of the
+same form.  Spectrality fixes each row up to a factor (a 3-vector cross product per row); the two factors are
+the overall scale (irrelevant) and the rotation gauge ``diag(ρ, 1)``, fixed by the gauge rule of
+:func:`gauge_rule`.
+"""
+
+from __future__ import annotations
+
+from math import factorial
+
+import numpy as np
+
+from .._errors import InvalidParameterError
+from . import _series
+from ._base import Family
+
+__all__ = ["TrigonometricFamily", "gauge_rule"]
+
+
+def _check_gamma(gamma) -> float:
+    if isinstance(gamma, bool) or np.iscomplexobj(gamma):
+        raise InvalidParameterError(f"the anisotropy gamma must be a real number > 0, got {gamma!r}")
+    try:
+        g = float(gamma)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"the anisotropy gamma must be a real number > 0, got {gamma!r}") from None
+    if not np.isfinite(g) or g <= 0:
+        raise InvalidParameterError(f"the anisotropy gamma must be finite and > 0 (gamma -> 0 is the rational "
+                                    f"family: use family='rational'), got {g}")
+    return g
+
+
+class TrigonometricFamily(Family):
+    """The XXZ family with anisotropy ``gamma`` (module docstring)."""
+
+    name = "trigonometric"
+    uniform = False
+    n_dressing = 6  # E11 e^{iγλ}, E11 e^{−iγλ}, E12, E21, E22 e^{iγλ}, E22 e^{−iγλ}
+    kernel_rule = 1
+
+    def __init__(self, gamma: float = 1.0):
+        self.gamma = _check_gamma(gamma)
+
+    @property
+    def period(self) -> float:
+        return float(np.pi / self.gamma)
+
+    def describe(self) -> dict:
+        return {"gamma": self.gamma}
+
+    # ---- basis functions -------------------------------------------------------------------------------------
+
+    def taylor(self, a, x0, order):
+        g = self.gamma
+        s, c = _series.sin_cos(x0, g, order)
+        r = g * _series.inv(s, order)
+        return r if a in (1, 2) else _series.mul(c, r, order)
+
+    def regular(self, a, order):
+        g = self.gamma
+        n = order + 1
+        # sin(γx)/(γx) and cos(γx) as series in x; w_a = (1/x)·[1 or cos]/(sin(γx)/(γx))
+        s1 = np.array([(-1) ** (k // 2) * g**k / factorial(k + 1) if k % 2 == 0 else 0.0 for k in range(n)])
+        c = np.array([(-1) ** (k // 2) * g**k / factorial(k) if k % 2 == 0 else 0.0 for k in range(n)])
+        t = _series.inv(s1, n) if a in (1, 2) else _series.mul(c, _series.inv(s1, n), n)
+        return t[1:].astype(complex)  # t_0 = 1 is the pole 1/x
+
+    # ---- ν² ----------------------------------------------------------------------------------------------
+
+    def nu2_basis(self, m, x):
+        return self.phi(3, x, m)[m - 1]
+
+    def nu2_constant(self, b, extra):
+        J = extra[..., 0]
+        return b * b - self.gamma**2 * J * J
+
+    def nu2_constant_gradient(self, b, extra):
+        return -2.0 * self.gamma**2 * extra
+
+    def extra_integrals(self, sites):
+        M = sum(N for _, N in sites)
+        form = np.zeros((1, 3 * M))
+        o = 0
+        for _, N in sites:
+            form[0, 3 * o + 2] = 1.0
+            o += N
+        return ["J"], form
+
+    def uniformizer(self, lam):
+        return np.exp(2j * self.gamma * np.asarray(lam, dtype=complex))
+
+    def uniformizer_inverse(self, z):
+        return np.log(np.asarray(z, dtype=complex)) / (2j * self.gamma)
+
+    # ---- dressing -------------------------------------------------------------------------------------------
+
+    def dressing_basis(self, lam):
+        lam = np.asarray(lam, dtype=complex)
+        ep, em = np.exp(1j * self.gamma * lam), np.exp(-1j * self.gamma * lam)
+        out = np.zeros(lam.shape + (6, 2, 2), dtype=complex)
+        out[..., 0, 0, 0] = ep
+        out[..., 1, 0, 0] = em
+        out[..., 2, 0, 1] = 1.0
+        out[..., 3, 1, 0] = 1.0
+        out[..., 4, 1, 1] = ep
+        out[..., 5, 1, 1] = em
+        return out
+
+    def dressing_taylor(self, lam0, order):
+        g = self.gamma
+        ep = np.array([np.exp(1j * g * lam0) * (1j * g) ** n / factorial(n) for n in range(order)])
+        em = np.array([np.exp(-1j * g * lam0) * (-1j * g) ** n / factorial(n) for n in range(order)])
+        out = np.zeros((order, 6, 2, 2), dtype=complex)
+        out[:, 0, 0, 0] = ep
+        out[:, 1, 0, 0] = em
+        out[0, 2, 0, 1] = 1.0
+        out[0, 3, 1, 0] = 1.0
+        out[:, 4, 1, 1] = ep
+        out[:, 5, 1, 1] = em
+        return out
+
+    def real_dressing(self, xi, k1, k2):
+        return gauge_rule(self.gamma, xi, k1, k2)
+
+    def kernel_constants(self, xi):
+        g, xb = self.gamma, np.conj(xi)
+        return np.array([np.exp(-1j * g * xi), np.exp(-1j * g * xb), np.exp(1j * g * xi), np.exp(1j * g * xb),
+                         np.sin(g * (xi - xb))])
+
+
+def spectral_rows(gamma, xi, k1, k2):
+    r"""The two rows' null vectors ``(α, α_0, β)`` and ``(γ', δ, δ_0)`` of spectrality (cross products), shape
+    ``(B, 3)`` each: row 1 of ``D(ξ_i) k_i = 0`` reads ``(e^{iγξ_i} k_{i1}, e^{−iγξ_i} k_{i1}, k_{i2})·(α, α_0, β) = 0``
+    for ``ξ_1 = ξ``, ``ξ_2 = ξ̄``, row 2 ``(k_{i1}, e^{iγξ_i} k_{i2}, e^{−iγξ_i} k_{i2})·(γ', δ, δ_0) = 0``.  With
+    ``k2 = (−k̄_{12}, k̄_{11})`` they give ``αα_0 = δδ_0`` identically and ``α/δ → −1`` as ``Im ξ → 0``."""
+    e1p, e1m = np.exp(1j * gamma * xi), np.exp(-1j * gamma * xi)
+    e2p, e2m = np.exp(1j * gamma * np.conj(xi)), np.exp(-1j * gamma * np.conj(xi))
+    a1, a2 = k1[..., 0], k1[..., 1]
+    b1, b2 = k2[..., 0], k2[..., 1]
+    r1 = np.cross(np.stack([e1p * a1, e1m * a1, a2], -1), np.stack([e2p * b1, e2m * b1, b2], -1))
+    r2 = np.cross(np.stack([a1, e1p * a2, e1m * a2], -1), np.stack([b1, e2p * b2, e2m * b2], -1))
+    return r1, r2
+
+
+def gauge_rule(gamma, xi, k1, k2, rule: str = "symmetric"):
+    r"""Coefficients ``(α, α_0, β, γ', δ, δ_0)`` ``(B, 6)`` of the real two-point map's dressing.
+
+    ``rule="symmetric"`` (the map's; ``docs/families.md`` §gauge): with ``p = |k_{11}|²``, ``q = |k_{12}|²``,
+    ``s(x) = sin(γx)``,
+
+    .. math:: D(\lambda) = \frac{1}{p+q}\begin{pmatrix} p\,s(\lambda-\xi) + q\,s(\lambda-\bar\xi) &
+              -k_{11}\bar k_{12}\, s(\xi-\bar\xi) \\ -\bar k_{11} k_{12}\, s(\xi-\bar\xi) &
+              q\,s(\lambda-\xi) + p\,s(\lambda-\bar\xi)\end{pmatrix},
+
+    the rational ``K = λ + M_0`` of eq. (mm) (:func:`jetgaudin.backlund._dressing.real_two_point_M0`, times
+    ``|k|²``) with every difference ``x`` replaced by ``sin(γx)``: it kills ``k1`` at ``ξ`` and
+    ``k2 = (−k̄_{12}, k̄_{11})`` at ``ξ̄``, satisfies the symmetric gauge ``αα_0 = δδ_0`` (invariant under
+    ``λ → −λ``, which swaps ``e^{±iγλ}``), is real (``|ρ| = 1``) and tends to ``sin(γ(λ − ξ))·1`` (the identity
+    map) as ``Im ξ → 0`` — which fixes the sign ``ρ = ±1`` left by ``αα_0 = δδ_0``.  It is the time-1 flow of
+    ``G_ξ`` (``tests/test_trigonometric_maps.py``).  Other values exist only to test that a wrong rule fails:
+    ``"alpha"`` (``α = δ``: not real) and ``"sign"`` (``ρ = −1``, the other root of ``αα_0 = δδ_0``, e.g. the raw
+    cross products of :func:`spectral_rows`: real, Poisson, but the flow composed with the rotation by ``π`` about
+    ``e_3``, not the identity at ``Im ξ → 0``)."""
+    a1, a2 = k1[..., 0], k1[..., 1]
+    p, q = np.abs(a1) ** 2, np.abs(a2) ** 2
+    n = p + q
+    e1p, e1m = np.exp(1j * gamma * xi), np.exp(-1j * gamma * xi)
+    e2p, e2m = np.exp(1j * gamma * np.conj(xi)), np.exp(-1j * gamma * np.conj(xi))
+    off = np.sin(gamma * (xi - np.conj(xi))) / n
+    # s(λ − ξ) = (e^{−iγξ} e^{iγλ} − e^{iγξ} e^{−iγλ})/(2i)
+    c = np.stack([(p * e1m + q * e2m) / (2j * n), -(p * e1p + q * e2p) / (2j * n), -a1 * np.conj(a2) * off,
+                  -np.conj(a1) * a2 * off, (q * e1m + p * e2m) / (2j * n), -(q * e1p + p * e2p) / (2j * n)], -1)
+    if rule == "symmetric":
+        return c
+    if rule == "alpha":
+        rho = c[..., 4] / c[..., 0]
+    elif rule == "sign":
+        rho = -np.ones_like(c[..., 0])
+    else:  # pragma: no cover - a programming error
+        raise ValueError(rule)
+    c[..., :3] = c[..., :3] * rho[..., None]
+    return c

@@ -1,0 +1,268 @@
+r"""One compiled (Numba) kernel of the real two-point map for every family (``docs/families.md`` §compiled).
+
+Per step everything is linear in the state with constants that depend only on ``ξ``, the sites and the family,
+hoisted out of the loop by :func:`orbit_constants`:
+
+* ``f[a, c] = φ_{a,k_c}(ξ − λ_{i_c})``: ``ξ^a(ξ) = b δ_{a3} + Σ_c f[a, c] y^a_c``, so ``ℓ(ξ)`` costs ``3M`` products;
+* ``T[i, n, e, t]``: the Taylor coefficients at the site ``λ_i`` of the dressing basis ``B_p``
+  (:meth:`jetgaudin.families.Family.dressing_taylor`), stored sparsely: entry ``e`` of ``D`` (``00, 01, 10, 11``)
+  is ``Σ_t c_{pidx[e, t]} T[i, n, e, t]`` (two terms per entry for the rational and trigonometric bases);
+* ``rule``, ``gk``: the family's gauge rule as an id and its constants (:attr:`jetgaudin.families.Family.kernel_rule`,
+  :meth:`~jetgaudin.families.Family.kernel_constants`): ``0`` rational (``K = λ + M_0`` of eq. (mm), ``gk[0] = ξ``),
+  ``1`` trigonometric (:func:`jetgaudin.families.trigonometric.gauge_rule`, ``gk = (e^{−iγξ}, e^{−iγξ̄},
+  e^{iγξ}, e^{iγξ̄}, sin(γ(ξ − ξ̄)))``), ``2`` elliptic (the null vector of spectrality,
+  :func:`jetgaudin.families.elliptic.spectral_null_vector`, as the largest of the four generalised cross products of
+  three of its four rows; ``gk = (w_a(ξ − λ_0), w_a(ξ̄ − λ_0))``).
+
+A step: ``ν1`` (the root of ``u² + vw`` closest to the previous one), the eigenvector ``k1`` of ``ℓ(ξ)``, the
+coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_n = Σ_p c_p T[i, n, p]``,
+``adj D_n``, ``1/det D`` as a series (Cauchy square, then inversion) and the new principal parts
+``ℓ̃_k = Σ_{j ≥ k} Σ_{a+c+e=j−k} D_a ℓ_j (adj D)_c g_e`` — the arithmetic of
+:func:`jetgaudin.gaudin.maps.dress_sites`.  No residual check, no imaginary residue (as the rational kernel of
+:mod:`jetgaudin.gaudin._kernels`); the orbits agree with the NumPy route to round-off
+(``tests/test_trigonometric_kernels.py``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ._kernels import _abs2
+
+
+@njit(cache=True)
+def _det3(A, r0, r1, r2, c0, c1, c2):
+    return (A[r0, c0] * (A[r1, c1] * A[r2, c2] - A[r1, c2] * A[r2, c1])
+            - A[r0, c1] * (A[r1, c0] * A[r2, c2] - A[r1, c2] * A[r2, c0])
+            + A[r0, c2] * (A[r1, c0] * A[r2, c1] - A[r1, c1] * A[r2, c0]))
+
+
+@njit(cache=True)
+def _elliptic_coefficients(gk, a1, a2, c):
+    """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
+    ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
+    whose cofactors are largest."""
+    A = np.empty((4, 4), dtype=np.complex128)
+    for h in range(2):
+        if h == 0:
+            k1 = a1
+            k2 = a2
+        else:
+            k1 = -a2.conjugate()
+            k2 = a1.conjugate()
+        w1 = gk[3 * h]
+        w2 = gk[3 * h + 1]
+        w3 = gk[3 * h + 2]
+        A[2 * h, 0] = k1  # B_0 k = k, B_1 k = w1 (k2, k1), B_2 k = w2 (−i k2, i k1), B_3 k = w3 (k1, −k2)
+        A[2 * h + 1, 0] = k2
+        A[2 * h, 1] = w1 * k2
+        A[2 * h + 1, 1] = w1 * k1
+        A[2 * h, 2] = -1j * w2 * k2
+        A[2 * h + 1, 2] = 1j * w2 * k1
+        A[2 * h, 3] = w3 * k1
+        A[2 * h + 1, 3] = -w3 * k2
+    best = -1.0
+    n = np.empty(4, dtype=np.complex128)
+    rn = np.empty(4)
+    for q in range(4):
+        rn[q] = _abs2(A[q, 0]) + _abs2(A[q, 1]) + _abs2(A[q, 2]) + _abs2(A[q, 3])
+    for i in range(4):
+        skip = 3 - i  # rows 0, 1, 2 first; the others only when their cofactors are small (Hadamard-relative)
+        r0 = (skip + 1) % 4  # any order of the three rows: the null vector is defined up to a factor
+        r1 = (skip + 2) % 4
+        r2 = (skip + 3) % 4
+        n[0] = _det3(A, r0, r1, r2, 1, 2, 3)
+        n[1] = -_det3(A, r0, r1, r2, 0, 2, 3)
+        n[2] = _det3(A, r0, r1, r2, 0, 1, 3)
+        n[3] = -_det3(A, r0, r1, r2, 0, 1, 2)
+        s = _abs2(n[0]) + _abs2(n[1]) + _abs2(n[2]) + _abs2(n[3])
+        if s > best:
+            best = s
+            for q in range(4):
+                c[q] = n[q]
+        if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
+            break
+    scale = 1.0 / np.sqrt(best)
+    for q in range(4):
+        c[q] *= scale
+
+
+@njit(cache=True)
+def _coefficients(rule, gk, a1, a2, c):
+    """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
+    and 1: P = 6; a new family adds its rule here)."""
+    p = _abs2(a1)
+    q = _abs2(a2)
+    n = p + q
+    if rule == 0:  # rational: (1, M0_00, M0_01, M0_10, 1, M0_11), M0 of backlund._dressing.real_two_point_M0
+        eta = gk[0]
+        cc = 2j * eta.imag / n
+        c[0] = 1.0
+        c[1] = -eta + cc * q
+        c[2] = -cc * a1 * a2.conjugate()
+        c[3] = -cc * a1.conjugate() * a2
+        c[4] = 1.0
+        c[5] = -eta.conjugate() - cc * q
+    elif rule == 2:
+        _elliptic_coefficients(gk, a1, a2, c)
+    else:  # trigonometric: families.trigonometric.gauge_rule("symmetric")
+        e1m = gk[0]
+        e2m = gk[1]
+        e1p = gk[2]
+        e2p = gk[3]
+        inv = 1.0 / n
+        off = gk[4] * inv
+        d = -0.5j * inv  # 1/(2i n)
+        c[0] = (p * e1m + q * e2m) * d
+        c[1] = -(p * e1p + q * e2p) * d
+        c[2] = -a1 * a2.conjugate() * off
+        c[3] = -a1.conjugate() * a2 * off
+        c[4] = (q * e1m + p * e2m) * d
+        c[5] = -(q * e1p + p * e2p) * d
+
+
+@njit(cache=True)
+def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P):
+    """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
+    M = x.shape[0] // 3
+    x1 = 0j
+    x2 = 0j
+    x3 = complex(b)
+    for k in range(M):
+        x1 += f[0, k] * x[3 * k]
+        x2 += f[1, k] * x[3 * k + 1]
+        x3 += f[2, k] * x[3 * k + 2]
+    u = x3
+    v = x1 - 1j * x2
+    w = x1 + 1j * x2
+    r = np.sqrt(u * u + v * w)
+    if (r.conjugate() * nu_prev).real < 0:
+        r = -r
+    # eigenvector of ℓ(ξ) for ν: (v, ν − u) or (u + ν, w), whichever is larger (backlund._dressing.eigenvector)
+    if _abs2(v) + _abs2(r - u) >= _abs2(u + r) + _abs2(w):
+        a1 = v
+        a2 = r - u
+    else:
+        a1 = u + r
+        a2 = w
+    _coefficients(rule, gk, a1, a2, c)
+    for i in range(site_off.shape[0]):
+        o = site_off[i]
+        N = site_n[i]
+        for m in range(N):
+            for e in range(4):
+                s = 0j
+                for t in range(pidx.shape[1]):
+                    s += c[pidx[e, t]] * T[i, m, e, t]
+                Dt[m, e] = s
+            At[m, 0] = Dt[m, 3]
+            At[m, 1] = -Dt[m, 1]
+            At[m, 2] = -Dt[m, 2]
+            At[m, 3] = Dt[m, 0]
+            s = 0j
+            for a in range(m + 1):
+                s += Dt[a, 0] * Dt[m - a, 3] - Dt[a, 1] * Dt[m - a, 2]
+            det[m] = s
+        g[0] = 1.0 / det[0]
+        for m in range(1, N):
+            s = 0j
+            for a in range(1, m + 1):
+                s += det[a] * g[m - a]
+            g[m] = -s * g[0]
+        for j in range(N):
+            cj = o + j
+            P[j, 0] = complex(x[3 * cj + 2])
+            P[j, 1] = complex(x[3 * cj], -x[3 * cj + 1])
+            P[j, 2] = complex(x[3 * cj], x[3 * cj + 1])
+            P[j, 3] = -complex(x[3 * cj + 2])
+        for k in range(N):
+            s00 = 0j  # (ℓ̃_k)_11 is −(ℓ̃_k)_00 (traceless): not computed
+            s01 = 0j
+            s10 = 0j
+            for j in range(k, N):
+                for a in range(j - k + 1):
+                    # K = D_a ℓ_j
+                    k00 = Dt[a, 0] * P[j, 0] + Dt[a, 1] * P[j, 2]
+                    k01 = Dt[a, 0] * P[j, 1] + Dt[a, 1] * P[j, 3]
+                    k10 = Dt[a, 2] * P[j, 0] + Dt[a, 3] * P[j, 2]
+                    k11 = Dt[a, 2] * P[j, 1] + Dt[a, 3] * P[j, 3]
+                    for cc in range(j - k - a + 1):
+                        ge = g[j - k - a - cc]
+                        s00 += ge * (k00 * At[cc, 0] + k01 * At[cc, 2])
+                        s01 += ge * (k00 * At[cc, 1] + k01 * At[cc, 3])
+                        s10 += ge * (k10 * At[cc, 0] + k11 * At[cc, 2])
+            ck = o + k
+            out[3 * ck] = 0.5 * (s01.real + s10.real)
+            out[3 * ck + 1] = 0.5 * (s10.imag - s01.imag)
+            out[3 * ck + 2] = s00.real
+    return r
+
+
+@njit(cache=True)
+def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
+    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
+    n = x0.shape[0]
+    rows = np.empty((steps // save_every + 1, n))
+    rows[0] = x0
+    x = x0.copy()
+    y = np.empty(n)
+    Nmax = T.shape[1]
+    c = np.zeros(n_basis, dtype=np.complex128)
+    Dt = np.empty((Nmax, 4), dtype=np.complex128)
+    At = np.empty((Nmax, 4), dtype=np.complex128)
+    det = np.empty(Nmax, dtype=np.complex128)
+    g = np.empty(Nmax, dtype=np.complex128)
+    P = np.empty((Nmax, 4), dtype=np.complex128)
+    nu = nu0
+    for s in range(steps):
+        nu = _step(x, y, b, nu, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P)
+        x, y = y, x
+        if (s + 1) % save_every == 0:
+            rows[(s + 1) // save_every] = x
+    return rows, x, nu
+
+
+@njit(cache=True, parallel=True)
+def run_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
+    """A batch of independent orbits ``X0`` (B, 3M), one :func:`run_orbit` per iteration of a ``prange`` loop (all
+    cores): ``(rows (steps//save_every, B, 3M) without the start states, final (B, 3M), last ν1 (B,))``; every
+    orbit gets the bits of its single run."""
+    B, n = X0.shape
+    rows = np.empty((steps // save_every, B, n))
+    final = np.empty((B, n))
+    last = np.empty(B, dtype=np.complex128)
+    for i in prange(B):
+        r, x, nu = run_orbit(X0[i].copy(), b, nu0[i], f, rule, gk, T, pidx, n_basis, site_off, site_n, steps,
+                             save_every)
+        rows[:, i] = r[1:]
+        final[i] = x
+        last[i] = nu
+    return rows, final, last
+
+
+def orbit_constants(model, xi):
+    """``(f, rule, gk, T, pidx, P, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module
+    docstring)."""
+    fam = model.family
+    f = np.zeros((3, model.M), dtype=complex)
+    for i, (p, N) in enumerate(model.sites):
+        o = model.offsets[i]
+        for a in range(3):
+            f[a, o:o + N] = fam.phi(a + 1, complex(xi) - p, N)
+    Nmax = max(model.orders)
+    P = fam.n_dressing
+    full = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
+    for i, (p, N) in enumerate(model.sites):
+        T = fam.dressing_taylor(p, N, complex(xi)) if fam.dressing_needs_xi else fam.dressing_taylor(p, N)
+        full[i, :N] = T.reshape(N, P, 4)
+    used = np.any(full != 0, axis=(0, 1))  # (P, 4): which basis matrices feed which entry
+    K = max(1, int(used.sum(axis=0).max()))
+    pidx = np.zeros((4, K), dtype=np.int64)
+    T = np.zeros((len(model.sites), Nmax, 4, K), dtype=complex)
+    for e in range(4):
+        for t, p in enumerate(np.flatnonzero(used[:, e])):
+            pidx[e, t] = p
+            T[:, :, e, t] = full[:, :, p, e]
+    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx, P,
+            np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))
