@@ -192,8 +192,8 @@ def flow(
             cm.fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", cm.EXIT_FAILED)
 
 
-WEIGHTS_HELP = ("the weights 'w_1,...,w_2N' of H = Σ w_m κ_m, κ = (H_1..H_N, C_1..C_N) of ν² (with --sites: the 2M "
-                "weights of the h_(i,m), in the order of `jetgaudin info --sites`)")
+WEIGHTS_HELP = ("the weights 'w_1,...,w_2N' of H = Σ w_m κ_m, κ = (H_1..H_N, C_1..C_N) of ν² (with --sites: the "
+                "weights of the h_(i,m) and the family's J or c0, in the order of `jetgaudin info --sites`)")
 HAMILTONIAN_LABEL = {"interpolating": "G_η", "physical": "H_2/2"}
 
 
@@ -207,7 +207,7 @@ def parse_hamiltonian(text: str, X0, b: float, model=None) -> tuple[str, np.ndar
                                    "a chain flows under its G_η ('interpolating') or under weights 'w_1,...,w_2M'")
         return name, None if name == "interpolating" else np.asarray(
             jg.physical_hamiltonian(len(X0) // 3, b).weights, dtype=float)
-    n = 2 * (len(X0) // 3) if model is None else 2 * int(model.M)
+    n = 2 * (len(X0) // 3) if model is None else int(model.n_integrals)  # a family's extras (J, c0) last
     try:
         w = np.array(cm.parse_init(text, "--hamiltonian"), dtype=float)
     except cm.CliInputError:
