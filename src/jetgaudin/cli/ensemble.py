@@ -92,7 +92,7 @@ def _read_input(path: Path):
                 warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
                 text = raw.decode("utf-8")
                 lines = text.splitlines()
-                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0_1,...)
+                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0^1,...)
                 X = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2, skiprows=skip)
                 if skip and lines[0].startswith("n,"):
                     X = X[:, 1:]  # orbit.csv: drop the step column
