@@ -1,5 +1,5 @@
 r"""Compiled parameter solve of :mod:`jetgaudin.exact` (private): from an orbit's state to its accepted parameters in
-one call (:func:`_solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
+one call (:func:`solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
 Gauss–Legendre, Newton's method for ``h``, the branch check); a ``prange`` loop over a batch (every orbit gets the
 bits of its single solve).
 
@@ -248,7 +248,7 @@ def _branch_ok(kappa, roots, rho, h, nu_end, tol):
 
 
 @njit(cache=True, error_model="numpy")
-def _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
                  iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
     """One orbit from its state: ``κ`` (:func:`_kappa`), ``ρ_j = c R / t_j``, the solve (:func:`_solve_one`) and the
     acceptance (converged, residual, quadrature estimate, ``h_j ≠ 0``, branch check); ``eta`` (k,) complex,
@@ -290,18 +290,10 @@ def _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, x
 @njit(cache=True, error_model="numpy", parallel=True)
 def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
                        iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
-    """:func:`_solve_state` for every orbit of ``X`` (B, 3N) on all threads (every orbit the bits of its own)."""
+    """:func:`solve_state` for every orbit of ``X`` (B, 3N) on all threads (every orbit the bits of its own; small
+    batches call :func:`solve_state` orbit by orbit: no thread start-up)."""
     for i in prange(X.shape[0]):
-        _solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                     iterations, res_tol, quad_tol, branch_tol, eta[i], nu[i], out[i])
-
-
-@njit(cache=True, error_model="numpy")
-def solve_states(X, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                 iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
-    """:func:`solve_states_batch` on the calling thread (small batches, one orbit: no thread start-up)."""
-    for i in range(X.shape[0]):
-        _solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+        solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
                      iterations, res_tol, quad_tol, branch_tol, eta[i], nu[i], out[i])
 
 
