@@ -165,7 +165,7 @@ def ensemble_rate(quick, echo=print):
     t0 = time.perf_counter()
     p = E.parameters(X)
     t1 = time.perf_counter()
-    Xb = E._run(X, p, steps, steps)[1]
+    Xb = E._run(X, p.eta, p.theta, p.nu, steps, steps)[1]
     t2 = time.perf_counter()
     assert np.all(np.isfinite(Xb))
     echo(f"ensemble B = {B}, {steps} steps: parameter solve {t1 - t0:.2f} s ({(t1 - t0) / B * 1e6:.1f} µs/orbit), "

@@ -1,11 +1,12 @@
-r"""Compiled parameter solve of :mod:`jetgaudin.exact` (private): the weights ``ω_m(ρ + i h)`` by Gauss–Legendre
-and Newton's method for ``h``, one orbit per call of :func:`_solve_one` (a ``prange`` loop over a batch: every orbit
-gets the bits of its single solve).
+r"""Compiled parameter solve of :mod:`jetgaudin.exact` (private): from an orbit's state to its accepted parameters in
+one call (:func:`solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
+Gauss–Legendre, Newton's method for ``h``, the branch check); a ``prange`` loop over a batch (every orbit gets the
+bits of its single solve).
 
 ``ν`` along the vertical segment ``λ = ρ + i s``, ``s ∈ [0, h]``: the root of ``ν² = Σ_m κ_m λ^{-m}`` positive at
 ``s = 0`` (``ν(ρ)² = |ξ(ρ)|² > 0`` for a real state), continued node by node (the root closer to the previous
 node's value; the nodes are sorted along the segment).  This is the default branch of :func:`jetgaudin.nu` as long
-as no branch point lies near the segment; :mod:`jetgaudin.exact` checks the end value against the branch rule.
+as no branch point lies near the segment; :func:`_branch_ok` checks the end value against the branch rule.
 The NumPy twin is :func:`jetgaudin.exact._weights` (the tests compare the two).
 """
 
@@ -87,10 +88,12 @@ def _eval(kappa, rho, h, x, w, OM, DOM, NU):
 
 
 @njit(cache=True, error_model="numpy")
-def _newton(kappa, rho, target, h, x, w, OM, DOM, NU, step_tol, fold, iterations):
+def _newton(kappa, rho, target, h, x, w, OM, DOM, NU, step_tol, fold, iterations, F, h_last):
+    """Newton's method for ``Σ_j ω_m(ρ_j + i h_j) = target`` with the rule ``(x, w)``; stops when every step
+    ``|Δh_j| ≤ step_tol |h_j|``.  On return ``h_last`` is the last point evaluated (``OM``, ``DOM``, ``NU`` there)
+    and ``F`` the last step: ``h = h_last − F``."""
     k = rho.shape[0]
     A = np.empty((k, k))
-    F = np.empty(k)
     for _ in range(iterations):
         _eval(kappa, rho, h, x, w, OM, DOM, NU)
         for mi in range(k):
@@ -108,6 +111,7 @@ def _newton(kappa, rho, target, h, x, w, OM, DOM, NU, step_tol, fold, iterations
                 return False
             if abs(F[j]) > step_tol * abs(hn):
                 done = False
+            h_last[j] = h[j]
             h[j] = hn
         if done:
             return True
@@ -115,15 +119,25 @@ def _newton(kappa, rho, target, h, x, w, OM, DOM, NU, step_tol, fold, iterations
 
 
 @njit(cache=True, error_model="numpy")
-def _solve_one(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterations, h, nu_end, info):
+def _solve_one(kappa, rho, target, x, w, x2, w2, xc, wc, stages, step_tol, fold, iterations, h, nu_end, info):
     """Solve ``Σ_j ω_m(ρ_j + i h_j) = target_{m−2}`` (``m = 2..k+1``) into ``h``; ``info = (ok, residual,
-    quadrature estimate, Σ_j ω_1)``, ``nu_end`` the end-point ``ν`` of each segment."""
+    quadrature estimate, Σ_j ω_1)``, ``nu_end`` the end-point ``ν`` of each segment.
+
+    Newton's method runs on the coarse rule ``(xc, wc)`` to a step of ``1e-9 |h|``, then on the ``x`` rule to
+    ``step_tol`` (quadratic convergence: one or two iterations; from the linear start alone if the coarse phase
+    fails).  The residual, the quadrature estimate ``|Q_x − Q_x2|`` and ``ν`` are taken at the last point Newton
+    evaluated, ``h_last = h + Δ`` (``|Δ_j| ≤ step_tol |h_j|``), and ``Σ_j ω_1`` is carried to ``h`` by its derivative
+    (an error ``O(Δ²)``, below round-off): no extra evaluation of the fine rule."""
     k = rho.shape[0]
     M = kappa.shape[0] - 1
     OM = np.zeros((k, M))
     DOM = np.zeros((k, M))
     OM2 = np.zeros((k, M))
+    DOM2 = np.zeros((k, M))
     V = np.empty((k, k))
+    F = np.zeros(k)
+    h_last = np.zeros(k)
+    h0 = np.empty(k)
     ok = False
     for S in stages:
         for s in range(1, S + 1):
@@ -136,13 +150,21 @@ def _solve_one(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterati
                         V[mi, j] = -(rho[j] ** -(mi + 2)) / nr
                 if not _gauss_solve(V, h):
                     break
-            ok = _newton(kappa, rho, tg, h, x, w, OM, DOM, nu_end, step_tol, fold, iterations)
+            h0[:] = h
+            ok = _newton(kappa, rho, tg, h, xc, wc, OM, DOM, nu_end, 1e-9, fold, iterations, F, h_last)
+            ok = ok and _newton(kappa, rho, tg, h, x, w, OM, DOM, nu_end, step_tol, fold, iterations, F, h_last)
+            if not ok:  # the coarse rule can fail where the fine one converges: from the same start, fine only
+                h[:] = h0
+                ok = _newton(kappa, rho, tg, h, x, w, OM, DOM, nu_end, step_tol, fold, iterations, F, h_last)
             if not ok:
                 break
         if ok:
             break
-    _eval(kappa, rho, h, x, w, OM, DOM, nu_end)
-    _eval(kappa, rho, h, x2, w2, OM2, DOM, nu_end[k:])
+    if not ok:  # the values at the last h (for the caller's message only)
+        h_last[:] = h
+        F[:] = 0.0
+        _eval(kappa, rho, h_last, x, w, OM, DOM, nu_end)
+    _eval(kappa, rho, h_last, x2, w2, OM2, DOM2, nu_end[k:])
     res = 0.0
     quad = 0.0
     for mi in range(k):
@@ -154,7 +176,7 @@ def _solve_one(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterati
         res = max(res, abs(tot) / scale)
     om1 = 0.0
     for j in range(k):
-        om1 += OM[j, 0]
+        om1 += OM[j, 0] - DOM[j, 0] * F[j]
         for m in range(min(M, k + 1)):
             quad = max(quad, abs(OM[j, m] - OM2[j, m]) / (abs(OM[j, m]) + abs(OM[j, 0]) + 1e-300))
     info[0] = 1.0 if ok else 0.0
@@ -163,17 +185,130 @@ def _solve_one(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterati
     info[3] = om1
 
 
-@njit(cache=True, error_model="numpy", parallel=True)
-def solve_batch(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterations, h, nu_end, info):
-    """:func:`_solve_one` for every orbit of a batch (``kappa`` (B, 2N+1), ``rho`` (B, k), ``target`` (B, k))."""
-    for i in prange(kappa.shape[0]):
-        _solve_one(kappa[i], rho[i], target[i], x, w, x2, w2, stages, step_tol, fold, iterations, h[i], nu_end[i],
-                   info[i])
+@njit(cache=True, error_model="numpy")
+def _kappa(x, b, kappa):
+    """``κ_0..κ_{2N}`` of ``ν² = Σ κ_m λ^{-m}`` from the state ``x`` (3N,) in the field ``b e_3``:
+    ``κ_{i+j} += ⟨ξ_i, ξ_j⟩`` with ``ξ_0 = b e_3``, ``ξ_{n+1} = y_n`` (reduction (lax2)), summed in the order of
+    :func:`jetgaudin.spectral.curve_coefficients` (the same bits)."""
+    N = x.shape[0] // 3
+    xi = np.zeros((N + 1, 3))
+    xi[0, 2] = b
+    for n in range(N):
+        for a in range(3):
+            xi[n + 1, a] = x[3 * n + a]
+    for m in range(2 * N + 1):
+        kappa[m] = 0.0
+    for i in range(N + 1):
+        for j in range(N + 1):
+            kappa[i + j] += (xi[i, 0] * xi[j, 0] + xi[i, 1] * xi[j, 1]) + xi[i, 2] * xi[j, 2]
 
 
 @njit(cache=True, error_model="numpy")
-def solve_serial(kappa, rho, target, x, w, x2, w2, stages, step_tol, fold, iterations, h, nu_end, info):
-    """:func:`solve_batch` on the calling thread (small batches: no thread start-up; the same bits per orbit)."""
-    for i in range(kappa.shape[0]):
-        _solve_one(kappa[i], rho[i], target[i], x, w, x2, w2, stages, step_tol, fold, iterations, h[i], nu_end[i],
-                   info[i])
+def _branch_points(kappa):
+    """The roots of ``P(λ) = Σ_m κ_m λ^{2N−m}`` (``κ_0 = b² ≠ 0``): eigenvalues of the companion matrix, as
+    :func:`jetgaudin.spectral._roots`."""
+    deg = kappa.shape[0] - 1
+    comp = np.zeros((deg, deg), dtype=np.complex128)
+    for j in range(deg):
+        comp[0, j] = -kappa[j + 1] / kappa[0]
+    for j in range(deg - 1):
+        comp[j + 1, j] = 1.0
+    return np.linalg.eigvals(comp)
+
+
+@njit(cache=True, error_model="numpy")
+def _branch_ok(kappa, roots, rho, h, nu_end, tol):
+    """Whether every continued ``ν(ρ_j + i h_j)`` (``nu_end``) is the branch rule's ``ν`` (the maps' own,
+    :func:`jetgaudin.spectral._nu_from_kappa`: the root of ``ν²`` whose phase matches
+    ``λ^{−N} √P(ρ) sgn(ρ)^N Π_k √((λ − r_k)/(ρ − r_k))``, ``P(λ) = λ^{2N} ν²``) to ``tol`` (relative): no branch point
+    near a segment."""
+    deg = kappa.shape[0] - 1
+    N = deg // 2
+    for j in range(rho.shape[0]):
+        a = rho[j]
+        lam = complex(a, h[j])
+        Pa = complex(0.0, 0.0)
+        for m in range(deg + 1):
+            Pa += kappa[m] * complex(a, 0.0) ** (deg - m)
+        ref = np.sqrt(Pa) * (1.0 if a > 0 else -1.0) ** N
+        for r in roots:
+            ratio = (lam - r) / (a - r)
+            if abs(ratio.imag) <= 1e-13 * abs(ratio) and ratio.real <= 0.0:
+                return False  # a branch point on the segment
+            ref *= np.sqrt(ratio)
+        direct = np.sqrt(_nu2(kappa, lam))
+        if direct == 0 or ref == 0:
+            return False
+        ph = (lam.conjugate() / abs(lam)) ** N
+        test = ((direct / abs(direct)).conjugate() * (ref / abs(ref)) * ph).real
+        rule = direct if test >= 0 else -direct
+        if not np.isfinite(test) or abs(rule - nu_end[j]) > tol * abs(rule):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+                 iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
+    """One orbit from its state: ``κ`` (:func:`_kappa`), ``ρ_j = c R / t_j``, the solve (:func:`_solve_one`) and the
+    acceptance (converged, residual, quadrature estimate, ``h_j ≠ 0``, branch check); ``eta`` (k,) complex,
+    ``nu`` (k,) the maps' ``ν(η_j)`` (the root of ``ν²(η_j)`` on the continued, checked branch: the maps' first
+    ``ν1``), ``out = (ok, residual, quadrature estimate, θ)`` with ``θ = 2b(dt w_1 − Σ_j ω_1)``."""
+    M = x.shape[0] // 3 * 2
+    kappa = np.empty(M + 1)
+    _kappa(x, b, kappa)
+    roots = _branch_points(kappa)
+    R = 1e-6  # floor: X = 0 has every branch point at 0
+    for r in roots:
+        R = max(R, abs(r))
+    rho = np.empty(k)
+    h = np.zeros(k)
+    target = np.empty(k)
+    for j in range(k):
+        rho[j] = rho_factor * R / scales[j]
+        target[j] = dt * weights[j + 1]
+    nu_end = np.zeros(2 * k, dtype=np.complex128)
+    info = np.zeros(4)
+    ok = kappa[0] > 0.0  # b != 0 (checked by the caller)
+    if ok:
+        _solve_one(kappa, rho, target, x64, w64, x32, w32, xc, wc, stages, step_tol, fold, iterations, h, nu_end,
+                   info)
+        ok = info[0] == 1.0 and info[1] <= res_tol and info[2] <= quad_tol
+        for j in range(k):
+            ok = ok and h[j] != 0.0
+        ok = ok and _branch_ok(kappa, roots, rho, h, nu_end, branch_tol)
+    for j in range(k):
+        eta[j] = complex(rho[j], h[j])
+        r = np.sqrt(_nu2(kappa, eta[j]))  # ν at η_j itself (nu_end is at Newton's last point, |Δh| ≤ step_tol |h|)
+        nu[j] = r if (r.real * nu_end[j].real + r.imag * nu_end[j].imag) >= 0.0 else -r
+    out[0] = 1.0 if ok else 0.0
+    out[1] = info[1]
+    out[2] = info[2]
+    out[3] = 2.0 * b * (dt * weights[0] - info[3])
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+                       iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
+    """:func:`solve_state` for every orbit of ``X`` (B, 3N) on all threads (every orbit the bits of its own; small
+    batches call :func:`solve_state` orbit by orbit: no thread start-up)."""
+    for i in prange(X.shape[0]):
+        solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+                     iterations, res_tol, quad_tol, branch_tol, eta[i], nu[i], out[i])
+
+
+@njit(cache=True, error_model="numpy")
+def rotate(X, theta):
+    """:func:`jetgaudin.exact.rotate_about_field` of a flat batch ``X`` (B, 3N) by ``theta`` (B,), compiled (one
+    call for a short run: no NumPy temporaries); a new array."""
+    out = np.empty_like(X)
+    for i in range(X.shape[0]):
+        c = np.cos(theta[i])
+        s = np.sin(theta[i])
+        for n in range(X.shape[1] // 3):
+            y1 = X[i, 3 * n]
+            y2 = X[i, 3 * n + 1]
+            out[i, 3 * n] = c * y1 - s * y2
+            out[i, 3 * n + 1] = s * y1 + c * y2
+            out[i, 3 * n + 2] = X[i, 3 * n + 2]
+    return out

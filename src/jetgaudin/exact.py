@@ -46,7 +46,7 @@ from ._errors import InvalidParameterError, StepTooLargeError
 from ._validate import as_state, field_vector, real_number
 from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
-from .spectral import _nu_from_kappa, _roots, curve_coefficients, integrals
+from .spectral import _nu_from_kappa, integrals
 
 __all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR"]
 
@@ -54,6 +54,9 @@ __all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters"
 RHO_FACTOR = 1.5
 #: Gauss–Legendre nodes of the weights' quadrature (the estimate with half as many is checked, see below)
 _NODES = 64
+#: nodes of the rule Newton's method starts with (to a step of 1e-9 |h|; the 64-point rule then converges in one
+#: or two iterations)
+_COARSE_NODES = 16
 #: accepted quadrature error estimate ``|Q_64 − Q_32|`` relative to the weights' scale (round-off level: the rule
 #: converges geometrically on segments a distance ``≥ (c − 1) R`` from every singularity)
 _QUAD_TOL = 1e-13
@@ -65,6 +68,10 @@ _RES_TOL = 1e-12
 _FOLD = 2.0
 _NEWTON_ITERATIONS = 40
 _CONTINUATION_STAGES = (1, 4, 16)
+_STAGES = np.array(_CONTINUATION_STAGES, dtype=np.int64)
+#: the continued ``ν(η_j)`` must equal the branch rule's to this relative tolerance (a branch point near a segment
+#: flips the sign: a difference of order 1)
+_BRANCH_TOL = 1e-8
 #: batches of at least this many orbits solve on all threads (below, a thread start costs more than the work)
 _PARALLEL_FROM = 256
 
@@ -76,6 +83,7 @@ def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     return (x + 1.0) / 2.0, w / 2.0
 
 
+@cache
 def _node_scales(k: int) -> np.ndarray:
     """``t_1..t_k = 1, −1, 1/2, −1/2, …`` (``ρ_j = c R / t_j``)."""
     return np.array([(1.0 if j % 2 == 0 else -1.0) / (j // 2 + 1) for j in range(k)])
@@ -104,16 +112,19 @@ class ExactParameters:
     """The solved parameters of one exact (sub-)step for each orbit of a batch: ``eta`` ``(..., N−1)`` the maps'
     parameters, ``theta`` ``(...)`` the rotation angle about the field, ``dt`` the sub-step, ``residual`` ``(...)``
     the relative residual of the weight equations, ``quadrature_error`` ``(...)`` the relative estimate
-    ``|Q_64 − Q_32|`` of the weights."""
+    ``|Q_64 − Q_32|`` of the weights, ``nu`` ``(..., N−1)`` the maps' ``ν(η_j)`` (their first ``ν1``)."""
 
     eta: np.ndarray
     theta: np.ndarray
     dt: float
     residual: np.ndarray
     quadrature_error: np.ndarray
+    nu: np.ndarray | None = None
 
 
 def _field_strength(H: IntegralHamiltonian) -> float:
+    if type(H.b) is float and H.b != 0 and math.isfinite(H.b):  # the common case, without building a vector
+        return H.b
     bvec = field_vector(H.b)
     if bvec[0] != 0 or bvec[1] != 0 or bvec[2] == 0:
         raise InvalidParameterError(
@@ -123,44 +134,30 @@ def _field_strength(H: IntegralHamiltonian) -> float:
     return float(bvec[2])
 
 
-def _setup(H: IntegralHamiltonian, X: np.ndarray, rho_factor: float, k: int):
-    """``(kappa, roots, ρ (..., k))`` of the orbits ``X`` (from the integrals only)."""
-    kappa = curve_coefficients(X, _field_strength(H))
-    roots = _roots(kappa)
-    R = np.maximum(np.max(np.abs(roots), axis=-1), 1e-6)  # floor: X = 0 has every branch point at 0
-    rho = rho_factor * R[..., None] / _node_scales(k)
-    return kappa, roots, rho
-
-
 def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float, k: int | None = None):
-    """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok)``; ``k`` maps
-    (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow)."""
-    b = _field_strength(H)
-    N = H.N if k is None else k + 1
-    w = np.asarray(H.weights, dtype=float)
-    kappa, roots, rho = _setup(H, X, rho_factor, N - 1)
-    k = N - 1
-    target = np.ascontiguousarray(np.broadcast_to(dt * w[1:N], X.shape[:-1] + (k,)))
-    h = np.zeros(rho.shape)
-    nu_end = np.zeros(rho.shape[:-1] + (2 * k,), dtype=complex)
-    info = np.zeros(rho.shape[:-1] + (4,))
-    x, wq = _gauss_legendre(_NODES)
-    x2, w2 = _gauss_legendre(_NODES // 2)
-    from ._exact_kernels import solve_batch, solve_serial
+    """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok, nu)`` (``nu``: the
+    maps' ``ν(η_j)`` on the checked branch, their first ``ν1``); ``k`` maps
+    (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow).  One
+    compiled call (:func:`jetgaudin._exact_kernels.solve_state`): per orbit the integrals ``κ``, the branch points'
+    largest modulus ``R`` (``≥ 1e-6``: ``X = 0`` has every branch point at 0), ``ρ_j``, Newton's method and the
+    acceptance, including the check that the continued ``ν`` at each ``η_j`` is the branch rule's (the maps' own
+    ``ν``: no branch point near a segment)."""
+    from ._exact_kernels import solve_state, solve_states_batch
 
-    solve = solve_batch if len(X) >= _PARALLEL_FROM else solve_serial
-    solve(np.ascontiguousarray(kappa), np.ascontiguousarray(rho), target, x, wq, x2, w2,
-                np.array(_CONTINUATION_STAGES, dtype=np.int64), _STEP_TOL, _FOLD, _NEWTON_ITERATIONS, h, nu_end, info)
-    residual, quad = info[:, 1], info[:, 2]
-    ok = (info[:, 0] == 1) & (residual <= _RES_TOL) & (quad <= _QUAD_TOL) & np.all(h != 0, axis=-1)
-    if ok.any():  # the continued ν at η equals the branch rule's (the maps' own ν): no branch point near a segment
-        eta = rho[ok] + 1j * h[ok]
-        kk = np.broadcast_to(kappa[ok][:, None, :], eta.shape + kappa.shape[-1:])
-        rule = _nu_from_kappa(kk, eta, 1, roots=np.broadcast_to(roots[ok][:, None, :], eta.shape + roots.shape[-1:]))
-        same = np.all(np.abs(rule - nu_end[ok, :k]) <= 1e-8 * np.abs(rule), axis=-1)
-        ok[np.flatnonzero(ok)[~same]] = False
-    theta = 2.0 * b * (dt * w[0] - info[:, 3])
-    return rho + 1j * h, theta, residual, quad, ok
+    k = H.N - 1 if k is None else k
+    X = np.ascontiguousarray(X, dtype=float)
+    eta = np.empty((X.shape[0], k), dtype=complex)
+    nu = np.empty((X.shape[0], k), dtype=complex)
+    out = np.empty((X.shape[0], 4))
+    args = (_field_strength(H), np.asarray(H.weights, dtype=float), float(dt), k, float(rho_factor), _node_scales(k),
+            *_gauss_legendre(_NODES), *_gauss_legendre(_NODES // 2), *_gauss_legendre(_COARSE_NODES), _STAGES,
+            _STEP_TOL, _FOLD, _NEWTON_ITERATIONS, _RES_TOL, _QUAD_TOL, _BRANCH_TOL)
+    if len(X) >= _PARALLEL_FROM:
+        solve_states_batch(X, *args, eta, nu, out)
+    else:  # orbit by orbit on this thread (no thread start-up; the same bits per orbit)
+        for i in range(len(X)):
+            solve_state(X[i], *args, eta[i], nu[i], out[i])
+    return eta, out[:, 3], out[:, 1], out[:, 2], out[:, 0] == 1.0, nu
 
 
 def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: float, rel: float = 1e-3,
@@ -169,7 +166,7 @@ def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: fl
     lo, hi = 0.0, abs(dt)
     while hi - lo > rel * hi:
         mid = 0.5 * (lo + hi)
-        if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor, k)[-1][0]:
+        if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor, k)[4][0]:
             lo = mid
         else:
             hi = mid
@@ -191,7 +188,16 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
         raise InvalidParameterError("ExactFlow supports the reduction (lax2) only (c = None)")
     dt = nonzero_step(dt)
     Xf = X.reshape(-1, 3 * N)
-    eta, theta, res, quad, ok = _solve_flat(H, dt, Xf, rho_factor, maps)
+    eta, theta, res, quad, nu = _accepted(H, dt, Xf, rho_factor, maps)
+    lead = X.shape[:-1]
+    return ExactParameters(eta.reshape(lead + (eta.shape[-1],)), theta.reshape(lead), dt, res.reshape(lead),
+                           quad.reshape(lead), nu.reshape(lead + (nu.shape[-1],)))
+
+
+def _accepted(H: IntegralHamiltonian, dt: float, Xf: np.ndarray, rho_factor: float, maps: int | None):
+    """:func:`_solve_flat` on checked inputs; :class:`StepTooLargeError` naming the first orbit without a
+    solution and its largest feasible ``dt``."""
+    eta, theta, res, quad, ok, nu = _solve_flat(H, dt, Xf, rho_factor, maps)
     if not ok.all():
         i = int(np.flatnonzero(~ok)[0])
         dmax = _largest_dt(H, dt, Xf[i], rho_factor, k=maps)
@@ -201,9 +207,7 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
             f"{abs(dmax):.4g} or substeps >= {math.ceil(abs(dt) / max(abs(dmax), 1e-300) * 1.01)}",
             dt_max=dmax,
         )
-    lead = X.shape[:-1]
-    return ExactParameters(eta.reshape(lead + (eta.shape[-1],)), theta.reshape(lead), dt, res.reshape(lead),
-                           quad.reshape(lead))
+    return eta, theta, res, quad, nu
 
 
 def rotate_about_field(X, theta):
@@ -336,35 +340,42 @@ class ExactFlow(FixedStep, Map):
             X[i] = x
         return X
 
-    def _maps_compiled(self, X: np.ndarray, eta: np.ndarray, k: int) -> np.ndarray:
-        """``k`` steps of every map, one kernel call each (per-orbit ``η``: the ensemble kernels)."""
+    def _maps_compiled(self, X: np.ndarray, eta: np.ndarray, nu: np.ndarray, k: int) -> np.ndarray:
+        """``k`` steps of every map, one kernel call each (per-orbit ``η``: the ensemble kernels), each started
+        from ``ν1 = ν(η_j)`` of the solve (``nu``; ``ν(η)`` depends on the integrals only, so it is the branch rule's
+        ``ν`` at every state of the orbit)."""
         from .backlund._compiled import kernels
 
         K = kernels()
-        bb = np.full(X.shape[0], self.b)
+        b = _field_strength(self.H)
+        bb = np.full(X.shape[0], b) if X.shape[0] > 1 else None
         for j in range(eta.shape[-1]):
-            ee = np.ascontiguousarray(eta[:, j])
-            nu0 = K.nu_default(X, bb, ee, 1)
             if X.shape[0] == 1:  # the single-orbit kernel (the same bits as a batch member, ~20x faster for one)
-                X = K.iterate_single(X[0], self.b, ee[0], nu0[0], False, k, k, want_drift=False)[1][None]
-            else:
-                X = np.ascontiguousarray(K.iterate_batch(X, bb, ee, nu0, False, k, k, want_drift=False)[1])
+                X = K.iterate_single(X[0], b, eta[0, j], nu[0, j], False, k, k, want_drift=False)[1][None]
+                continue
+            ee = np.ascontiguousarray(eta[:, j])
+            nu0 = np.ascontiguousarray(nu[:, j])
+            X = np.ascontiguousarray(K.iterate_batch(X, bb, ee, nu0, False, k, k, want_drift=False)[1])
         return X
 
-    def _run(self, X: np.ndarray, p: ExactParameters, steps: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(rows, final)`` of ``steps`` steps on a flat batch ``X`` (B, 3N) with the parameters ``p``."""
+    def _run(self, X: np.ndarray, eta: np.ndarray, theta: np.ndarray, nu: np.ndarray, steps: int,
+             save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(rows, final)`` of ``steps`` steps on a flat batch ``X`` (B, 3N) with the maps' ``eta`` (B, k), their
+        first ``ν1`` ``nu`` (B, k) and the rotation angles ``theta`` (B,) of one sub-step."""
         s = self.substeps
         rows = np.empty((steps // save_every,) + X.shape)
         compiled = self.resolved_backend(X, steps) is Backend.COMPILED
         X = np.ascontiguousarray(X, dtype=float)
+        if compiled:
+            from ._exact_kernels import rotate
         done = 0
         while done < steps:
             k = min(save_every - done % save_every, steps - done)
             if compiled:
-                X = rotate_about_field(self._maps_compiled(X, p.eta, k * s), (k * s) * p.theta)
+                X = rotate(self._maps_compiled(X, eta, nu, k * s), (k * s) * theta)
             else:
                 for _ in range(k * s):
-                    X = rotate_about_field(self._maps_numpy(X.copy(), p.eta), p.theta)
+                    X = rotate_about_field(self._maps_numpy(X.copy(), eta), theta)
             done += k
             if done % save_every == 0:
                 rows[done // save_every - 1] = X
@@ -387,8 +398,8 @@ class ExactFlow(FixedStep, Map):
         if steps == 0 or flat.shape[0] == 0:
             rows = np.empty((steps // save_every,) + X.shape)
             return Advance(rows=rows, X=X.copy(), carry=zeros, imag_max=zeros.real)
-        p = self.parameters(flat)
-        rows, final = self._run(flat, p, steps, save_every)
+        eta, theta, _, _, nu = _accepted(self.H, self.dt / self.substeps, flat, self.rho_factor, self._maps)
+        rows, final = self._run(flat, eta, theta, nu, steps, save_every)
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros,
                        imag_max=zeros.real)
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -41,14 +42,14 @@ def flow(
     init: Annotated[str, typer.Option("--init", metavar="X1,...,X3N",
             help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
     hamiltonian: Annotated[
-        Hamiltonian,
+        str,
         typer.Option(
-            "--hamiltonian",
+            "--hamiltonian", metavar="NAME|W1,...",
             help="'interpolating': G_η = i ∫ ν dλ from η̄ to η, whose time-1 flow is "
             "the map; 'physical': H_2/2 of eq. (H) (chains: ½Σ(λ_i h_i,1 + h_i,2) and its trigonometric "
-            "analogue, docs/families.md)",
+            "analogue, docs/families.md); or " + WEIGHTS_HELP,
         ),
-    ] = Hamiltonian.interpolating,
+    ] = Hamiltonian.interpolating.value,
     dt: Annotated[float, typer.Option("--dt", help="time between samples (1 = one step of the map for G_η)")] = 1.0,
     method: Annotated[
         Method, typer.Option("--method", help="integrator: DOP853 (SciPy), heyoka (Taylor), exact (every step the "
@@ -71,8 +72,7 @@ def flow(
     overwrite: cm.OverwriteOption = False,
     progress: cm.ProgressOption = None,
     no_plots: cm.NoPlotsOption = False,
-    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η "
-                                              "or physical Hamiltonian")
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η")
                      ] = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
@@ -102,35 +102,26 @@ def flow(
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
         else:
             cm.check_state_scale(X0, bf)
+        kind, weights = parse_hamiltonian(hamiltonian, X0, bf, model)
+        hamiltonian = Hamiltonian(kind) if kind != "weights" else "weights"
         if not (0 < rtol < 1):
             raise cm.CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
             raise cm.CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:
             raise cm.CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
-        if model is not None:
-            B = _chains.chain_map(model, eta_c, "default", "numpy")  # the chain map's rules for eta
-            if hamiltonian is Hamiltonian.interpolating:
-                with cm.blame("--eta"):
-                    H = model.interpolating_flow_hamiltonian(X0, eta_c)
-            else:  # ν²/2's coefficient at the family's infinity (H_2/2 for one site at 0): jetgaudin.gaudin.physical
-                with cm.blame("--hamiltonian"):
-                    H = model.physical_hamiltonian()
-            with cm.blame("--dt"):
-                fm = _chains.chain_flow_map(H, dt, method.value, rtol)
-        else:
-            with cm.blame("--eta"):
+        with cm.blame("--eta"):
+            if model is not None:
+                B = _chains.chain_map(model, eta_c, "default", "numpy")  # the chain map's rules for eta
+                if hamiltonian is Hamiltonian.interpolating:
+                    weights = model.interpolating_weights(X0, eta_c)
+            else:
                 B = jg.TwoPointBacklund(bf, eta_c)  # the map's rules for eta (Im eta = 0: G_eta = 0, refused)
-        if model is not None:
-            pass
-        elif hamiltonian is Hamiltonian.interpolating:
-            with cm.blame("--eta"):
-                H = jg.interpolating_flow_hamiltonian(X0, bf, eta_c)
-        else:
-            H = jg.physical_hamiltonian(N, bf)
-        if model is None:
-            with cm.blame("--dt"):
-                fm = _flow_map(H, dt, method, rtol, substeps, X0)
+                if hamiltonian is Hamiltonian.interpolating:
+                    weights = jg.interpolating_flow_hamiltonian(X0, bf, eta_c).weights
+        H = integral_hamiltonian(weights, N, bf, model)
+        with cm.blame("--dt"):
+            fm = _flow_map(H, dt, method, rtol, substeps, X0, model)
         with cm.blame("--init"):
             spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
                                     program="jetgaudin flow")
@@ -142,7 +133,7 @@ def flow(
 
         def extras():
             written, extra = [], {"inputs_cli": {"b": bf, "eta": [eta_c.real, eta_c.imag], "hamiltonian":
-                                                 hamiltonian.value, "dt": dt, "method": method.value, "rtol": rtol,
+                                                 str(hamiltonian), "dt": dt, "method": method.value, "rtol": rtol,
                                                  "compare": compare}}
             data = runlayer.load(out_dir)
             t = data.n * dt
@@ -162,7 +153,8 @@ def flow(
             if not no_plots:
                 from .. import plotting
 
-                what = "G_η" if hamiltonian is Hamiltonian.interpolating else "H_2/2" if model is None else "physical H"
+                what = ("physical H" if model is not None and hamiltonian is Hamiltonian.physical
+                        else HAMILTONIAN_LABEL.get(str(hamiltonian), "H"))
                 title = (
                     f"flow of {what}: b = {bf:g}, "
                     f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
@@ -182,7 +174,7 @@ def flow(
                     written += plotting.save_orbit_figures(out_dir, t, data.X, bf, title=title, xlabel="time t")
             if hamiltonian is Hamiltonian.interpolating:
                 extra["G_eta_weights"] = np.asarray(H.weights).tolist()
-            elif model is not None:
+            elif hamiltonian is Hamiltonian.physical and model is not None:
                 extra["physical_weights"] = np.asarray(H.weights).tolist()
             from ..recording import update_run
 
@@ -192,7 +184,7 @@ def flow(
         written, extra = cm.after_run(out_dir, "the figures and tables", extras)
         files += written
         con.print(cm.integrals_table(names, res.integrals0, res.max_drift_abs, res.max_drift_rel,
-                                  title=f"integrals along the flow ({hamiltonian.value}, t = 0 .. {n_steps * dt:g}, "
+                                  title=f"integrals along the flow ({hamiltonian}, t = 0 .. {n_steps * dt:g}, "
                                         f"{method.value})"))
         if compare:
             con.print(
@@ -205,18 +197,82 @@ def flow(
             cm.fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", cm.EXIT_FAILED)
 
 
-def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0):
+WEIGHTS_HELP = ("the weights 'w_1,...,w_2N' of H = Σ w_m κ_m, κ = (H_1..H_N, C_1..C_N) of ν² (with --sites: the "
+                "weights of the h_(i,m) and the family's J or c0, in the order of `jetgaudin info --sites`)")
+HAMILTONIAN_LABEL = {"interpolating": "G_η", "physical": "H_2/2"}
+
+
+def parse_hamiltonian(text: str, X0, b: float, model=None) -> tuple[str, np.ndarray | None]:
+    """``--hamiltonian``: ``("interpolating", None)``, ``("physical", weights)`` (H_2/2 of eq. (H); a top only) or
+    ``("weights", weights)`` from ``w_1,...`` (2N numbers for a top, 2M for a chain)."""
+    name = str(text).strip().lower()
+    if name in ("interpolating", "physical"):
+        if name == "physical" and model is not None:
+            # ν²/2's coefficient at the family's infinity (H_2/2 for one site at 0): jetgaudin.gaudin.physical
+            with cm.blame("--hamiltonian"):
+                return name, np.asarray(model.physical_hamiltonian().weights, dtype=float)
+        return name, None if name == "interpolating" else np.asarray(
+            jg.physical_hamiltonian(len(X0) // 3, b).weights, dtype=float)
+    n = 2 * (len(X0) // 3) if model is None else int(model.n_integrals)  # a family's extras (J, c0) last
+    try:
+        w = np.array(cm.parse_init(text, "--hamiltonian"), dtype=float)
+    except cm.CliInputError:
+        raise cm.CliInputError(f"--hamiltonian: give 'interpolating', 'physical' or {n} comma-separated weights "
+                               f"w_1,...,w_{n}, got {text!r}") from None
+    if len(w) != n:
+        raise cm.CliInputError(f"--hamiltonian: the state has {n} integrals; give {n} weights w_1,...,w_{n}, got "
+                               f"{len(w)}")
+    return "weights", w
+
+
+def integral_hamiltonian(weights, N: int, b: float, model=None):
+    """``Σ w_m κ_m`` of a top (:class:`jetgaudin.IntegralHamiltonian`) or of the chain ``model``."""
+    if model is not None:
+        return model.hamiltonian(np.asarray(weights, dtype=float))
+    return jg.IntegralHamiltonian(b, np.asarray(weights, dtype=float))
+
+
+def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, model=None, kernel: str = "auto"):
     """The run's map: the adaptive integrators' FlowMap, or a fixed-step map (ExactFlow, ImplicitMidpoint), whose
-    feasibility is checked on X0 before the run (an exact step too large for the leaf names the largest dt)."""
+    feasibility is checked on X0 before the run (an exact step too large for the leaf names the largest dt and
+    the --substeps that makes it feasible; ``jetgaudin orbit --dt`` shares this)."""
     if method is Method.exact:
-        if not isinstance(substeps, int) or substeps < 1:
-            raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
-        fm = jg.ExactFlow(H, dt, substeps)
-        with cm.blame("--dt"):
-            fm.parameters(X0)
-        return fm
+        return exact_map(H, dt, substeps, X0, model, kernel)
+    if model is not None:
+        if method is Method.midpoint:
+            raise cm.CliInputError("--method midpoint: the implicit midpoint rule is the tops'; a chain: DOP853, "
+                                   "heyoka or exact")
+        return _chains.chain_flow_map(H, dt, method.value, rtol)
     if method is Method.midpoint:
         from ..midpoint import ImplicitMidpoint
 
         return ImplicitMidpoint(H, dt)
     return FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
+
+
+def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto"):
+    """:class:`jetgaudin.ExactFlow` (a top) or :class:`jetgaudin.ChainExactFlow` (``model``: a chain) of ``H``
+    over ``dt``, solved once on ``X0`` so that an infeasible ``dt`` is one line before the run."""
+    if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
+        raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
+    fm: jg.ExactFlow | jg.ChainExactFlow
+    with cm.blame("--dt"):
+        if model is not None:
+            if substeps != 1:
+                raise cm.CliInputError("--substeps: a chain's exact flow takes one step per --dt (give a smaller "
+                                       "--dt instead)")
+            fm = jg.ChainExactFlow(H, dt)
+        else:
+            fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
+    try:
+        fm.parameters(np.asarray(X0, dtype=float))
+    except jg.StepTooLargeError as exc:
+        dmax = getattr(exc, "dt_max", None)
+        if dmax is None:
+            raise cm.CliInputError(f"--dt: {dt:g} is too large for this orbit (no well-conditioned Bäcklund "
+                                   "parameters give the exact step); give a smaller --dt") from None
+        need = math.ceil(abs(dt) / substeps / max(abs(dmax), 1e-300) * 1.01) * substeps
+        raise cm.CliInputError(f"--dt: {dt:g} is too large for this orbit's leaf: the largest feasible time step "
+                               f"is dt = {dmax:.4g}; give |--dt| <= {abs(dmax) * substeps:.4g} or --substeps {need}"
+                               ) from None
+    return fm

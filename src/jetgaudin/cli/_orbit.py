@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
@@ -44,6 +45,7 @@ from ._common import (
     run_with_progress,
     timing_text,
 )
+from ._flow import WEIGHTS_HELP
 
 
 class Kernel(StrEnum):
@@ -164,6 +166,17 @@ def orbit(
     ] = None,
     progress: ProgressOption = None,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP)] = None,
+    dt: Annotated[str | None, typer.Option(
+        "--dt", metavar="FLOAT",
+        help="exact time steps: the run's map is the exact time-dt flow of --hamiltonian (jg.ExactFlow; "
+             "jg.ChainExactFlow with --sites), either sign; excludes --eta; orbit.csv / orbit.h5 gain the column "
+             "t = n dt")] = None,
+    hamiltonian: Annotated[str | None, typer.Option(
+        "--hamiltonian", metavar="NAME|W1,...",
+        help="with --dt: 'physical' (H_2/2 of eq. (H), the default of a top) or " + WEIGHTS_HELP)] = None,
+    substeps: Annotated[int | None, typer.Option(
+        "--substeps", help="with --dt: exact sub-steps per step (for a dt larger than the leaf's largest feasible "
+                           "step) [default: 1]")] = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
@@ -174,6 +187,10 @@ def orbit(
     the sphere |z| = const), figure2.png (x–y projection), integrals.png and run.json.  With --sites (a chain of
     more than one site, or one site of order N != 3): chain_y0.png (each site's y_0 in 3D) and
     chain_integrals.png (drift of the h_{i,m}) instead of the figures of the paper.
+
+    With --dt H (instead of --eta): every step is the exact time-H flow of --hamiltonian (default: the physical
+    H_2/2), built from commuting Bäcklund maps and a rotation (docs/integrators.md); orbit.csv has the columns
+    n, t, y_0, ... and orbit.h5 the dataset t.
     """
     con = console()
     with reported_errors():
@@ -207,7 +224,11 @@ def orbit(
             if v is not None:
                 expect[name] = v
         opts: dict[str, Any] = dict(checkpoint_seconds=checkpoint_seconds)
+        timed = _timed_options(dt, hamiltonian, substeps, eta, branch)
         if resume is not None:
+            if timed is not None:
+                raise CliInputError("--dt, --hamiltonian, --substeps: a resumed run keeps its recorded map; drop "
+                                    "them with --resume")
             if out is not None and Path(out).resolve() != Path(resume).resolve():
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
             if init_from_dir is not None:
@@ -237,18 +258,26 @@ def orbit(
                     except (KeyError, TypeError, ValueError):
                         raise CliInputError(f"--init-from: {init_from_dir}/run.json has no usable map description "
                                             "(b, eta, branch); give --b, --eta and --branch") from None
+                elif "b" in m:  # an exact-flow run (orbit --dt, flow --method exact): its field
+                    defaults.update(b=m["b"])
                 sites = sites if sites is not None else _chains.sites_of(rec)
             X0 = expect.get("init", defaults["init"])
             bb = expect.get("b", defaults["b"])
             ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
+            model = None
             if sites is not None:
                 model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec, modulus=modulus))
                 X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
-                m = _chains.chain_map(model, ee, expect.get("branch", defaults["branch"]),
-                                      None if kernel is None else kernel.value)
             else:
                 _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
                 check_state_scale(X0, bb)
+            if timed is not None:
+                m = _exact(timed, np.array(X0, dtype=float), bb, model, kernel)
+                opts["stem"] = "orbit"
+            elif model is not None:
+                m = _chains.chain_map(model, ee, expect.get("branch", defaults["branch"]),
+                                      None if kernel is None else kernel.value)
+            else:
                 with blame("--eta"):
                     m = _two_point(bb, ee, expect.get("branch", defaults["branch"]), kernel)
             with blame("--init" if init_from_dir is None else "--init-from"):
@@ -287,6 +316,43 @@ def orbit(
         print_summary(con, res, files)
         if res.failed:
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
+
+
+def _timed_options(dt, hamiltonian, substeps, eta, branch) -> tuple[float, str, int] | None:
+    """``(dt, hamiltonian, substeps)`` of ``--dt`` (exact time steps), or ``None`` (the map of ``--eta``)."""
+    if dt is None:
+        if hamiltonian is not None or substeps is not None:
+            raise CliInputError("--hamiltonian and --substeps go with --dt (exact time steps); give --dt H")
+        return None
+    if eta is not None:
+        raise CliInputError("--dt and --eta exclude each other: --dt H steps the exact time-H flow of --hamiltonian, "
+                            "--eta iterates the Bäcklund map B_η; give one of them")
+    if branch is not None:
+        raise CliInputError("--branch goes with --eta; an exact time step takes the default roots (the inverse step "
+                            "is --dt with the opposite sign)")
+    try:
+        h = float(dt)
+    except ValueError:
+        raise CliInputError(f"--dt: not a number: {dt!r}; give the time step, e.g. --dt 0.05") from None
+    if not math.isfinite(h) or h == 0:
+        raise CliInputError(f"--dt: must be finite and nonzero (either sign), got {dt!r}")
+    return h, "physical" if hamiltonian is None else hamiltonian, 1 if substeps is None else substeps
+
+
+def _exact(timed: tuple[float, str, int], X0: np.ndarray, b: float, model, kernel):
+    """The run's map of ``--dt``: the same construction as ``jetgaudin flow --method exact``."""
+    from ._flow import Method, _flow_map, integral_hamiltonian, parse_hamiltonian
+
+    dt, text, substeps = timed
+    if model is not None and text == "physical":
+        raise CliInputError("--hamiltonian: a chain (--sites) has no physical default; give its 2M weights "
+                            "'w_1,...' (the h_(i,m) in the order of `jetgaudin info --sites`)")
+    _, weights = parse_hamiltonian(text, X0, b, model)
+    if weights is None:
+        raise CliInputError("--hamiltonian: 'interpolating' is G_η of --eta, whose time-1 flow is the map itself: "
+                            "run `jetgaudin orbit --eta` instead, or give 'physical' or weights with --dt")
+    H = integral_hamiltonian(weights, len(X0) // 3, b, model)
+    return _flow_map(H, dt, Method.exact, 0.0, substeps, X0, model, "auto" if kernel is None else kernel.value)
 
 
 def _two_point(b: float, eta: complex, branch: str, kernel):

@@ -135,7 +135,8 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
         try:
             b_run = float(described.get("b", inp.get("b")))
-            eta = complex(*described.get("eta", inp.get("eta")))
+            # an exact-flow run (orbit --dt) has a time step and no eta
+            eta = None if "dt" in described else complex(*described.get("eta", inp.get("eta")))
         except (TypeError, ValueError):
             raise RecordingError(f"{run_dir}/run.json names no field b and parameter eta; cannot draw it") from None
         return RunRows(kind="orbit", path=run_dir / rec.ORBIT_H5, dataset="X", index_name="n", rows=safe,

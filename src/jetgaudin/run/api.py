@@ -107,6 +107,8 @@ def _orbit_inputs(spec: RunSpec) -> dict:
         inputs["branch"] = d["branch"]
     inputs.update(N=spec.n_state // 3, save_every=spec.save_every, csv=bool(spec.csv), kernel=spec.map.backend.value,
                   max_drift=spec.limits.max_drift, max_imag=spec.limits.max_imag)
+    if _time_step(spec.map) is not None and spec.stem != "flow":
+        inputs["stem"] = spec.stem  # a timed map recorded as an orbit (orbit.h5 with n and t)
     return inputs
 
 
@@ -192,10 +194,9 @@ def _version() -> str:
 
 def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool) -> Store:
     if spec.layout is Layout.ORBIT:
-        dt = _time_step(spec.map)
         labels = getattr(spec.map, "state_labels", None)  # a map may name the state's components (the chains)
-        return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv,
-                          stem="orbit" if dt is None else "flow", time_step=dt,
+        return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv, stem=_stem(spec),
+                          time_step=_time_step(spec.map),
                           columns=list(labels()) if callable(labels) else None)
     b, eta, _ = _batch_params(spec.map, spec.B)
     extra = {"X0": spec.X0, "b": b, "eta": eta} if fresh else None
@@ -209,9 +210,14 @@ def _time_step(m: Map) -> float | None:
     return None if dt is None else float(dt)
 
 
+def _stem(spec: RunSpec) -> str:
+    """``orbit`` (``orbit.h5`` / ``orbit.csv``) or ``flow`` (a map with a time step, unless ``spec.stem``)."""
+    return "orbit" if _time_step(spec.map) is None else spec.stem
+
+
 def _files(spec: RunSpec, out_dir: Path) -> tuple[Path, ...]:
     if spec.layout is Layout.ORBIT:
-        stem = "orbit" if _time_step(spec.map) is None else "flow"
+        stem = _stem(spec)
         h5, csv = (ORBIT_H5, ORBIT_CSV) if stem == "orbit" else ("flow.h5", "flow.csv")
         return (out_dir / h5,) + ((out_dir / csv,) if spec.csv else ()) + (out_dir / RUN_JSON,)
     return (out_dir / ENSEMBLE_H5, out_dir / RUN_JSON)
@@ -397,7 +403,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
     if "B" not in rec:  # an orbit directory
         m = map_from_description(run["map"]) if "map" in run else _legacy_two_point(rec)
         spec = RunSpec(m, np.array(rec["init"], dtype=float), rec["steps"], rec["save_every"], limits,
-                       csv=bool(rec["csv"]), program=program)
+                       csv=bool(rec["csv"]), program=program, stem=str(rec.get("stem", "flow")))
         I0 = unhex(run["integrals0_hex"])
         health = Health(spec.map, spec.X0, limits, I0=I0)
         health.drift = np.array(run["max_drift_abs"], dtype=float)

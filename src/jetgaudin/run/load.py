@@ -53,8 +53,8 @@ def load(out_dir: str | Path, *, rows: slice | None = None, verify: bool = False
     safe = int(run.get("checkpoint", {}).get("rows", 0))
     layout = Layout.ENSEMBLE if "B" in run.get("inputs", {}) else Layout.ORBIT
     name, data = (ENSEMBLE_H5, "states") if layout is Layout.ENSEMBLE else (ORBIT_H5, "X")
-    if "dt" in run.get("map", {}):  # a flow map (its rows are indexed by time: flow.h5)
-        name = "flow.h5"
+    if "dt" in run.get("map", {}) and run.get("inputs", {}).get("stem", "flow") == "flow":
+        name = "flow.h5"  # a flow map (its rows are indexed by time), unless recorded as an orbit (orbit --dt)
     path = out_dir / name
     a, e, _ = (rows or slice(None)).indices(safe)
     try:

@@ -98,10 +98,12 @@ class RunSpec:
 
     ``X0``: one state ``(n,)`` (an *orbit* directory) or a batch ``(B, n)`` (an *ensemble* directory);
     ``limits``: health thresholds; ``csv``: also write ``orbit.csv`` (orbits only); ``program``: the command
-    named in ``run.json`` and in resume hints.  Validated once, here: the counts (integers in int64), the
-    state (finite, real, length ``map.n_state``, integrals representable) and the map's set-up at ``X0``
-    (``map.start``: a branch point of ``ν`` is refused with :class:`jetgaudin.BranchPointError` whatever the
-    layout).
+    named in ``run.json`` and in resume hints; ``stem``: the files of one orbit of a map with a time step
+    (``map.dt``): ``"flow"`` (the default: ``flow.h5`` / ``flow.csv``, rows indexed by ``t = n dt``) or
+    ``"orbit"`` (``orbit.h5`` / ``orbit.csv`` with both ``n`` and ``t``: ``jetgaudin orbit --dt``).  Validated
+    once, here: the counts (integers in int64), the state (finite, real, length ``map.n_state``, integrals
+    representable) and the map's set-up at ``X0`` (``map.start``: a branch point of ``ν`` is refused with
+    :class:`jetgaudin.BranchPointError` whatever the layout).
     """
 
     map: Map
@@ -112,6 +114,7 @@ class RunSpec:
     csv: bool = True
     program: str = "jetgaudin orbit"
     checkpoint_seconds: float = 1.0
+    stem: str = "flow"
 
     def __post_init__(self) -> None:
         if not isinstance(self.map, Map):
@@ -134,6 +137,8 @@ class RunSpec:
         if not isinstance(self.limits, HealthLimits):
             raise InvalidParameterError("limits must be a HealthLimits")
         object.__setattr__(self, "checkpoint_seconds", self.check_checkpoint_seconds(self.checkpoint_seconds))
+        if self.stem not in ("flow", "orbit"):
+            raise InvalidParameterError(f"stem must be 'flow' or 'orbit', got {self.stem!r}")
         with np.errstate(all="ignore"):
             if not np.all(np.isfinite(self.map.integrals(self.X0))):
                 raise InvalidParameterError(

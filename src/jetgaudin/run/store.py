@@ -260,7 +260,9 @@ class Store:
 
 class OrbitStore(Store):
     """``orbit.h5`` (datasets ``n``, ``X`` rows × n) and ``orbit.csv``; the checkpoint (exact state and ``ν1`` as
-    ``float.hex``, row and CSV digests) lives in ``run.json``."""
+    ``float.hex``, row and CSV digests) lives in ``run.json``.  A map with a time step (``time_step``) also gets the
+    dataset ``t = n · dt``; its CSV is indexed by ``t`` (``stem="flow"``) or has both ``n`` and ``t``
+    (``stem="orbit"``: ``jetgaudin orbit --dt``)."""
 
     def __init__(self, out_dir: Path, run: dict, n_state: int, *, fresh: bool, csv: bool, stem: str = "orbit",
                  time_step: float | None = None, columns: list[str] | None = None):
@@ -272,6 +274,7 @@ class OrbitStore(Store):
         self.csv_bytes = 0
         self.csv_fh: Any = None
         super().__init__(out_dir, run, (n_state,), fresh=fresh)
+        self.dt_ds = None if time_step is None else self.f["t"]
         try:
             self._open_csv(fresh)
         except BaseException:
@@ -288,8 +291,20 @@ class OrbitStore(Store):
             f.attrs["dt"] = self.time_step
         super()._attrs(f)
 
+    def _write_h5(self, h5py: Any, path: Path, old: Any, extra: dict[str, np.ndarray]) -> None:
+        super()._write_h5(h5py, path, old, extra)
+        if self.time_step is not None:  # t = n dt (derived from the verified n: rebuilt the same on resume)
+            with h5py.File(path, "a", libver="latest") as f:
+                f.create_dataset("t", data=self._times(f["n"][()]), maxshape=(None,), chunks=(4096,), dtype="f8")
+
+    def _times(self, n_idx: np.ndarray) -> np.ndarray:
+        return np.asarray(n_idx, dtype=float) * float(self.time_step or 0.0)
+
+    def _index(self) -> str:
+        return "n" if self.time_step is None else "t" if self.h5_name.startswith("flow") else "n,t"
+
     def _header(self) -> str:
-        index = "n" if self.time_step is None else "t"
+        index = self._index()
         if self.columns is not None:
             return ",".join([index, *self.columns]) + "\n"
         return csv_header(self.shape[0] // 3, index)
@@ -342,10 +357,16 @@ class OrbitStore(Store):
         return self._csv_text(np.array([self.dn[i]]), np.array(self.dS[i : i + 1]))
 
     def _csv_text(self, n_idx: np.ndarray, S: np.ndarray) -> bytes:
-        index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
+        index = n_idx.tolist() if self.time_step is None else self._times(n_idx).tolist()
+        if self._index() == "n,t":
+            index = [f"{n},{t:.17g}" for n, t in zip(n_idx.tolist(), index, strict=True)]
         return format_rows(index, S).encode()
 
     def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
+        if self.dt_ds is not None:
+            r = self.dn.shape[0]
+            self.dt_ds.resize((r,))
+            self.dt_ds[r - len(n_idx):r] = self._times(n_idx)
         if self.csv_fh is not None:
             text = self._csv_text(n_idx, S)
             self.csv_fh.write(text)

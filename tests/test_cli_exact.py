@@ -1,0 +1,145 @@
+"""`jetgaudin orbit --dt H`: the run's map is the exact time-H flow (jg.ExactFlow / jg.ChainExactFlow), shared with
+`jetgaudin flow --method exact`; orbit.csv / orbit.h5 gain the time column t = n dt (issue 25)."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import signal
+
+import h5py
+import numpy as np
+import pytest
+
+import jetgaudin as jg
+from jetgaudin.cli import main
+
+X3 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1.0, 0.0, 0.0])  # Appendix 2's initial state
+INIT = ",".join(f"{v:g}" for v in X3)
+
+
+def run_cli(capsys, *args):
+    with pytest.raises(SystemExit) as exc:
+        main([str(a) for a in args])
+    out = capsys.readouterr()
+    return (0 if exc.value.code is None else exc.value.code), out.out, out.err
+
+
+def one_line_error(code, err, *words):
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    return code == 2 and "Traceback" not in err and len(lines) == 1 and all(w in err for w in words)
+
+
+def table(path):
+    """``(header, rows)`` of a CSV written by the run layer."""
+    text = path.read_text()
+    return text.splitlines()[0].split(","), np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def reference(H, X0, T):
+    """DOP853 at rtol = atol = 1e-13: an integrator independent of the maps."""
+    return jg.integrate(H, X0, T, rtol=1e-13, atol=1e-13).X[-1]
+
+
+def test_orbit_dt_is_the_exact_flow_with_a_t_column(capsys, tmp_path):
+    code, out, err = run_cli(capsys, "orbit", "--dt", 0.05, "--steps", 40, "--no-plots", "--out", tmp_path)
+    assert code == 0, err
+    head, rows = table(tmp_path / "orbit.csv")
+    from jetgaudin.run.files import csv_header
+
+    assert head == ["n", "t", *csv_header(3).strip().split(",")[1:]] and rows.shape == (41, 11)
+    # t = n dt: the CSV's %.17g round-trips the double n * dt exactly
+    assert np.array_equal(rows[:, 0], np.arange(41)) and np.array_equal(rows[:, 1], np.arange(41) * 0.05)
+    with h5py.File(tmp_path / "orbit.h5") as f:
+        assert np.array_equal(f["t"][()], np.arange(41) * 0.05) and np.array_equal(f["X"][()], rows[:, 2:])
+    # 40 exact steps = the flow of H_2/2 to t = 2; DOP853 at 1e-13 leaves ~1e-12 over t = 2 (|X| ~ 3)
+    H = jg.physical_hamiltonian(3, 1.0)
+    assert np.max(np.abs(rows[-1, 2:] - reference(H, X3, 2.0))) < 1e-11
+    run = json.loads((tmp_path / "run.json").read_text())
+    assert run["map"]["kind"] == "exact" and run["map"]["dt"] == 0.05 and run["inputs"]["stem"] == "orbit"
+    assert jg.run.load(tmp_path).X.shape == (41, 9)
+
+
+def test_orbit_dt_hamiltonian_weights_and_figures(capsys, tmp_path):
+    """--hamiltonian w_1,...: the flow of Σ w_m κ_m (here H_2/2 + 0.3 H_3 − 0.2 H_1); figures are drawn."""
+    w = np.array([-0.2, 0.5, 0.3, 0.0, 0.0, 0.0])
+    code, _, err = run_cli(capsys, "orbit", "--dt", -0.05, "--steps", 20, "--hamiltonian", ",".join(map(str, w)),
+                           "--out", tmp_path)
+    assert code == 0, err
+    _, rows = table(tmp_path / "orbit.csv")
+    assert np.allclose(rows[-1, 1], -1.0, rtol=1e-15)
+    # 10 exact steps backwards to t = -1 vs DOP853 at 1e-13 (~1e-12 over |t| = 1)
+    assert np.max(np.abs(rows[-1, 2:] - reference(jg.IntegralHamiltonian(1.0, w), X3, -1.0))) < 1e-11
+    assert (tmp_path / "figure1.png").is_file() and (tmp_path / "integrals.png").is_file()
+
+
+def test_orbit_dt_bad_input_is_one_line(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "orbit", "--dt", 0.05, "--eta", "5+0.1i", "--out", tmp_path / "a")
+    assert one_line_error(code, err, "--dt", "--eta")
+    for args, words in ((["--dt", 0], ["--dt"]), (["--dt", "x"], ["--dt"]), (["--hamiltonian", "physical"], ["--dt"]),
+                        (["--dt", 0.1, "--hamiltonian", "1,2,3"], ["--hamiltonian", "6"]),
+                        (["--dt", 0.1, "--hamiltonian", "interpolating"], ["--eta"]),
+                        (["--dt", 0.1, "--branch", "opposite"], ["--branch"]),
+                        (["--dt", 0.1, "--substeps", 0], ["--substeps"])):
+        code, _, err = run_cli(capsys, "orbit", *args, "--out", tmp_path / "b")
+        assert one_line_error(code, err, *words), (args, err)
+    # an infeasible dt names the leaf's largest step and the --substeps that makes it feasible; that one runs
+    code, _, err = run_cli(capsys, "orbit", "--dt", 3, "--steps", 2, "--no-plots", "--out", tmp_path / "c")
+    assert one_line_error(code, err, "--dt", "largest feasible", "--substeps")
+    dmax = float(re.search(r"dt = ([0-9.e+-]+);", err).group(1))
+    assert dmax == pytest.approx(jg.ExactFlow(jg.physical_hamiltonian(3, 1.0), 1.0).max_dt(X3), rel=2e-3)
+    k = re.search(r"--substeps (\d+)", err).group(1)
+    code, _, err = run_cli(capsys, "orbit", "--dt", 3, "--substeps", k, "--steps", 2, "--no-plots", "--out",
+                           tmp_path / "c")
+    assert code == 0, err
+
+
+def test_orbit_dt_resumes_bit_for_bit_and_init_from(capsys, tmp_path, monkeypatch):
+    args = ("orbit", "--dt", 0.05, "--steps", 600, "--no-plots", "--checkpoint-seconds", 0)
+    assert run_cli(capsys, *args, "--out", tmp_path / "full")[0] == 0
+    calls = {"n": 0}
+    advance = jg.ExactFlow.advance
+
+    def interrupted(self, *a, **k):  # SIGINT during the 2nd chunk (256 steps each): the run stops at a checkpoint
+        calls["n"] += 1
+        if calls["n"] == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+        return advance(self, *a, **k)
+
+    monkeypatch.setattr(jg.ExactFlow, "advance", interrupted)
+    code, _, err = run_cli(capsys, *args, "--out", tmp_path / "cut")
+    assert code != 0 and json.loads((tmp_path / "cut" / "run.json").read_text())["status"] == "interrupted"
+    monkeypatch.setattr(jg.ExactFlow, "advance", advance)
+    code, _, err = run_cli(capsys, "orbit", "--resume", tmp_path / "cut")
+    assert code == 0, err
+    assert (tmp_path / "cut" / "orbit.csv").read_bytes() == (tmp_path / "full" / "orbit.csv").read_bytes()
+    with h5py.File(tmp_path / "cut" / "orbit.h5") as f, h5py.File(tmp_path / "full" / "orbit.h5") as g:
+        assert np.array_equal(f["t"][()], g["t"][()]) and np.array_equal(f["X"][()], g["X"][()])
+    # --init-from the end, with -dt: back to the start (the exact flow of -dt inverts that of dt; the round-off of
+    # 1200 exact steps on |X| ~ 3, a few 1e-13)
+    code, _, err = run_cli(capsys, "orbit", "--init-from", tmp_path / "full", "--dt", -0.05, "--steps", 600,
+                           "--no-plots", "--out", tmp_path / "back")
+    assert code == 0, err
+    _, rows = table(tmp_path / "back" / "orbit.csv")
+    assert np.max(np.abs(rows[-1, 2:] - X3)) < 1e-11
+    code, _, err = run_cli(capsys, "orbit", "--resume", tmp_path / "cut", "--dt", 0.05)
+    assert one_line_error(code, err, "--resume")
+
+
+def test_orbit_dt_sites_is_the_chain_exact_flow(capsys, tmp_path):
+    """--sites: ChainExactFlow of the given weights; one step vs DOP853 of the chain Hamiltonian."""
+    model = jg.GaudinModel(1.0, ((0.0, 2), (1.0, 1)))
+    X0 = np.array([0.3, -0.2, 0.5, 0.1, 0.2, -0.1, 0.4, 0.1, 0.6])
+    w = np.zeros(2 * model.M)
+    w[~model.casimir_mask()] = [0.5, 0.2, 0.3][: int((~model.casimir_mask()).sum())]
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2,1:1", "--init", ",".join(map(str, X0)), "--dt", 0.01,
+                           "--steps", 2, "--hamiltonian", ",".join(map(str, w)), "--no-plots", "--out", tmp_path)
+    assert code == 0, err
+    _, rows = table(tmp_path / "orbit.csv")
+    ref = jg.integrate(model.hamiltonian(w), X0, 0.02, rtol=1e-13, atol=1e-13).X[-1]
+    # two exact steps vs DOP853 at 1e-13 (the chain weights by adaptive quadrature at epsrel 1e-13): 1e-11
+    assert np.max(np.abs(rows[-1, 2:] - ref)) < 1e-11
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2,1:1", "--init", ",".join(map(str, X0)), "--dt", 0.01,
+                           "--out", tmp_path / "p")
+    assert one_line_error(code, err, "--hamiltonian", "chain")
