@@ -378,7 +378,7 @@ class ChainTwoPointBacklund(_ChainMap):
             return step_loop(self, X, carry, steps, save_every)
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
-        nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
+        nu = self._compiled_start(Xb) if carry is None else np.reshape(carry, -1)
         name, _, run_orbit = self._kernel()
         if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
             from . import _family_kernel
@@ -394,6 +394,20 @@ class ChainTwoPointBacklund(_ChainMap):
             out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
         return self._finish(rows, final, last, shape)
+
+    def _compiled_start(self, Xb: np.ndarray) -> np.ndarray:
+        """``ν1`` at the states ``Xb`` ``(B, 3M)`` by the compiled branch rule
+        (:func:`jetgaudin.gaudin._family_kernel.branch_rule`, every family), the exact NumPy rule (:meth:`start`)
+        for the states it flags; only the sign of ``ν1`` reaches the kernels (they take the root of ``ν²`` nearest
+        to it), so the orbits are the NumPy-started ones bit for bit wherever the two rules agree
+        (``tests/test_chain_compiled_start.py``)."""
+        from ._family_kernel import branch_rule, segment_constants
+
+        nu, ok = branch_rule(np.ascontiguousarray(Xb, dtype=float), float(self.model.b),
+                             segment_constants(self.model, self.eta), self.sheet)
+        if not np.all(ok):
+            nu[~ok] = self.start(Xb[~ok])
+        return nu
 
     @staticmethod
     def _finish(rows, final, last, shape) -> Advance:
