@@ -64,3 +64,19 @@ def test_flagged_states_take_the_numpy_rule(monkeypatch):
     want = B.start(X)
     assert np.array_equal(got[~ok], want[~ok])
     assert np.max(np.abs(got - want) / np.abs(want)) < 1e-9
+
+
+@pytest.mark.parametrize("name", ["rational", "trigonometric"])
+def test_replace_backend_is_not_overridden_by_the_kernel_alias(name):
+    """The run layer resolves AUTO by ``dataclasses.replace(map, backend=...)``; the constructor's ``kernel=`` alias
+    must not bring the old route back (it did: every chunk of a CLI run then re-resolved AUTO on its own few steps
+    and ran on NumPy, ~500 steps/s)."""
+    import dataclasses
+
+    from jetgaudin.maps import Backend
+
+    B = MODELS[name].two_point_backlund(0.2 + 0.05j, kernel="auto")
+    assert dataclasses.replace(B, backend=Backend.COMPILED).backend is Backend.COMPILED
+    assert dataclasses.replace(B, backend=Backend.COMPILED).resolved_backend(1, np.zeros(B.n_state)) \
+        is Backend.COMPILED
+    assert MODELS[name].two_point_backlund(0.2 + 0.05j, kernel="numpy").backend is Backend.NUMPY

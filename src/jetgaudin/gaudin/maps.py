@@ -173,7 +173,7 @@ class _ChainMap(Map):
     branch: Branch
     properties: MapProperties
     kind: str
-    kernel: Any  # the alias of backend given to the constructor (then equal to backend)
+    kernel: Any  # the alias of backend given to the constructor (None once parsed into backend)
 
     def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
@@ -184,7 +184,9 @@ class _ChainMap(Map):
         object.__setattr__(self, "branch", Branch.parse(self.branch))
         backend = Backend.parse(self.backend if self.kernel is None else self.kernel)  # kernel=: an alias
         object.__setattr__(self, "backend", backend)
-        object.__setattr__(self, "kernel", backend)
+        # the alias is consumed: ``dataclasses.replace(m, backend=...)`` (the run layer's resolution of AUTO) must
+        # not be overridden by the constructor's old alias (it was: every chunk resolved AUTO again on its steps)
+        object.__setattr__(self, "kernel", None)
 
     @property
     def has_compiled(self) -> bool:
