@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
-from ._kernels import _abs2
+from ._kernels import _abs2  # first: it applies the Bäcklund kernels' Numba target (``_target.configure``)
 
 
 @njit(cache=True)
