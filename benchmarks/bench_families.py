@@ -10,14 +10,17 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
 (b) the trigonometric map, compiled (the one family kernel, :mod:`jetgaudin.gaudin._family_kernel`) and NumPy, for
     M = 2, 3, 4 order-1 sites and a chain with jet sites, and the rational kernel on the same sites beside it;
 (c) the rational family run through the family kernel (the one kernel every family can use) against its own kernel;
+(d) the same work two ways (trigonometric and elliptic, M = 4): ``--work-steps`` steps of the compiled map against
+    heyoka integrating the flow of ``G_ξ`` over the same time sampled at integer times (wall, whole calls, median
+    of 3);
 (e) an ensemble (trig magnet M = 4, 64 orbits): the batch on all cores (``prange``) against the orbits one by one
     (wall time, median of 3; orbit-steps/s);
-(f) short calls (the per-call set-up): ``advance`` of one step from a new state, the branch rule of ``ν`` compiled
+(f) the elliptic map (modulus 0.6, issue 24), compiled and NumPy, on the sites of (b), the trigonometric kernel
+    beside it;
+(g) short calls (the per-call set-up): ``advance`` of one step from a new state, the branch rule of ``ν`` compiled
     (:func:`jetgaudin.gaudin._family_kernel.branch_rule`, today's route) against the NumPy rule that started every
     compiled call before (``advance(X, start(X), 1)``, the same kernel after it), rational and trigonometric M = 4,
-    and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call);
-(d) the same work two ways (trigonometric, M = 4): ``--work-steps`` steps of the compiled map against heyoka
-    integrating the flow of ``G_ξ`` over the same time sampled at integer times (wall, whole calls, median of 3).
+    and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call).
 """
 
 import argparse
@@ -80,17 +83,31 @@ def rational_kernel(args):
         print(line)
 
 
-def trigonometric(args, rng):
-    print("(b) trigonometric map (gamma = 0.7), steps/s; the rational kernel on the same sites")
-    print(f"  {'sites':42s} {'numpy':>9s} {'compiled':>11s} {'ratio':>7s} {'rational kernel':>16s}")
+def _family_rates(args, rng, title, other, make, make_other, rename=str):
+    """steps/s of one orbit, NumPy and compiled, for each site list of ``TRIG``; ``make_other``'s kernel beside."""
+    print(title)
+    print(f"  {'sites':42s} {'numpy':>9s} {'compiled':>11s} {'ratio':>7s} {other:>16s}")
     for name, sites in TRIG.items():
-        m = GaudinModel(0.8, sites, family="trigonometric", gamma=0.7)
+        m = make(sites)
         X = rng.normal(size=m.n_state)
         B = m.two_point_backlund(XI)
         rn = rate(B, X, args.numpy_steps, 1, "numpy", repeats=3)
         rc = rate(B, X, args.steps, 1000, "compiled")
-        rr = rate(GaudinModel(0.8, sites).two_point_backlund(XI), X, args.steps, 1000, "compiled")
-        print(f"  {name:42s} {rn:9.0f} {rc:11.0f} {rc / rn:7.0f} {rr:16.0f}")
+        ro = rate(make_other(sites).two_point_backlund(XI), X, args.steps, 1000, "compiled")
+        print(f"  {rename(name):42s} {rn:9.0f} {rc:11.0f} {rc / rn:7.0f} {ro:16.0f}")
+
+
+def trigonometric(args, rng):
+    _family_rates(args, rng, "(b) trigonometric map (gamma = 0.7), steps/s; the rational kernel on the same sites",
+                  "rational kernel", lambda s: GaudinModel(0.8, s, family="trigonometric", gamma=0.7),
+                  lambda s: GaudinModel(0.8, s))
+
+
+def elliptic(args, rng):
+    _family_rates(args, rng, "(f) elliptic map (modulus k = 0.6, b = 0), steps/s; the trigonometric kernel (gamma = "
+                  "0.7) on the same sites", "trig kernel",
+                  lambda s: GaudinModel(0.0, s, family="elliptic", modulus=0.6),
+                  lambda s: GaudinModel(0.8, s, family="trigonometric", gamma=0.7), lambda n: n.replace("trig", "XYZ"))
 
 
 def one_kernel(args, rng):
@@ -116,14 +133,19 @@ def same_work(args, rng):
     except ImportError:
         print("(d) heyoka not installed (pip install jetgaudin[heyoka]): skipped")
         return
+    for label, m in (("trig", GaudinModel(0.8, TRIG["trig magnet M=4"], family="trigonometric", gamma=0.7)),
+                     ("XYZ", GaudinModel(0.0, TRIG["trig magnet M=4"], family="elliptic", modulus=0.6))):
+        _same_work(args, rng, label, m)
+
+
+def _same_work(args, rng, label, m):
     n = args.work_steps
-    m = GaudinModel(0.8, TRIG["trig magnet M=4"], family="trigonometric", gamma=0.7)
     X = rng.normal(size=m.n_state)
     B = m.two_point_backlund(XI, kernel="compiled")
     B.iterate(X, 10)
     t_eval = np.arange(n + 1, dtype=float)
     H = m.interpolating_flow_hamiltonian(X, XI)
-    print(f"(d) same work, trig magnet M=4: {n} map steps vs heyoka's flow of G_xi over t = 0..{n} (wall, median "
+    print(f"(d) same work, {label} magnet M=4: {n} map steps vs heyoka's flow of G_xi over t = 0..{n} (wall, median "
           "of 3)")
     tm = float(np.median(timed(lambda: B.iterate(X, n), 3, time.perf_counter)))
     orbit = B.iterate(X, n)
@@ -164,7 +186,7 @@ def short_calls(args, rng):
             new(), old()
             tn = float(np.median(timed(new, 5, time.perf_counter)))
             to = float(np.median(timed(old, 5, time.perf_counter)))
-            print(f"(f) {fam} M=4, {what}: compiled set-up {1e3 * tn:.3f} ms, NumPy set-up {1e3 * to:.3f} ms "
+            print(f"(g) {fam} M=4, {what}: compiled set-up {1e3 * tn:.3f} ms, NumPy set-up {1e3 * to:.3f} ms "
                   f"({to / tn:.1f}x)")
 
 
@@ -174,13 +196,14 @@ def main():
     p.add_argument("--numpy-steps", type=int, default=1000)
     p.add_argument("--work-steps", type=int, default=1000)
     p.add_argument("--baseline-src", default=None, help="a source tree (its src/) for the rational baseline")
-    p.add_argument("--parts", default="abcdef")
+    p.add_argument("--parts", default="abcdefg")
     a = p.parse_args()
     print("machine:", machine())
     rng = np.random.default_rng(1)
     for part, fn in (("a", lambda: rational_kernel(a)), ("b", lambda: trigonometric(a, rng)),
                      ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng)),
-                     ("e", lambda: ensemble(a, rng)), ("f", lambda: short_calls(a, rng))):
+                     ("e", lambda: ensemble(a, rng)), ("f", lambda: elliptic(a, rng)),
+                     ("g", lambda: short_calls(a, rng))):
         if part in a.parts:
             fn()
 

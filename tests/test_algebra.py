@@ -209,3 +209,17 @@ def test_vectorised_over_leading_axes(rng):
         assert np.array_equal(P[i, j], jg.poisson_tensor(X[i, j]))
         assert np.array_equal(C[i, j], jg.casimirs(X[i, j]))
         assert np.array_equal(B[i, j], jg.bracket(g[i, j], g[::-1][i, j], X[i, j]))
+
+
+@pytest.mark.parametrize("N", [1, 2, 3, 4])
+def test_casimir_gradients_of_complex_states(N):
+    # the one-point map's states are complex and its Casimirs are checked there: the gradients accept complex states
+    # and, the Casimirs being quadratic, are complex-linear in X: grad C(Xr + i Xi) = grad C(Xr) + i grad C(Xi)
+    # exactly up to the rounding of one complex product per term (1e-14 relative).  Kills the mutant
+    # allow_complex=True -> False in casimir_gradients (docs/mutation.md).
+    rng = np.random.default_rng(N)
+    Xr, Xi = rng.normal(size=(2, 5, 3 * N))
+    got = casimir_gradients(Xr + 1j * Xi)
+    want = casimir_gradients(Xr) + 1j * casimir_gradients(Xi)
+    assert got.dtype.kind == "c"
+    assert np.max(np.abs(got - want)) <= 1e-14 * (1 + np.max(np.abs(want)))

@@ -248,6 +248,62 @@ def test_two_point_is_composition_of_one_point(rng, N, eta):
     assert np.abs(W - Y).max() <= 1e-11 * (1 + np.abs(Y).max())
 
 
+def test_a_nu_off_the_curve_leaves_a_division_remainder(rng):
+    # nu1 not an eigenvalue of l(eta1): det M(eta1) != 0, so (lambda - eta1)(lambda - eta2) does not divide
+    # M l adj M and the exact division leaves a remainder of order one; the map refuses the step (the residual test
+    # of maps._check_residual, relative tolerance 1e-8) instead of returning a wrong state.  The right nu1 passes.
+    # Kills the mutant "rel > tol" -> "rel == tol" (docs/mutation.md).
+    X = random_state(rng, 3)
+    eta = 0.8 + 0.4j
+    nu1 = jg.nu(eta, X, 1.0)
+    two_point_general(X, 1.0, eta, np.conj(eta), nu1, np.conj(nu1))
+    with pytest.raises(jg.SingularStepError, match="remainder"):
+        two_point_general(X, 1.0, eta, np.conj(eta), 1.5 * nu1, np.conj(1.5 * nu1))
+
+
+def test_two_point_parameters_refuse_coinciding_eigenvectors():
+    # eq. (X): t = (eta1 - eta2)/(s + kappa) is refused when |s + kappa| <= 1e-13 (|s| + |kappa|) (the eigenvectors
+    # at eta1 and eta2 coincide).  eta2 = eta1 + d with nu2 continued makes s + kappa = O(d): at d = 6.5e-13 the
+    # denominator, 1.2e-13 here, is inside the bound (|s| = 0.70: the bound is 1.4e-13), at d = 1e-10 (1.8e-11)
+    # it is not.  Kills the mutant 1e-13 (|s| + |kappa|) -> 1e-13 |s|/|kappa| (1e-13 here; docs/mutation.md).
+    from jetgaudin.backlund._dressing import horner, spectral_kappa, spectral_s
+    from jetgaudin.backlund.maps import two_point_parameters
+
+    X, b, e1 = np.asarray(APPENDIX2_X0), APPENDIX2_B, 0.8 + 0.4j
+    ell = ell_coefficients(X, b)
+    nu1 = jg.nu(e1, X, b)
+
+    def den(d):
+        nu2 = -jg.nu(e1 + d, X, b)  # -nu2 is the eigenvalue at eta2 close to nu1
+        L1, L2 = horner(ell, e1), horner(ell, e1 + d)
+        sv = spectral_s(L1[0, 0], L1[0, 1], L1[1, 0], nu1)
+        kv = spectral_kappa(L2[0, 0], L2[0, 1], L2[1, 0], -nu2)
+        return nu2, abs(sv + kv), abs(sv) + abs(kv), abs(sv) / abs(kv)
+
+    nu2, dn, ssum, ratio = den(6.5e-13)
+    assert 1e-13 * ratio < dn <= 1e-13 * ssum  # the case sits between the bound and the mutant's
+    with pytest.raises(jg.SingularStepError, match="s \\+ kappa"):
+        two_point_parameters(ell, e1, e1 + 6.5e-13, nu1, nu2)
+    nu2, dn, ssum, _ = den(1e-10)
+    assert dn > 1e-13 * ssum
+    two_point_parameters(ell, e1, e1 + 1e-10, nu1, nu2)
+
+
+def test_one_point_parameters_are_the_maps(rng):
+    # the public helper one_point_parameters gives the (p, q) of OnePointBacklund.parameters: p = y_0^-/(2b) (hh) and
+    # q = (u(eta) - nu)/v(eta) (hhh), bit for bit (the same operations).  Kills the mutant 2b -> 2 + b.
+    from jetgaudin.backlund.maps import one_point_parameters
+
+    X = random_state(rng, 3, (4,))
+    for b in (1.7, -0.4):
+        B = jg.OnePointBacklund(b, 0.8 + 0.4j)
+        p, q, nu = B.parameters(X)
+        p2, q2 = one_point_parameters(ell_coefficients(X, b), B.eta, nu, b)
+        assert np.array_equal(p, p2) and np.array_equal(q, q2)
+        y0m = X[..., 0] - 1j * X[..., 1]  # y_0^- = y_0^1 - i y_0^2
+        assert np.allclose(p, y0m / (2 * b), rtol=1e-15, atol=0)
+
+
 def test_other_choice_of_nu2_is_not_real(rng):
     """The real reduction needs mu2 = conj(mu1): with mu2 = -conj(mu1) the map leaves the real space."""
     X = random_state(rng, 3)
@@ -646,3 +702,25 @@ def test_one_point_iterate(rng, N):
     assert (np.abs(I - I[0]) / scale).max() <= 1e-11
     back = B.inverse()(orb[1])
     assert np.abs(back - X).max() <= 1e-9 * _tol_scale(X, orb[1])
+
+
+def test_numpy_route_drift_is_not_linear():
+    # The NumPy route divides only M[P, l] by D (l_new = l + M[P, l]/D, _dressing.dress_real_two_point): its round-off
+    # is a random walk.  The former form R/D rescaled l by the same rounding of |eta|^2 at every step and the
+    # integrals drifted linearly: 2.1e-12 after 10^4 steps of Appendix 2 (AMD EPYC), against 5.9e-15 now.  Bound
+    # 3e-14: five times the measured drift, seventy times below the linear drift (docs/backlund.md, section 7).
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA, backend="numpy")
+    orbit = B.iterate(APPENDIX2_X0, 10_000, save_every=100)
+    I = jg.integrals(orbit, APPENDIX2_B)
+    assert np.max(np.abs(I - I[0]) / np.maximum(1.0, np.abs(I[0]))) <= 3e-14
+
+
+def test_generic_compiled_route_drift_is_not_linear():
+    # the generic kernel (any N) in the same form: 5.7e-14 after 10^5 steps of Appendix 2, against 2.1e-11 in the
+    # former form (docs/backlund.md, section 7); bound 5e-13, nine times the measured drift, forty times below
+    from jetgaudin.backlund import kernels
+
+    B = jg.TwoPointBacklund(APPENDIX2_B, APPENDIX2_ETA)
+    out, final, drift, _ = kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, B.nu1(APPENDIX2_X0),
+                                                  False, 100_000, 1000, specialise=False)
+    assert np.max(drift) <= 5e-13

@@ -80,7 +80,7 @@ def test_orbit_defaults_are_appendix2(appendix2_dir):
 def test_orbit_csv_round_trips_and_equals_the_map(appendix2_dir):
     text = (appendix2_dir / "orbit.csv").read_text()
     header, *rows = text.splitlines()
-    assert header == "n,y0_1,y0_2,y0_3,y1_1,y1_2,y1_3,y2_1,y2_2,y2_3"
+    assert header == "n,y0^1,y0^2,y0^3,y1^1,y1^2,y1^3,y2^1,y2^2,y2^3"
     assert len(rows) == 1001 and rows[0].startswith("0,") and rows[-1].startswith("1000,")
     n, X = read_csv(appendix2_dir / "orbit.csv")
     np.testing.assert_array_equal(n, np.arange(1001))

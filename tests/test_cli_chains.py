@@ -109,7 +109,7 @@ def test_without_sites_nothing_changes(tmp_path, capsys):
     code, _, err = run_cli(capsys, "orbit", "--steps", "3", "--no-plots", "--out", tmp_path / "a")
     assert code == 0, err
     assert json.loads((tmp_path / "a" / "run.json").read_text())["map"]["kind"] == "two_point"
-    assert (tmp_path / "a" / "orbit.csv").read_text().startswith("n,y0_1,y0_2,y0_3,y1_1")
+    assert (tmp_path / "a" / "orbit.csv").read_text().startswith("n,y0^1,y0^2,y0^3,y1^1")
 
 
 @pytest.mark.parametrize(("args", "words"), [

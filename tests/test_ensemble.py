@@ -62,6 +62,11 @@ def test_drift_equals_independent_computation(batch):
         assert np.allclose(res.drift[i], drift, rtol=0, atol=1e-14)
     assert res.max_drift.shape == (len(b),)
     assert np.all(res.max_drift < 1e-12)  # the map preserves the 2N integrals (Prop. 2)
+    # the two reductions of the (B, 2N) table, by name: over the integrals (per orbit), over the orbits (per integral)
+    assert np.array_equal(res.max_drift_per_orbit, res.drift.max(axis=1))
+    assert np.array_equal(res.max_drift, res.max_drift_per_orbit)
+    assert res.max_drift_per_integral.shape == (X0.shape[1] // 3 * 2,)
+    assert np.array_equal(res.max_drift_per_integral, res.drift.max(axis=0))
 
 
 def test_continuation_with_nu_equals_unsplit_run(batch):

@@ -81,6 +81,45 @@ def test_interpolating_hamiltonian_value(eta):
     assert abs(jg.interpolating_hamiltonian(X, b, np.conj(eta)) + G) <= 1e-12 * abs(G)
 
 
+def mpmath_G(X, b, eta, dps=30):
+    """G_eta = -2 int_0^{Im eta} Re nu(Re eta + i s) ds with mpmath: nu^2 from the curve coefficients in 30 digits,
+    its square root in mpmath (the sign only taken from jg.nu, the default branch), adaptive tanh-sinh quadrature
+    split at the heights of the branch points next to the segment (an independent evaluation of the integral)."""
+    import mpmath as mp
+
+    from jetgaudin.spectral import curve_coefficients
+
+    with mp.workdps(dps):
+        kap = [mp.mpf(float(k)) for k in curve_coefficients(np.asarray(X, dtype=float), b)]
+        a, h = eta.real, eta.imag
+
+        def f(s):
+            lam = mp.mpc(a, s)
+            r = mp.sqrt(sum(k * lam ** (-j) for j, k in enumerate(kap)))
+            if (complex(r).conjugate() * complex(jg.nu(complex(lam), X, b))).real < 0:
+                r = -r
+            return mp.re(r)
+
+        cuts = [p.imag for p in jg.branch_points(X, b) if abs(p.real - a) < 0.1 and min(0, h) < p.imag < max(0, h)]
+        return float(-2 * np.sign(h) * mp.quad(f, sorted([0.0, h] + cuts)))
+
+
+@pytest.mark.parametrize("branch_point, offset, height", [(0, 1e-3, 3.3), (0, 1e-3, 3.2), (2, 1e-3, 0.7)])
+def test_interpolating_hamiltonian_near_a_branch_point_against_mpmath(branch_point, offset, height):
+    # the segment [Re eta, eta] passes 1e-3 from a branch point, where nu has a square-root singularity nearby and
+    # the adaptive quadrature must subdivide.  Reference: mpmath at 30 digits (mpmath_G).  Tolerance: the relative
+    # accuracy the quadrature asks for, epsrel = 1e-13 (measured: <= 3.7e-16 on these cases, AMD EPYC).  A
+    # quadrature asked for 1e6 times less (epsabs 1e-9, epsrel 1e-7) misses it here by 3e-13..5e-12 (planted,
+    # issue 27), while the smooth cases of test_interpolating_hamiltonian_value still pass at 1e-11.
+    X, b = APPENDIX2_X0, APPENDIX2_B
+    bp = jg.branch_points(X, b)[branch_point]
+    eta = complex(bp.real + offset, height)
+    assert min(abs(eta.real + 1j * s - bp) for s in np.linspace(0, height, 20001)) < 2e-3  # near it indeed
+    G = jg.interpolating_hamiltonian(X, b, eta)
+    ref = mpmath_G(X, b, eta)
+    assert abs(G - ref) <= 1e-13 * abs(ref)
+
+
 @pytest.mark.parametrize("N", [1, 2, 3, 4])
 def test_interpolating_weights_give_gradient(N, rng):
     """grad G_eta = sum_m omega_m grad kappa_m (omega = interpolating_weights) equals a central finite

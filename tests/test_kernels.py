@@ -515,3 +515,30 @@ def test_a_continued_nu1_off_by_rel_gives_the_accurate_orbit(rel):
         out, _, _, _ = _kernels.iterate_single(APPENDIX2_X0, APPENDIX2_B, APPENDIX2_ETA, nu, True, 20, 1,
                                                specialise=spec)
         assert np.max(np.abs(out - ref)) <= 20 * PER_STEP_RTOL * _scale(ref)
+
+
+@pytest.mark.parametrize("N, specialise", [(1, False), (2, False), (3, False), (3, True), (4, False)])
+def test_drift_monitor_integrals_are_jg_integrals(N, specialise):
+    # the kernels' drift pass (_scalar._integrals, _drift_pass) against jetgaudin.integrals of the same rows, the
+    # definition drift_k = max_n |I_k(x_n) - I_k(x_0)| / max(1, |I_k(x_0)|), computed here from the saved rows.
+    # The two sums add the same terms in another order: a few ulp of the largest term (|I| <= ~50 here), so 1e-13
+    # absolute; a wrong integral formula is not preserved by the map and drifts at the 1e-2..1e-1 level (b y^3
+    # for 2b y^3 in H_1: planted, this test fails).
+    X = sample_on_leaf(N, np.linspace(0.5, 2.0, N), 1, seed=7 + N, scale=1.5)[0]
+    b, eta = 1.3, 2 - 1j
+    B = jg.TwoPointBacklund(b, eta)
+    out, final, drift, _ = _kernels.iterate_single(X, b, eta, B.nu1(X), False, 50, 5, specialise=specialise)
+    rows = np.concatenate([out, final[None]])
+    I = jg.integrals(rows, b)
+    want = np.max(np.abs(I - I[0]) / np.maximum(1.0, np.abs(I[0])), axis=0)
+    assert drift.shape == (2 * N,)
+    assert np.max(np.abs(drift - want)) <= 1e-13
+    # the batch kernels' drift pass (the lanes for N = 3, the prange loop otherwise), orbit by orbit
+    Xb = np.stack([X, 1.1 * X, X[::-1].copy()])
+    outb, finalb, driftb, _ = _kernels.iterate_batch(Xb, np.full(3, b), np.full(3, eta),
+                                                     np.array([B.nu1(x) for x in Xb]), False, 50, 5,
+                                                     specialise=specialise)
+    for i in range(3):
+        Ib = jg.integrals(np.concatenate([outb[i], finalb[i][None]]), b)
+        wantb = np.max(np.abs(Ib - Ib[0]) / np.maximum(1.0, np.abs(Ib[0])), axis=0)
+        assert np.max(np.abs(driftb[i] - wantb)) <= 1e-13

@@ -337,3 +337,28 @@ def test_uvw_printed_misprints_fail_at_a_random_point(rng):
         assert abs(val - corrected(D, lam - mu)) < 1e-12 * (1 + abs(val))
         # printed differs by 2|truth| (sign flip) or |truth| (claimed zero); the truth is O(0.1-1) here
         assert abs(val - printed(D, lam - mu)) > 0.1 * abs(val) > 1e-3
+
+
+@pytest.mark.parametrize("i", [1, 2, 3])
+def test_jet_function_needs_only_the_constants_up_to_its_index(i):
+    # f_i depends on c_1..c_i only (T is lower triangular: c(eps)^n starts at eps^n), so the default N = i + 1 takes
+    # exactly i constants; a larger N gives the same value (the extra terms are exact zeros).  Kills the mutant
+    # "default N = i + 2" (it would demand one constant more; docs/mutation.md).
+    c = [-1.0, 0.3, -0.2][:i]
+    lam = np.array([0.7 + 0.2j, -1.3 + 0.5j])
+    f = jet_function(i, lam, c=c)
+    assert np.array_equal(f, jet_function(i, lam, N=i + 1, c=c))
+    assert np.allclose(jet_function(i, lam, N=i + 3, c=c + [0.5, 0.25]), f, rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("c", [None, [-1.0, 0.4]])
+def test_lax_coefficients_of_complex_states_are_complex_linear(c):
+    # the one-point map's states are complex: xi_0 = b and xi_{n+1} = sum_i T[i, n] y_i is complex-linear in the
+    # state, xi(Xr + i Xi) = xi(Xr) + i xi(Xi) for n >= 1, to one rounding of the complex product (1e-15 relative).
+    # Kills the mutant allow_complex=True -> False in lax_coefficients (docs/mutation.md).
+    rng = np.random.default_rng(3)
+    Xr, Xi = rng.normal(size=(2, 4, 9))
+    got = lax_coefficients(Xr + 1j * Xi, 1.3, c)
+    want = lax_coefficients(Xr, 1.3, c)[..., 1:, :] + 1j * lax_coefficients(Xi, 1.3, c)[..., 1:, :]
+    assert got.dtype.kind == "c" and np.array_equal(got[..., 0, :].real, np.broadcast_to([0, 0, 1.3], (4, 3)))
+    assert np.allclose(got[..., 1:, :], want, rtol=1e-15, atol=1e-15)

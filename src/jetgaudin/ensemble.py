@@ -22,7 +22,7 @@ import numpy as np
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
 from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
-from .maps import Advance, Backend, Branch, Map, MapProperties, check_count
+from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop
 from .spectral import integrals as _jg_integrals
 
 __all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
@@ -71,9 +71,21 @@ class EnsembleResult:
     save_every: int
 
     @property
-    def max_drift(self) -> np.ndarray:
-        """Largest relative integral drift of each orbit, shape ``(B,)``."""
+    def max_drift_per_orbit(self) -> np.ndarray:
+        """Largest relative drift of each orbit over its 2N integrals, ``max_m drift[:, m]``, shape ``(B,)``."""
         return np.max(self.drift, axis=-1)
+
+    @property
+    def max_drift_per_integral(self) -> np.ndarray:
+        """Largest relative drift of each integral ``(H_1..H_N, C_1..C_N)`` over the orbits, ``max_i drift[i, :]``,
+        shape ``(2N,)``."""
+        return np.max(self.drift, axis=0)
+
+    @property
+    def max_drift(self) -> np.ndarray:
+        """Per orbit, shape ``(B,)``: the same as :attr:`max_drift_per_orbit` (kept under its first name; the
+        per-integral maximum is :attr:`max_drift_per_integral`, the table of both is :attr:`drift`)."""
+        return self.max_drift_per_orbit
 
     def drift_quantiles(self, q=DRIFT_QUANTILES) -> np.ndarray:
         """Quantiles over the orbits of each integral's relative drift, shape ``(len(q), 2N)``: row ``j`` is the
@@ -121,16 +133,21 @@ def per_orbit_integrals(X, b):
 @dataclass(frozen=True, eq=False)
 class BatchBacklund(Map):
     r"""The real two-point map on a batch ``(B, 3N)`` with a field ``b_i`` and a parameter ``η_i`` per orbit
-    (arrays ``(B,)``), compiled route (:func:`iterate_ensemble`; the carry is ``ν1`` ``(B,)``).  Orbit ``i`` equals
-    ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ..., kernel="compiled")`` bit for bit.  ``scheduler`` /
-    ``chunk_size``: run each call on a Dask cluster (same bits)."""
+    (arrays ``(B,)``; the carry is ``ν1`` ``(B,)``).  ``backend`` (alias ``kernel``; the rule of
+    :mod:`jetgaudin.maps`): ``"auto"`` (the default) and ``"compiled"`` run the compiled kernels
+    (:func:`iterate_ensemble`), orbit ``i`` equal to ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ...,
+    backend="compiled")`` bit for bit; ``"numpy"`` the NumPy reference step orbit by orbit (for checks, not
+    speed), orbit ``i`` equal to ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ..., backend="numpy")``.
+    ``scheduler`` / ``chunk_size``: run each compiled call on a Dask cluster (same bits)."""
 
     b: np.ndarray
     eta: np.ndarray
     branch: Branch = Branch.DEFAULT
     scheduler: Any = field(default=None, repr=False)
     chunk_size: int | None = None
+    backend: Backend = Backend.AUTO
     properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
         b = np.atleast_1d(np.asarray(self.b))
@@ -147,48 +164,66 @@ class BatchBacklund(Map):
         object.__setattr__(self, "b", bb)
         object.__setattr__(self, "eta", ee)
         object.__setattr__(self, "branch", Branch.parse(self.branch))
-
-    @property
-    def backend(self) -> Backend:
-        return Backend.COMPILED
+        self._init_backend()
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return per_orbit_integrals(X, self.b)
 
     def start(self, X: np.ndarray) -> np.ndarray:
+        """``ν1`` by the branch rule, orbit by orbit: the compiled rule (NumPy's ``jg.nu`` for
+        ``backend="numpy"``)."""
+        X, _ = as_state(X)
+        if self.backend is Backend.NUMPY:
+            return np.array([self._orbit_map(i).nu1(X[i]) for i in range(len(X))], dtype=complex)
         from .backlund._compiled import kernels
 
-        X, _ = as_state(X)
         return kernels().nu_default(np.ascontiguousarray(X.reshape(-1, X.shape[-1])), self.b, self.eta,
                                     self.branch.sheet)
 
-    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
-        """One NumPy step per orbit (the reference route; for checks, not speed)."""
+    def _orbit_map(self, i: int):
         from .backlund.maps import TwoPointBacklund
 
-        out = [TwoPointBacklund(self.b[i], self.eta[i], self.branch).step(X[i], None if carry is None else carry[i])
-               for i in range(len(X))]
+        return TwoPointBacklund(self.b[i], self.eta[i], self.branch, Backend.NUMPY)
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        """One NumPy step per orbit (the reference route; for checks, not speed)."""
+        out = [self._orbit_map(i).step(X[i], None if carry is None else carry[i]) for i in range(len(X))]
         return (np.array([o[0] for o in out]), np.array([o[1] for o in out], dtype=complex),
                 np.array([o[2] for o in out], dtype=float))
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """The compiled kernels (:meth:`_compiled_advance`) or, for ``backend="numpy"``, the loop over :meth:`step`
+        with the carry as given (``None``: each orbit's first step applies the branch rule, as the single-orbit
+        map does, so that orbit ``i`` equals it bit for bit)."""
+        X = np.asarray(X)
+        if X.size and self.resolved_backend(X, steps) is Backend.COMPILED:
+            steps, save_every = check_count(steps, "steps"), check_count(save_every, "save_every", 1)
+            return self._compiled_advance(X, carry, steps, save_every)
+        return step_loop(self, X, carry, steps, save_every)
+
+    def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
         res = iterate_ensemble(X, self.b, self.eta, steps, save_every=save_every, branch=self.branch, nu1=carry,
                                scheduler=self.scheduler, chunk_size=self.chunk_size)
         return Advance(rows=res.states[1:], X=res.final, carry=res.nu, imag_max=np.zeros(len(res.final)))
 
     def inverse(self) -> BatchBacklund:
         other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
-        return BatchBacklund(self.b, self.eta, other, self.scheduler, self.chunk_size)
+        return BatchBacklund(self.b, self.eta, other, self.scheduler, self.chunk_size, self.backend)
 
-    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+    def prepare_kernels(self, X: np.ndarray | None = None, steps: int | None = None, notify=None):
         """Compile (or load) the kernels of :meth:`advance` on ``X`` (B, 3N) visibly, as
-        :meth:`jetgaudin.TwoPointBacklund.prepare_kernels`; on a Dask cluster only the branch rule runs here, and
+        :meth:`jetgaudin.TwoPointBacklund.prepare_kernels` (``None`` for ``backend="numpy"``; no ``X``: every
+        kernel, :func:`jetgaudin.backlund.kernels.warmup`); on a Dask cluster only the branch rule runs here, and
         what the workers compile is announced (:func:`jetgaudin.backlund.kernels.remote_notice`)."""
         import sys
 
         from .backlund._compiled import kernels
 
+        if self.backend is Backend.NUMPY:
+            return None
         K = kernels()
+        if X is None:
+            return K.warmup(notify)
         n, B = X.shape[-1], max(1, len(X))
         if self.scheduler is not None:
             msg = K.remote_notice(n, B)
@@ -197,7 +232,7 @@ class BatchBacklund(Map):
 
     def describe(self) -> dict:
         return {"kind": "two_point_batch", "b": self.b.tolist(), "eta": [[e.real, e.imag] for e in self.eta],
-                "branch": self.branch.value}
+                "branch": self.branch.value, "backend": self.backend.value}
 
 
 def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise):

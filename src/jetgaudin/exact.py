@@ -283,7 +283,10 @@ class ExactFlow(FixedStep, Map):
     backend: Backend = Backend.AUTO  # type: ignore[assignment]
     rho_factor: float = RHO_FACTOR
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias of backend
     chunk_invariant: ClassVar[bool] = False
+    #: the backend rule (jetgaudin.maps): advance runs the compiled kernels itself (AUTO: compiled)
+    has_compiled: ClassVar[bool] = True  # type: ignore[misc]
     _maps: ClassVar[int | None] = None  # the number of two-point maps per (sub-)step; None: N − 1 (the exact flow)
     _kind: ClassVar[str] = "exact"
 
@@ -297,7 +300,7 @@ class ExactFlow(FixedStep, Map):
         _field_strength(self.H)
         object.__setattr__(self, "dt", nonzero_step(self.dt))
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
-        object.__setattr__(self, "backend", Backend.parse(self.backend))
+        self._init_backend()
         rf = real_number(self.rho_factor, "rho_factor")
         if rf <= 1:
             raise InvalidParameterError(f"rho_factor must be > 1 (Re eta beyond every branch point), got {rf}")
@@ -352,7 +355,7 @@ class ExactFlow(FixedStep, Map):
         """``(rows, final)`` of ``steps`` steps on a flat batch ``X`` (B, 3N) with the parameters ``p``."""
         s = self.substeps
         rows = np.empty((steps // save_every,) + X.shape)
-        compiled = self.backend is not Backend.NUMPY
+        compiled = self.resolved_backend(X, steps) is Backend.COMPILED
         X = np.ascontiguousarray(X, dtype=float)
         done = 0
         while done < steps:

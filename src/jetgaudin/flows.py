@@ -19,7 +19,7 @@ from ._errors import IntegrationError, InvalidParameterError
 from ._validate import as_state, parse_choice, real_number
 from .algebra import structure_constants
 from .hamiltonians import IntegralHamiltonian
-from .maps import Advance, Map, MapProperties, check_count, register_map
+from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .spectral import integrals
 
 __all__ = ["Trajectory", "integrate", "Method", "FlowMap"]
@@ -201,7 +201,9 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     r"""Integrate ``Ẋ = Π(X) ∇H`` from ``X0`` over ``[0, T]`` (``T < 0``: backwards).
 
     ``H`` is an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian` or
-    :func:`jetgaudin.interpolating_flow_hamiltonian`), or any object with ``vector_field(X)``
+    :func:`jetgaudin.interpolating_flow_hamiltonian` ``(X0, b, η)``, the Hamiltonian whose flow from ``X0`` is that of
+    ``G_η``; the value ``G_η(X)`` itself is :func:`jetgaudin.interpolating_hamiltonian`, a number, not something to
+    integrate), or any object with ``vector_field(X)``
     (then give the field ``b`` for the recorded integrals, unless ``H.record_integrals(X)`` gives them, as for
     :class:`jetgaudin.gaudin.ChainHamiltonian`).  ``t_eval`` (default: ``0`` and ``T``)
     are the sample times, strictly monotone, between ``0`` and ``T``.  ``method``: ``"DOP853"``
@@ -291,11 +293,14 @@ class FlowMap(Map):
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) over a fixed time step ``dt``, as a :class:`~jetgaudin.maps.Map`.
 
     ``H``: an :class:`IntegralHamiltonian` (e.g. :func:`jetgaudin.physical_hamiltonian`, or
-    :func:`jetgaudin.interpolating_flow_hamiltonian`, whose time-1 flow from its ``X0`` is the two-point map);
+    :func:`jetgaudin.interpolating_flow_hamiltonian` ``(X0, b, η)``, whose time-1 flow from its ``X0`` is the two-point
+    map; not :func:`jetgaudin.interpolating_hamiltonian`, which is the value ``G_η(X)``);
     ``method``, ``rtol``, ``atol`` as in :func:`integrate`.  :meth:`advance` integrates ``steps * dt`` in one
     call sampled every ``save_every * dt`` (an adaptive integrator restarted at other times gives other
     round-off: a flow is reproducible for a given chunking, not bit for bit across chunkings; the run layer
-    therefore cuts flows into fixed chunks, ``chunk_invariant = False``).  No carry (zeros).
+    therefore cuts flows into fixed chunks, ``chunk_invariant = False``).  No carry (zeros).  ``backend`` (alias
+    ``kernel``; the rule of :mod:`jetgaudin.maps`): the NumPy/SciPy route only (``"auto"``, the default, is
+    ``"numpy"``; ``"compiled"`` is refused with :class:`~jetgaudin.InvalidParameterError`).
     """
 
     H: IntegralHamiltonian
@@ -303,8 +308,10 @@ class FlowMap(Map):
     method: Method = Method.DOP853
     rtol: float = 1e-12
     atol: float = 1e-12
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_FLOW_PROPERTIES, init=False, repr=False, compare=False)
     chunk_invariant = False
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
         if not isinstance(self.H, IntegralHamiltonian):
@@ -317,6 +324,7 @@ class FlowMap(Map):
         object.__setattr__(self, "method", Method.parse(self.method))
         object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
         object.__setattr__(self, "atol", _check_tol("atol", self.atol, False))
+        self._init_backend()
 
     @property
     def n_state(self) -> int:
@@ -346,25 +354,27 @@ class FlowMap(Map):
 
     def inverse(self) -> FlowMap:
         """The flow backwards in time (``dt → −dt``)."""
-        return _flow_map(self.H, -self.dt, self.method, self.rtol, self.atol)
+        return _flow_map(self.H, -self.dt, self.method, self.rtol, self.atol, self.backend)
 
     def describe(self) -> dict:
         b = np.asarray(self.H.b, dtype=float)
         return {"kind": "flow", "b": b.tolist(), "weights": np.asarray(self.H.weights).tolist(),
                 "c": None if self.H.c is None else np.asarray(self.H.c).tolist(), "dt": self.dt,
-                "method": self.method.value, "rtol": self.rtol, "atol": self.atol}
+                "method": self.method.value, "rtol": self.rtol, "atol": self.atol, "backend": self.backend.value}
 
 
-def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float) -> FlowMap:
+def _flow_map(H: IntegralHamiltonian, dt: float, method: Method, rtol: float, atol: float,
+              backend: Backend | str = Backend.AUTO) -> FlowMap:
     """A flow map with any nonzero ``dt`` (the constructor takes ``dt > 0``; the inverse runs backwards)."""
-    m = FlowMap(H, abs(dt), method, rtol, atol)
+    m = FlowMap(H, abs(dt), method, rtol, atol, Backend.parse(backend))
     object.__setattr__(m, "dt", float(dt))
     return m
 
 
 def _flow_from(d: dict) -> FlowMap:
     H = IntegralHamiltonian(d["b"], np.asarray(d["weights"], dtype=float), d.get("c"))
-    return _flow_map(H, float(d["dt"]), Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
+    return _flow_map(H, float(d["dt"]), Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]),
+                     d.get("backend", "auto"))
 
 
 register_map("flow", _flow_from)

@@ -5,6 +5,17 @@ Hamiltonian ``G_η = i ∫_{η̄}^{η} ν(λ) dλ`` of the real two-point Bäckl
 ``G_η`` depends on the state only through the integrals, so its Hamiltonian vector field at
 ``X`` is ``Σ_m ω_m X_{κ_m}`` with ``ω_m = ∂G_η/∂κ_m`` constant along its own flow: the flow of
 ``G_η`` for time ``T`` is the flow of the quadratic Hamiltonian ``Σ_m ω_m(X_0) κ_m`` for time ``T``.
+
+Which is which:
+
+* :func:`interpolating_hamiltonian` ``(X, b, η)`` -- the **value** ``G_η(X)`` (a number per state; the quadrature
+  of ``ν`` along the segment);
+* :func:`interpolating_weights` ``(X, b, η)`` -- its gradient coordinates ``ω_m = ∂G_η/∂κ_m`` at ``X``;
+* :func:`interpolating_flow_hamiltonian` ``(X0, b, η)`` -- an :class:`IntegralHamiltonian` ``Σ_m ω_m(X0) κ_m``
+  (weights frozen at ``X0``) to **integrate**: its flow from ``X0`` is the flow of ``G_η`` (time 1: the two-point
+  map), not from another state;
+* :func:`interpolating_vector_field` ``(X, b, η)`` -- the vector field of ``G_η`` itself, each state with its own
+  weights.
 """
 
 from __future__ import annotations
@@ -114,25 +125,33 @@ def _segment_integral(X, b, eta, integrand, epsabs=1e-15, epsrel=1e-13):
 
 
 def interpolating_hamiltonian(X, b, eta):
-    r"""``G_η(X) = i ∫_{η̄}^{η} ν(λ; X) dλ = −2 ∫_0^{Im η} Re ν(Re η + i s) ds`` (vertical segment,
-    ``ν`` on the default branch; real since ``ν(λ̄) = conj ν(λ)``).  Shape ``(...)``."""
+    r"""The value ``G_η(X) = i ∫_{η̄}^{η} ν(λ; X) dλ = −2 ∫_0^{Im η} Re ν(Re η + i s) ds`` (vertical segment,
+    ``ν`` on the default branch; real since ``ν(λ̄) = conj ν(λ)``).  Shape ``(...)``.  To integrate its flow use
+    :func:`interpolating_flow_hamiltonian` (an :class:`IntegralHamiltonian`), not this function.  Adaptive
+    quadrature (SciPy ``quad_vec``) asked for ``epsrel = 1e-13``, ``epsabs = 1e-15``."""
     return -2.0 * _segment_integral(X, b, eta, lambda lam, nu: nu)
 
 
 def interpolating_weights(X, b, eta):
-    r"""``ω_m = ∂G_η/∂κ_m = −2 ∫_0^{Im η} Re[λ^{-m} / (2 ν(λ))] ds`` for ``m = 1..2N``, shape ``(..., 2N)``."""
+    r"""``ω_m = ∂G_η/∂κ_m = −2 ∫_0^{Im η} Re[λ^{-m} / (2 ν(λ))] ds`` for ``m = 1..2N``, shape ``(..., 2N)``: the
+    gradient of :func:`interpolating_hamiltonian` in the integrals, the weights of
+    :func:`interpolating_flow_hamiltonian`."""
     X, N = as_state(X)
     m = np.arange(1, 2 * N + 1)
     return -2.0 * _segment_integral(X, b, eta, lambda lam, nu: lam[..., None] ** (-m) / (2.0 * nu[..., None]))
 
 
 def interpolating_flow_hamiltonian(X0, b, eta) -> IntegralHamiltonian:
-    r"""The quadratic Hamiltonian ``Σ_m ω_m(X0) κ_m`` whose flow from ``X0`` is the flow of ``G_η``."""
+    r"""The quadratic Hamiltonian ``Σ_m ω_m(X0) κ_m`` (an :class:`IntegralHamiltonian`, weights
+    :func:`interpolating_weights` frozen at ``X0``) whose flow from ``X0`` is the flow of ``G_η``: give it to
+    :func:`jetgaudin.integrate` or :class:`jetgaudin.flows.FlowMap` with the same ``X0``.  Its value is not ``G_η``
+    (that is :func:`interpolating_hamiltonian`)."""
     return IntegralHamiltonian(b, interpolating_weights(X0, b, eta))
 
 
 def interpolating_vector_field(X, b, eta):
-    r"""The Hamiltonian vector field of ``G_η`` at ``X``: ``Π(X)∇G_η = Σ_m ω_m(X) Π(X)∇κ_m``,
-    shape ``(..., 3N)`` (vectorised: each state uses its own weights ``ω(X)``)."""
+    r"""The Hamiltonian vector field of ``G_η`` (:func:`interpolating_hamiltonian`) at ``X``:
+    ``Π(X)∇G_η = Σ_m ω_m(X) Π(X)∇κ_m``, shape ``(..., 3N)`` (vectorised: each state uses its own weights ``ω(X)``;
+    along one orbit it equals the field of :func:`interpolating_flow_hamiltonian` from any of its states)."""
     w = interpolating_weights(X, b, eta)
     return IntegralHamiltonian(b, w).vector_field(X)

@@ -13,16 +13,37 @@ The run layer (:mod:`jetgaudin.run`) drives any map through this surface only:
 * ``describe()`` / :func:`map_from_description` -- a JSON-able description and its inverse, so that a run
   can be resumed from ``run.json``.
 
+**The backend rule** (one for every map, written here once):
+
+* every map takes ``backend=`` (alias ``kernel=``; a :class:`Backend` or its value ``"auto"``, ``"numpy"``,
+  ``"compiled"``) in its constructor and in :meth:`Map.iterate`; the default is ``Backend.AUTO`` everywhere
+  (:func:`backend_option`: ``"auto"`` yields to the other name, two different concrete choices are refused);
+* a map *declares* a compiled route by overriding :meth:`Map._compiled_advance` (then :attr:`Map.has_compiled` is
+  true) and, optionally, its cost rule :meth:`Map._auto_backend` for ``AUTO`` (default: compiled) and
+  :meth:`Map.prepare_kernels`; everything else is shared: :meth:`Map.resolved_backend` ``(X, steps)`` (``AUTO``
+  is the NumPy route for a map without a compiled one), :meth:`Map.advance` (the compiled hook or the loop over
+  :meth:`Map.step`), :meth:`Map.with_backend`, :meth:`Map.iterate`;
+* ``backend="compiled"`` for a map without a compiled route is an :class:`InvalidParameterError` at construction
+  (:meth:`Map._init_backend`, called by the maps' ``__post_init__``) and in :meth:`Map.iterate`;
+* the argument order is ``(X, steps)`` everywhere: ``resolved_backend(X, steps)``, ``prepare_kernels(X, steps,
+  notify)``; ``prepare_kernels()`` without arguments compiles every kernel the map could need.
+
+Both routes of the two-point map keep the integrals at round-off (a random walk; ``docs/backlund.md``, section 7),
+so the ``AUTO`` choice is a matter of cost only.  The same rule in words, with the template of a map that follows
+it: ``docs/architecture.md``, "The backend rule".
+
 Concrete maps are frozen dataclasses.  The selection enums :class:`Backend` and :class:`Branch` live here.
 """
 
 from __future__ import annotations
 
 import abc
+import copy
+import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 
@@ -34,8 +55,10 @@ __all__ = [
     "Branch",
     "Map",
     "MapProperties",
+    "backend_option",
     "check_count",
     "map_from_description",
+    "with_resolved_backend",
     "register_map",
     "step_loop",
 ]
@@ -58,6 +81,17 @@ class Backend(StrEnum):
             raise InvalidParameterError(
                 f"backend (kernel) must be 'auto', 'numpy' or 'compiled', got {value!r}"
             ) from None
+
+
+def backend_option(backend: Backend | str | None = None, kernel: Backend | str | None = None) -> Backend | None:
+    """The backend a caller asked for with ``backend=`` or its alias ``kernel=``: ``None`` when neither is given
+    (keep the map's own); ``AUTO`` (no preference) yields to the other; two different concrete choices are an
+    :class:`InvalidParameterError`."""
+    chosen = [Backend.parse(v) for v in (backend, kernel) if v is not None]
+    concrete = {c for c in chosen if c is not Backend.AUTO}
+    if len(concrete) > 1:
+        raise InvalidParameterError(f"backend={backend!r} and its alias kernel={kernel!r} disagree; give one of them")
+    return concrete.pop() if concrete else (Backend.AUTO if chosen else None)
 
 
 class Branch(StrEnum):
@@ -146,8 +180,66 @@ class Map(abc.ABC):
 
     @property
     def backend(self) -> Backend:
-        """How the map is evaluated (maps without a compiled route: :attr:`Backend.NUMPY`)."""
+        """How the map is evaluated: the map's ``backend`` field (a map without the field: :attr:`Backend.NUMPY`)."""
         return Backend.NUMPY
+
+    @property
+    def has_compiled(self) -> bool:
+        """Whether the map has a compiled route: it overrides :meth:`_compiled_advance`."""
+        return type(self)._compiled_advance is not Map._compiled_advance
+
+    def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
+        """The compiled route of :meth:`advance` (maps with one override it; ``X`` non-empty, counts checked)."""
+        raise NotImplementedError(f"{type(self).__name__} has no compiled route")
+
+    def _auto_backend(self, X: Any, steps: Any) -> Backend:
+        """What ``AUTO`` means for a map with a compiled route, for ``steps`` steps of ``X`` (here: compiled; the
+        two-point maps weigh the compile or load time against the steps, :func:`jetgaudin.backlund.auto_kernel`)."""
+        return Backend.COMPILED
+
+    def resolved_backend(self, X: Any, steps: Any) -> Backend:
+        """The route :meth:`advance` takes for ``steps`` steps of the states ``X``: the map's ``backend``, with
+        ``AUTO`` resolved (:meth:`_auto_backend` for a map with a compiled route, the NumPy route otherwise)."""
+        b = self.backend
+        if b is not Backend.AUTO:
+            return b
+        return self._auto_backend(np.asarray(X), steps) if self.has_compiled else Backend.NUMPY
+
+    def _init_backend(self) -> None:
+        """Set the ``backend`` field from it and its alias field ``kernel`` (:func:`backend_option`; the alias is
+        then cleared), refusing ``COMPILED`` for a map without a compiled route.  Called by the ``__post_init__``
+        of every map with the fields ``backend: Backend = Backend.AUTO`` and ``kernel: Backend | str | None =
+        field(default=None, kw_only=True, repr=False, compare=False)``."""
+        chosen = backend_option(self.backend, getattr(self, "kernel", None))
+        object.__setattr__(self, "backend", Backend.AUTO if chosen is None else chosen)
+        if hasattr(self, "kernel"):
+            object.__setattr__(self, "kernel", None)
+        if self.backend is Backend.COMPILED and not self.has_compiled:
+            raise InvalidParameterError(
+                f"{type(self).__name__} has no compiled route: backend (kernel) must be 'auto' or 'numpy', "
+                "got 'compiled'"
+            )
+
+    def with_backend(self, backend: Backend | str) -> Self:
+        """This map with another ``backend`` (the same map when it is unchanged; :class:`InvalidParameterError` for
+        ``"compiled"`` on a map without a compiled route)."""
+        backend = Backend.parse(backend)
+        if backend is self.backend:
+            return self
+        if not self.has_compiled:  # one route: "auto" and "numpy" are the same map
+            if backend is Backend.COMPILED:
+                raise InvalidParameterError(f"{type(self).__name__} has no compiled route: backend (kernel) must be "
+                                            "'auto' or 'numpy', got 'compiled'")
+            return self
+        return dataclasses.replace(self, backend=backend)  # type: ignore[type-var]
+
+    def prepare_kernels(self, *args: Any, **kwargs: Any) -> Any:
+        """``prepare_kernels(X=None, steps=None, notify=None)``: compile (or load) the kernels :meth:`advance` of
+        ``steps`` steps from ``X`` will call, visibly (``notify(message)``; default stderr), and return a report of
+        the time spent (``None``: nothing to compile, as here for a map without a compiled route).  Without
+        arguments: every kernel the map could need.  (Declared with ``*args, **kwargs`` so that a map may spell its
+        signature out; the order is ``(X, steps, notify)``.)"""
+        return None
 
     @abc.abstractmethod
     def integrals(self, X: np.ndarray) -> np.ndarray:
@@ -163,17 +255,26 @@ class Map(abc.ABC):
         imag_residue)``, the residue of shape ``(...)`` (zeros where not defined)."""
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        """``steps`` steps from ``(X, carry)`` keeping every ``save_every``-th state (a loop over :meth:`step`;
-        ``carry=None`` starts the orbit with :meth:`start`)."""
+        """``steps`` steps from ``(X, carry)`` keeping every ``save_every``-th state: the compiled route
+        (:meth:`_compiled_advance`) when :meth:`resolved_backend` says so, else a loop over :meth:`step`
+        (``carry=None`` starts the orbit with :meth:`start`)."""
         X = np.asarray(X)
+        if self.has_compiled and X.size and self.resolved_backend(X, steps) is Backend.COMPILED:
+            return self._compiled_advance(X, carry, check_count(steps, "steps"),
+                                          check_count(save_every, "save_every", 1))
         return step_loop(self, X, self.start(X) if carry is None else carry, steps, save_every)
 
     def iterate(self, X0: np.ndarray, steps: int, *, save_every: int = 1, carry: Any = None,
-                return_carry: bool = False) -> np.ndarray | tuple[np.ndarray, Any]:
+                return_carry: bool = False, backend: Backend | str | None = None,
+                kernel: Backend | str | None = None) -> np.ndarray | tuple[np.ndarray, Any]:
         """Orbit ``X_0, X_k, …, X_{⌊steps/k⌋k}`` (``k = save_every``), shape ``(steps//k + 1, ..., n)``;
-        ``return_carry=True`` also returns the carry after the last step (pass it back to continue)."""
+        ``return_carry=True`` also returns the carry after the last step (pass it back to continue).
+        ``backend`` (alias ``kernel``): the route for this call (default: the map's ``backend``; the rule of the
+        module doc)."""
+        choice = backend_option(backend, kernel)
+        m = self if choice is None else self.with_backend(choice)
         X0 = np.asarray(X0)
-        adv = self.advance(X0, carry, steps, save_every)
+        adv = m.advance(X0, carry, steps, save_every)
         orbit = np.concatenate([X0[None].astype(adv.rows.dtype, copy=False), adv.rows], axis=0)
         return (orbit, adv.carry) if return_carry else orbit
 
@@ -188,6 +289,15 @@ class Map(abc.ABC):
     @abc.abstractmethod
     def describe(self) -> dict:
         """A JSON-able description with ``"kind"`` and every parameter (:func:`map_from_description` inverts it)."""
+
+
+def with_resolved_backend(m: Map, backend: Backend) -> Map:
+    """A copy of ``m`` with its ``backend`` field set to ``backend`` (the run layer records the route ``AUTO`` chose);
+    the copy is not validated again (``m`` was when it was built: a flow map run backwards, ``dt < 0``, which the
+    constructor refuses, stays valid)."""
+    out = copy.copy(m)
+    object.__setattr__(out, "backend", Backend.parse(backend))
+    return out
 
 
 def step_loop(m: Map, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:

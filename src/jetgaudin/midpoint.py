@@ -19,7 +19,7 @@ from ._errors import IntegrationError, InvalidParameterError
 from ._validate import as_state
 from .exact import FixedStep, nonzero_step
 from .hamiltonians import IntegralHamiltonian
-from .maps import Map, MapProperties, register_map
+from .maps import Backend, Map, MapProperties, register_map
 from .spectral import integrals
 
 __all__ = ["ImplicitMidpoint"]
@@ -36,16 +36,20 @@ _MIDPOINT_PROPERTIES = MapProperties(
 @dataclass(frozen=True, eq=False)
 class ImplicitMidpoint(FixedStep, Map):
     """One step of the implicit midpoint rule for ``H`` (an :class:`~jetgaudin.IntegralHamiltonian`) with time step
-    ``dt`` (either sign; ``−dt`` is :meth:`inverse`).  States ``(3N,)`` or ``(..., 3N)``; no carry."""
+    ``dt`` (either sign; ``−dt`` is :meth:`inverse`).  States ``(3N,)`` or ``(..., 3N)``; no carry.  ``backend``
+    (alias ``kernel``; the rule of :mod:`jetgaudin.maps`): the NumPy route only (``"compiled"`` is refused)."""
 
     H: IntegralHamiltonian
     dt: float
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_MIDPOINT_PROPERTIES, init=False, repr=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias of backend
 
     def __post_init__(self) -> None:
         if not isinstance(self.H, IntegralHamiltonian) or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("H must be an IntegralHamiltonian with one set of weights (shape (2N,))")
         object.__setattr__(self, "dt", nonzero_step(self.dt))
+        self._init_backend()
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return np.asarray(integrals(X, self.H.b, self.H.c), dtype=float)
@@ -82,15 +86,16 @@ class ImplicitMidpoint(FixedStep, Map):
         return Y, zeros.astype(complex), zeros
 
     def inverse(self) -> ImplicitMidpoint:
-        return ImplicitMidpoint(self.H, -self.dt)
+        return ImplicitMidpoint(self.H, -self.dt, self.backend)
 
     def describe(self) -> dict:
         return {"kind": "midpoint", "b": np.asarray(self.H.b, dtype=float).tolist(),
-                "weights": np.asarray(self.H.weights).tolist(), "dt": self.dt}
+                "weights": np.asarray(self.H.weights).tolist(), "dt": self.dt, "backend": self.backend.value}
 
 
 def _midpoint_from(d: dict) -> ImplicitMidpoint:
-    return ImplicitMidpoint(IntegralHamiltonian(d["b"], np.asarray(d["weights"], dtype=float)), float(d["dt"]))
+    return ImplicitMidpoint(IntegralHamiltonian(d["b"], np.asarray(d["weights"], dtype=float)), float(d["dt"]),
+                            d.get("backend", "auto"))
 
 
 register_map("midpoint", _midpoint_from)

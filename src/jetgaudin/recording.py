@@ -5,7 +5,7 @@ An orbit run is the run layer's case of one state: :func:`run_orbit` builds a :c
 directory::
 
     DIR/orbit.h5     HDF5 (SWMR mode): datasets ``n`` (int64, rows) and ``X`` (float64, rows × 3N)
-    DIR/orbit.csv    header ``n,y0_1,y0_2,y0_3,y1_1,...``; one row per saved step, 17 significant digits
+    DIR/orbit.csv    header ``n,y0^1,y0^2,y0^3,y1^1,...``; one row per saved step, 17 significant digits
     DIR/run.json     inputs, map, version, kernel, status, last safe step, checkpoint, integrals at n = 0, drifts
 
 Guarantees: ``docs/reliability.md`` (rows at ``n ≡ 0 (mod save_every)`` and the last step; durable checkpoints;

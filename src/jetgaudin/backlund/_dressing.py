@@ -228,3 +228,32 @@ def dress_one_point(ell, eta, p, q, inverse=False):
     lead = np.max(np.abs(R[..., 0, :, :]), axis=(-2, -1))
     Q, res = laurent_divide(R[..., 1:, :, :], [-eta * np.ones(np.shape(p))])
     return Q, np.maximum(res, lead)
+
+
+def dress_real_two_point(ell, eta, M0):
+    r"""The real two-point dressing ``ℓ̆ = M ℓ adj(M) / D`` (eq. (128)), ``M = λ + M0``, ``D = (λ − η)(λ − η̄)``,
+    evaluated as ``ℓ̆ = ℓ + M [P, ℓ] / D``; returns ``(ℓ̆, res)`` as :func:`dress_two_point`.
+
+    With ``m = tr(M0)/2 = −Re η`` and ``P = M0 − m`` (traceless), ``adj M = M − 2P`` and ``ℓ adj M = adj M ℓ +
+    [P, ℓ]``, so ``M ℓ adj M = det(M) ℓ + M [P, ℓ]``; ``det M = (λ + m)² − P² = D`` because ``P² = −(Im η)²`` for
+    the ``M0`` of :func:`real_two_point_M0` (``P = i Im η (n̂·σ)`` with a unit vector ``n̂``).  The exact division
+    then acts on ``M [P, ℓ]`` only, of size ``|Im η| |ℓ|``: its round-off is a random walk of that size.  The
+    form ``R / D`` of :func:`dress_two_point` divides the whole ``D ℓ`` too, and the rounded ``δ2 = |η|²`` is the
+    same every step, so there its relative error ``ε`` rescales ``ℓ`` by ``1 + O(ε)`` at every step, the same
+    way: the integrals drift linearly (``docs/reliability.md``, "Integral drift of the two routes").
+    """
+    N = ell.shape[-3] - 1
+    P = M0.copy()
+    # the traceless part: M0 + Re(eta) I; the diagonal's real part is -Re(eta) exactly, so only Im survives
+    P[..., 0, 0] = 1j * M0[..., 0, 0].imag
+    P[..., 1, 1] = 1j * M0[..., 1, 1].imag
+    Pe = P[..., None, :, :]
+    C = mm(Pe, ell) - mm(ell, Pe)  # [P, ℓ_m], m = 0..N
+    shape = np.broadcast_shapes(ell.shape[:-3], M0.shape[:-2]) + (N + 3, 2, 2)
+    S = np.zeros(shape, dtype=complex)  # coefficients of λ^{2-k}: M(λ)[P, ℓ(λ)] has no λ² term
+    S[..., 1 : N + 2, :, :] += C
+    S[..., 2 : N + 3, :, :] += mm(M0[..., None, :, :], C)
+    eta = np.asarray(eta, dtype=complex)
+    ones = np.ones(M0.shape[:-2])
+    Q, res = laurent_divide(S, [-2.0 * eta.real * ones, (eta * np.conj(eta)).real * ones])
+    return ell + Q, res

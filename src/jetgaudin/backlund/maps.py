@@ -25,12 +25,23 @@ import numpy as np
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import as_state, nonzero_field, spectral_parameter
 from ..lax import ell_coefficients, state_from_ell
-from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
+from ..maps import (
+    Advance,
+    Backend,
+    Branch,
+    Map,
+    MapProperties,
+    backend_option,
+    check_count,
+    register_map,
+    step_loop,
+)
 from ..spectral import _nu_from_kappa, curve_coefficients, integrals
 from . import _compiled
 from ._dressing import (
     _safe_ratio,
     dress_one_point,
+    dress_real_two_point,
     dress_two_point,
     eigenvector,
     horner,
@@ -157,8 +168,10 @@ class TwoPointBacklund(Map):
     map and is refused with :class:`InvalidParameterError`).  Maps real states ``(..., 3N)`` to real states;
     it preserves the 2N integrals, is a Poisson map, commutes with itself for other ``η``, has the
     ``"opposite"`` branch as inverse, and equals the time-1 flow of ``G_η``
-    (:func:`jetgaudin.interpolating_hamiltonian`).  ``backend``: :class:`~jetgaudin.maps.Backend` of
-    :meth:`advance` / :meth:`iterate` (the carry is ``ν1``).
+    (the value of ``G_η`` is :func:`jetgaudin.interpolating_hamiltonian`; the quadratic Hamiltonian with the same
+    flow from a given ``X0``, for :func:`jetgaudin.integrate`, is :func:`jetgaudin.interpolating_flow_hamiltonian`).
+    ``backend`` (alias ``kernel``; default ``"auto"``): the route of :meth:`advance` / :meth:`iterate`, by the rule
+    of :mod:`jetgaudin.maps` (the carry is ``ν1``).
 
     >>> import jetgaudin as jg
     >>> B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
@@ -176,12 +189,13 @@ class TwoPointBacklund(Map):
     branch: Branch = Branch.DEFAULT
     backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False, compare=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
-        object.__setattr__(self, "backend", Backend.parse(self.backend))
+        self._init_backend()
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: the real two-point map is "
@@ -244,7 +258,7 @@ class TwoPointBacklund(Map):
         L1 = horner(ell, self.eta)
         k1, k2 = eigenvector(L1[..., 0, 0], L1[..., 0, 1], L1[..., 1, 0], nu1)
         M0 = real_two_point_M0(self.eta, k1, k2)
-        new_ell, res = dress_two_point(ell, self.eta, np.conj(self.eta), M0)
+        new_ell, res = dress_real_two_point(ell, self.eta, M0)
         _check_residual(res, ell, "two-point Bäcklund step")
         Xc = state_from_ell(new_ell)
         Xr = Xc.real
@@ -253,24 +267,28 @@ class TwoPointBacklund(Map):
             raise SingularStepError("two-point Bäcklund step produced non-finite values; change eta")
         return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
-    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
-        """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` (``AUTO`` resolved by
-        :func:`auto_kernel`)."""
-        if self.backend is not Backend.AUTO:
-            return self.backend
+    def _auto_backend(self, X: np.ndarray, steps: int) -> Backend:
+        """``AUTO``: :func:`auto_kernel` (compiled when its kernels are loaded, or from 2000 orbit-steps on when
+        Numba's cache holds them, or from 20000 on when they must first be compiled; NumPy otherwise)."""
         return Backend(auto_kernel(steps, X.shape[-1], X.shape[:-1]))
 
-    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+    def prepare_kernels(self, X: np.ndarray | None = None, steps: int | None = None, notify=None):
         """Compile (or load) the kernels that :meth:`advance` of ``steps`` steps from ``X`` will call, saying so first
         with the expected time (``notify(message)``; default: stderr) and when done; nothing is said when they are
         loaded already, found in Numba's cache (loaded in a fraction of a second, timed) or the NumPy route is used.
-        Returns a :class:`~jetgaudin.backlund.kernels.CompileReport` (``None`` on the NumPy route).  The run layer
-        calls it before a run, so that compile time is visible and apart from the stepping rate; :meth:`iterate`
-        and :meth:`advance` compile silently on first use."""
-        X, _ = as_state(X)
-        if X.size == 0 or self.resolved_backend(steps, X) is not Backend.COMPILED:
+        ``steps=None``: any number of steps (the kernels of the compiled route unless ``backend="numpy"``); no
+        arguments: every kernel a two-point map could need (every N, one orbit and batches:
+        :func:`jetgaudin.backlund.kernels.warmup`).  Returns a :class:`~jetgaudin.backlund.kernels.CompileReport`
+        (``None`` on the NumPy route).  The run layer calls it before a run, so that compile time is visible and
+        apart from the stepping rate; :meth:`iterate` and :meth:`advance` compile silently on first use."""
+        if self.backend is Backend.NUMPY:
             return None
         K = _compiled.kernels()
+        if X is None:
+            return K.warmup(notify)
+        X, _ = as_state(X)
+        if X.size == 0 or (steps is not None and self.resolved_backend(X, steps) is not Backend.COMPILED):
+            return None
         return K.prepare(X.shape[-1], None if X.ndim == 1 else int(np.prod(X.shape[:-1])), notify=notify,
                          announce_load=False)
 
@@ -286,10 +304,13 @@ class TwoPointBacklund(Map):
             carry = _check_nu(carry, X.shape[:-1], "nu1")
         if X.size == 0:
             return _empty_advance(X, steps, save_every, carry)
-        if self.resolved_backend(steps, X) is Backend.COMPILED:
-            orbit, final, nu = self._orbit_compiled(X, carry, steps, save_every)
-            return Advance(rows=orbit[1:], X=final, carry=nu, imag_max=np.zeros(X.shape[:-1]))
+        if self.resolved_backend(X, steps) is Backend.COMPILED:
+            return self._compiled_advance(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
+
+    def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
+        orbit, final, nu = self._orbit_compiled(X, carry, steps, save_every)
+        return Advance(rows=orbit[1:], X=final, carry=nu, imag_max=np.zeros(X.shape[:-1]))
 
     def _orbit_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> tuple[Any, Any, Any]:
         """``(orbit (steps//save_every + 1, ..., 3N) including X, final state, ν1)`` by the compiled kernels."""
@@ -310,7 +331,8 @@ class TwoPointBacklund(Map):
         return orbit, final.reshape(X.shape), nu.reshape(lead)
 
     def iterate(self, X0, steps: int, *, save_every: int = 1, kernel: Backend | str | None = None, nu1=None,
-                return_nu: bool = False, carry=None, return_carry: bool = False):
+                return_nu: bool = False, carry=None, return_carry: bool = False,
+                backend: Backend | str | None = None):
         """Orbit ``X_0, X_k, X_2k, …, X_{⌊steps/k⌋k}`` (``k = save_every``), shape ``(steps//k + 1, ..., 3N)``.
 
         ``ν(η)`` is taken on the chosen branch at ``X_0`` and continued along the orbit (it depends on
@@ -319,34 +341,31 @@ class TwoPointBacklund(Map):
         the previous chunk's last ``ν1``, equals the unsplit run bit for bit).  ``return_nu=True`` (alias
         ``return_carry``) returns ``(orbit, ν1)`` with the last ``ν1`` used.
 
-        ``kernel`` (a :class:`~jetgaudin.maps.Backend` or its value; default: the map's ``backend``):
-        ``"numpy"`` (the reference route), ``"compiled"`` (Numba kernels, N = 3 with a specialised kernel; the
-        same orbits to round-off, ``ν1`` at ``X_0`` by the compiled branch rule; the imaginary residue of the
-        steps is not computed) or ``"auto"`` (:func:`auto_kernel`: compiled when its kernels are already
+        ``backend`` (alias ``kernel``; a :class:`~jetgaudin.maps.Backend` or its value; default: the map's
+        ``backend``): ``"numpy"`` (the reference route), ``"compiled"`` (Numba kernels, N = 3 with a specialised
+        kernel; the same orbits to round-off, ``ν1`` at ``X_0`` by the compiled branch rule; the imaginary residue
+        of the steps is not computed) or ``"auto"`` (:func:`auto_kernel`: compiled when its kernels are already
         loaded in the process, or from 2000 orbit-steps on when Numba's on-disk cache holds them (loading costs
         about 1000 NumPy steps), or from 20000 on when they must first be compiled (about 6 s); NumPy
-        otherwise).  A batch ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both
-        routes).  The compiled route compiles its kernels silently at first use (a library call prints nothing);
-        call :meth:`prepare_kernels` first to see it and time it apart (the run layer and the CLI do).
+        otherwise).  Both routes keep the integrals at round-off (``docs/reliability.md``).  A batch
+        ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both routes).  The compiled route
+        compiles its kernels silently at first use (a library call prints nothing); call :meth:`prepare_kernels`
+        first to see it and time it apart (the run layer and the CLI do).
         """
-        backend = self.backend if kernel is None else Backend.parse(kernel)
+        choice = backend_option(backend, kernel)
+        m = self if choice is None else self.with_backend(choice)
         X, _ = as_state(X0)
         steps = check_count(steps, "steps")
         save_every = check_count(save_every, "save_every", 1)
         c = nu1 if carry is None else carry
         if c is not None:
             c = _check_nu(c, X.shape[:-1], "nu1")
-        if backend is Backend.AUTO:
-            backend = Backend(auto_kernel(steps, X.shape[-1], X.shape[:-1]))
-        if backend is Backend.COMPILED and X.size:  # the kernels write the whole orbit, X_0 included
-            orbit, _, c = self._orbit_compiled(X, c, steps, save_every)
+        if X.size and m.resolved_backend(X, steps) is Backend.COMPILED:  # the kernels write the orbit, X_0 included
+            orbit, _, c = m._orbit_compiled(X, c, steps, save_every)
         else:
-            m = self if backend is self.backend else TwoPointBacklund(self.b, self.eta, self.branch, backend)
-            adv = m.advance(X, c, steps, save_every)
+            adv = m.with_backend(Backend.NUMPY).advance(X, c, steps, save_every)
             orbit, c = np.concatenate([X[None], adv.rows], axis=0), adv.carry
         return (orbit, c) if (return_nu or return_carry) else orbit
-
-
 
 
 @dataclass(frozen=True)
@@ -364,19 +383,24 @@ class OnePointBacklund(Map):
 
     ``ν = ±ν(η)`` by the branch rule of :func:`jetgaudin.nu` (principal root at ``Re η`` for complex
     states), ``branch="opposite"`` taking ``−ν(η)``.  Real input gives complex output.  The carry of
-    :meth:`advance` is ``ν``; the imaginary residue is not defined (zeros).
+    :meth:`advance` is ``ν``; the imaginary residue is not defined (zeros).  ``backend`` (alias ``kernel``):
+    the rule of :mod:`jetgaudin.maps`; this map has the NumPy route only (``"auto"``, the default, is
+    ``"numpy"``; ``"compiled"`` is refused).
     """
 
     b: float
     eta: complex
     branch: Branch = Branch.DEFAULT
     inverse_map: bool = False
+    backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_ONE_POINT_PROPERTIES, init=False, repr=False, compare=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "b", nonzero_field(self.b))
         object.__setattr__(self, "eta", spectral_parameter(self.eta))
         object.__setattr__(self, "branch", Branch.parse(self.branch))
+        self._init_backend()
 
     @property
     def sheet(self) -> int:
@@ -384,11 +408,11 @@ class OnePointBacklund(Map):
 
     def inverse(self) -> OnePointBacklund:
         """The inverse map (same ``η`` and branch)."""
-        return OnePointBacklund(self.b, self.eta, self.branch, not self.inverse_map)
+        return OnePointBacklund(self.b, self.eta, self.branch, not self.inverse_map, self.backend)
 
     def describe(self) -> dict:
         return {"kind": "one_point", "b": self.b, "eta": [self.eta.real, self.eta.imag],
-                "branch": self.branch.value, "inverse": bool(self.inverse_map)}
+                "branch": self.branch.value, "inverse": bool(self.inverse_map), "backend": self.backend.value}
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         """``(H_1..H_N, C_1..C_N)`` at (complex) ``X``, shape ``(..., 2N)``."""
@@ -444,15 +468,17 @@ class OnePointBacklund(Map):
         """Apply the map to states of shape ``(..., 3N)`` (real or complex); complex output."""
         return self.step(X)[0]
 
-    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False):
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry=None, return_carry: bool = False,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None):
         """Orbit ``X_0, …, X_steps`` (complex), shape ``(steps//save_every + 1, ..., 3N)``.
 
         ``ν`` is taken by the branch rule at ``X_0`` and continued along the orbit (the map preserves ``ν(η)²``).
         The states grow complex and, in general, large: the one-point map is not a physical (real) map.
+        ``backend`` (alias ``kernel``): ``"auto"`` or ``"numpy"`` (the only route).
         """
         X, _ = as_state(X0, allow_complex=True)
         return Map.iterate(self, X.astype(complex), steps, save_every=save_every, carry=carry,
-                           return_carry=return_carry)
+                           return_carry=return_carry, backend=backend, kernel=kernel)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """A loop over :meth:`step` (``carry=None``: the branch rule at the first step)."""
@@ -470,7 +496,8 @@ def _two_point_from(d: dict) -> TwoPointBacklund:
 
 
 def _one_point_from(d: dict) -> OnePointBacklund:
-    return OnePointBacklund(d["b"], complex(*d["eta"]), d.get("branch", "default"), bool(d.get("inverse", False)))
+    return OnePointBacklund(d["b"], complex(*d["eta"]), d.get("branch", "default"), bool(d.get("inverse", False)),
+                            d.get("backend", "auto"))
 
 
 register_map("two_point", _two_point_from)

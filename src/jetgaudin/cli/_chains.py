@@ -18,25 +18,31 @@ SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer
               "N = len(--init)/3]")
 
 
-FAMILY_HELP = ("the Gaudin family of --sites: 'rational' (XXX, the paper's) or 'trigonometric' (XXZ, anisotropy "
-               "--gamma) [default: rational]")
+FAMILY_HELP = ("the Gaudin family of --sites: 'rational' (XXX, the paper's), 'trigonometric' (XXZ, anisotropy "
+               "--gamma) or 'elliptic' (XYZ, modulus --modulus, b = 0) [default: rational]")
 GAMMA_HELP = "anisotropy γ > 0 of --family trigonometric (sites distinct modulo π/γ) [default: 1]"
+MODULUS_HELP = ("modulus k in [0, 1) of --family elliptic (sites distinct modulo 2K(k), |Im η| < 0.9 K'(k)); "
+                "required by it")
 
 
-def family_kw(sites: str | None, family: str | None, gamma: str | None, record: dict | None = None) -> dict:
-    """``{"family": …, "gamma": …}`` for :func:`chain_model` from ``--family`` / ``--gamma`` (or, when both are
-    absent, from a recorded run's map description, ``record``); one line naming the option otherwise."""
-    if family is None and gamma is None:
+def family_kw(sites: str | None, family: str | None, gamma: str | None, record: dict | None = None, *,
+              modulus: str | None = None) -> dict:
+    """``{"family": …, "gamma": …, "modulus": …}`` for :func:`chain_model` from ``--family`` / ``--gamma`` /
+    ``--modulus`` (or, when all are absent, from a recorded run's map description, ``record``); one line naming the
+    option otherwise."""
+    if family is None and gamma is None and modulus is None:
         m = (record or {}).get("map", {})
-        return {k: m[k] for k in ("family", "gamma") if k in m}
+        return {k: m[k] for k in ("family", "gamma", "modulus") if k in m}
     if sites is None:
-        raise CliInputError(f"{'--family' if family is not None else '--gamma'}: the Gaudin families are chains; give "
-                            "--sites (e.g. --sites 0:1,1:1)")
+        opt = "--family" if family is not None else "--gamma" if gamma is not None else "--modulus"
+        raise CliInputError(f"{opt}: the Gaudin families are chains; give --sites (e.g. --sites 0:1,1:1)")
     from jetgaudin.families import family_names
 
-    fam = family or "trigonometric"
+    fam = family or ("elliptic" if modulus is not None else "trigonometric")
     if fam not in family_names():
         raise CliInputError(f"--family: unknown family {fam!r}; give one of {', '.join(family_names())}")
+    if modulus is not None or fam == "elliptic":
+        return _elliptic_kw(fam, gamma, modulus)
     if gamma is None:
         return {"family": fam}
     if fam != "trigonometric":
@@ -46,6 +52,21 @@ def family_kw(sites: str | None, family: str | None, gamma: str | None, record: 
     except (TypeError, ValueError):
         raise CliInputError(f"--gamma: the anisotropy must be a real number > 0, got {gamma!r}") from None
     return {"family": fam, "gamma": g}
+
+
+def _elliptic_kw(fam: str, gamma: str | None, modulus: str | None) -> dict:
+    if fam != "elliptic":
+        raise CliInputError(f"--modulus: the {fam} family has no elliptic modulus; give --family elliptic or drop "
+                            "--modulus")
+    if gamma is not None:
+        raise CliInputError("--gamma: the elliptic family has no anisotropy (its parameter is --modulus)")
+    if modulus is None:
+        raise CliInputError("--modulus: --family elliptic needs its modulus k in [0, 1), e.g. --modulus 0.5")
+    try:
+        k = float(modulus)
+    except (TypeError, ValueError):
+        raise CliInputError(f"--modulus: the modulus must be a real number in [0, 1), got {modulus!r}") from None
+    return {"family": fam, "modulus": k}
 
 
 def parse_chain_b(text: Any, option: str = "--b") -> float:
@@ -58,18 +79,23 @@ def parse_chain_b(text: Any, option: str = "--b") -> float:
     return parse_b(text, option)
 
 
-def chain_model(sites: str, b: float, family: str = "rational", gamma: float | None = None):
-    """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3`` (``--family``, ``--gamma``:
-    :func:`family_kw`)."""
+def chain_model(sites: str, b: float, family: str = "rational", gamma: float | None = None,
+                modulus: float | None = None):
+    """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3`` (``--family``, ``--gamma``,
+    ``--modulus``: :func:`family_kw`)."""
     import jetgaudin as jg
     from jetgaudin.gaudin import GaudinModel, parse_sites
 
     try:
-        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma)
+        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus)
     except jg.JetGaudinError as exc:
         msg = one_line(exc)
         if "gamma" in msg and "sites" not in msg:
             raise CliInputError("--gamma: " + msg) from None
+        if "modulus" in msg:
+            raise CliInputError("--modulus: " + msg) from None
+        if "has no field" in msg:
+            raise CliInputError("--b: " + msg) from None
         raise CliInputError("--sites: " + (msg[len("sites: "):] if msg.startswith("sites: ") else msg)) from None
 
 
@@ -159,6 +185,7 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
     con = console()
     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
     expansion = "b² + Σ h_(i,m) (λ − λ_i)^(−m)" if model.family.name == "rational" else (
+        f"c0 + Σ h_(i,m) ψ_m(λ − λ_i), elliptic, k = {model.modulus:g}" if model.family.name == "elliptic" else
         f"b² − γ²J² + Σ h_(i,m) ψ_m(λ − λ_i), {model.family.name}, γ = {model.gamma:g}")
     t = Table(title=f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals of ν² = {expansion}",
               title_justify="left")

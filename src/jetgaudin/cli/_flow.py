@@ -74,6 +74,7 @@ def flow(
                      ] = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
@@ -93,7 +94,7 @@ def flow(
         else:
             X0 = np.array(cm.parse_init(init))
         N = len(X0) // 3
-        fam = _chains.family_kw(sites, family, gamma)
+        fam = _chains.family_kw(sites, family, gamma, modulus=modulus)
         model = None if sites is None else _chains.chain_model(sites, bf, **fam)
         if model is not None:
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")

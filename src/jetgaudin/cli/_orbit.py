@@ -166,6 +166,7 @@ def orbit(
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP)] = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map; with no options, reproduce Appendix 2 of the paper.
 
@@ -211,7 +212,7 @@ def orbit(
                 raise CliInputError("--out and --resume name different directories; give only --resume DIR")
             if init_from_dir is not None:
                 raise CliInputError("--init-from starts a new run; it cannot be combined with --resume")
-            if sites is not None or family is not None or gamma is not None:
+            if sites is not None or family is not None or gamma is not None or modulus is not None:
                 raise CliInputError("--sites: a resumed run keeps its recorded sites; drop --sites with --resume")
             out_dir = resume_dir(resume)
             if not (out_dir / runlayer.RUN_JSON).exists():
@@ -237,12 +238,12 @@ def orbit(
             bb = expect.get("b", defaults["b"])
             ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
             if sites is not None:
-                model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec))
+                model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec, modulus=modulus))
                 X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
                 m = _chains.chain_map(model, ee, expect.get("branch", defaults["branch"]),
                                       None if kernel is None else kernel.value)
             else:
-                _chains.family_kw(sites, family, gamma)  # --family / --gamma need --sites
+                _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
                 check_state_scale(X0, bb)
                 with blame("--eta"):
                     m = _two_point(bb, ee, expect.get("branch", defaults["branch"]), kernel)

@@ -92,7 +92,7 @@ def _read_input(path: Path):
                 warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
                 text = raw.decode("utf-8")
                 lines = text.splitlines()
-                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0_1,...)
+                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0^1,...)
                 X = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2, skiprows=skip)
                 if skip and lines[0].startswith("n,"):
                     X = X[:, 1:]  # orbit.csv: drop the step column
@@ -162,6 +162,7 @@ def ensemble_command(
     progress: ProgressOption = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
+    modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens
@@ -198,9 +199,9 @@ def ensemble_command(
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma))
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma, modulus=modulus))
         else:
-            _chains.family_kw(sites, family, gamma)  # --family / --gamma need --sites
+            _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
                 raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
             bb = parse_b(b)

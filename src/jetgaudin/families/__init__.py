@@ -11,10 +11,12 @@ from collections.abc import Callable
 
 from .._errors import InvalidParameterError
 from ._base import Family
+from .elliptic import EllipticFamily
 from .rational import RationalFamily
 from .trigonometric import TrigonometricFamily
 
-__all__ = ["Family", "RationalFamily", "TrigonometricFamily", "make_family", "register_family", "family_names"]
+__all__ = ["Family", "RationalFamily", "TrigonometricFamily", "EllipticFamily", "make_family", "register_family",
+           "family_names"]
 
 _FAMILIES: dict[str, Callable[..., Family]] = {}
 
@@ -55,3 +57,13 @@ def _rational(gamma=None):
 
 register_family("rational", _rational)
 register_family("trigonometric", TrigonometricFamily)
+
+
+def _elliptic(modulus=None, half_period="0"):
+    if modulus is None:
+        raise InvalidParameterError("the elliptic family needs its modulus k in [0, 1): give modulus=k "
+                                    "(--modulus k on the command line)")
+    return EllipticFamily(modulus, half_period)
+
+
+register_family("elliptic", _elliptic)

@@ -137,6 +137,24 @@ class Family(abc.ABC):
         M = sum(N for _, N in sites)
         return [], np.zeros((0, 3 * M))
 
+    #: label of the constant term of ``ν²`` when it is itself an integral (a quadratic form in the state,
+    #: appended after the ``h_{j,m}``; elliptic ``"c0"``), ``None`` when it is a function of ``b`` and the extras
+    constant_integral: str | None = None
+
+    def nu2_basis_constant(self, m: int) -> float:
+        """``[x^0] (ψ_m(x) − x^{−m})`` at 0: needed by the core for the quadratic form of the constant term when
+        :attr:`constant_integral` is set."""
+        raise NotImplementedError(f"the {self.name} family has no constant-term integral")
+
+    def check_xi(self, xi: complex) -> None:
+        """Refuse a spectral parameter the family's maps cannot take (:class:`InvalidParameterError`); none by
+        default (the elliptic family refuses ``|Im ξ|`` too close to ``K'``)."""
+        return None
+
+    #: ``True`` when the dressing basis depends on the map's ``ξ`` (elliptic: ``w_a(λ − Re ξ)``): the core then
+    #: calls ``dressing_basis(lam, xi)`` and ``dressing_taylor(lam0, order, xi)``
+    dressing_needs_xi: bool = False
+
     def uniformizer(self, lam) -> np.ndarray | None:
         """``z(λ)`` such that ``ν²`` is a rational function of ``z`` with poles only at the ``z(λ_j)``, of
         degree ``2M`` over ``Π (z − z_j)^{2N_j}``, and vertical segments map to straight segments (rational

@@ -6,7 +6,7 @@ the field ``b = 0``, the checks and the matching with the literature.
 
 from .flow import ChainFlowMap
 from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
-from .model import ChainHamiltonian, GaudinModel, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
+from .model import ChainHamiltonian, GaudinModel, clebsch_top, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
 
 __all__ = [
     "GaudinModel",
@@ -16,6 +16,7 @@ __all__ = [
     "ChainFlowMap",
     "parse_sites",
     "gaudin_magnet",
+    "clebsch_top",
     "lagrange_chain",
     "twisted_chain",
 ]

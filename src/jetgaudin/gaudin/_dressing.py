@@ -29,17 +29,21 @@ def real_coefficients(model, xi: complex, L: np.ndarray, nu1: np.ndarray) -> np.
     return model.family.real_dressing(xi, k1, k2)
 
 
-def dressing_at(model, c: np.ndarray, lam) -> np.ndarray:
-    """``D(λ) = Σ_p c_p B_p(λ)``, shape ``(B, 2, 2)`` for a scalar ``λ``."""
-    return np.einsum("bp,pij->bij", c, model.family.dressing_basis(lam))
+def dressing_at(model, c: np.ndarray, lam, xi=None) -> np.ndarray:
+    """``D(λ) = Σ_p c_p B_p(λ)``, shape ``(B, 2, 2)`` for a scalar ``λ`` (``xi``: the map's, for a family whose basis
+    depends on it, :attr:`jetgaudin.families.Family.dressing_needs_xi`)."""
+    fam = model.family
+    B = fam.dressing_basis(lam, xi) if fam.dressing_needs_xi else fam.dressing_basis(lam)
+    return np.einsum("bp,pij->bij", c, B)
 
 
-def site_series(model, c: np.ndarray) -> list:
+def site_series(model, c: np.ndarray, xi=None) -> list:
     """Per site ``(Ka, Aa, g)`` for :func:`jetgaudin.gaudin.maps.dress_sites`: Taylor coefficients of ``D``,
     ``adj D`` (lists of ``(B, 2, 2)``) and ``1/det D`` (``(N_i, B)``) at ``λ_i``."""
     out = []
+    fam = model.family
     for lam_i, N in model.sites:
-        T = model.family.dressing_taylor(lam_i, N)
+        T = fam.dressing_taylor(lam_i, N, xi) if fam.dressing_needs_xi else fam.dressing_taylor(lam_i, N)
         Dt = np.einsum("bp,npij->nbij", c, T)
         At = adj(Dt)
         det = _series.mul(Dt[..., 0, 0], Dt[..., 1, 1], N) - _series.mul(Dt[..., 0, 1], Dt[..., 1, 0], N)

@@ -10,7 +10,9 @@ hoisted out of the loop by :func:`orbit_constants`:
 * ``rule``, ``gk``: the family's gauge rule as an id and its constants (:attr:`jetgaudin.families.Family.kernel_rule`,
   :meth:`~jetgaudin.families.Family.kernel_constants`): ``0`` rational (``K = λ + M_0`` of eq. (mm), ``gk[0] = ξ``),
   ``1`` trigonometric (:func:`jetgaudin.families.trigonometric.gauge_rule`, ``gk = (e^{−iγξ}, e^{−iγξ̄},
-  e^{iγξ}, e^{iγξ̄}, sin(γ(ξ − ξ̄)))``).
+  e^{iγξ}, e^{iγξ̄}, sin(γ(ξ − ξ̄)))``), ``2`` elliptic (the null vector of spectrality,
+  :func:`jetgaudin.families.elliptic.spectral_null_vector`, as the largest of the four generalised cross products of
+  three of its four rows; ``gk = (w_a(ξ − λ_0), w_a(ξ̄ − λ_0))``).
 
 A step: ``ν1`` (the root of ``u² + vw`` closest to the previous one), the eigenvector ``k1`` of ``ℓ(ξ)``, the
 coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_n = Σ_p c_p T[i, n, p]``,
@@ -32,6 +34,63 @@ from ._kernels import _abs2  # first: it applies the Bäcklund kernels' Numba ta
 
 
 @njit(cache=True)
+def _det3(A, r0, r1, r2, c0, c1, c2):
+    return (A[r0, c0] * (A[r1, c1] * A[r2, c2] - A[r1, c2] * A[r2, c1])
+            - A[r0, c1] * (A[r1, c0] * A[r2, c2] - A[r1, c2] * A[r2, c0])
+            + A[r0, c2] * (A[r1, c0] * A[r2, c1] - A[r1, c1] * A[r2, c0]))
+
+
+@njit(cache=True)
+def _elliptic_coefficients(gk, a1, a2, c):
+    """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
+    ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
+    whose cofactors are largest."""
+    A = np.empty((4, 4), dtype=np.complex128)
+    for h in range(2):
+        if h == 0:
+            k1 = a1
+            k2 = a2
+        else:
+            k1 = -a2.conjugate()
+            k2 = a1.conjugate()
+        w1 = gk[3 * h]
+        w2 = gk[3 * h + 1]
+        w3 = gk[3 * h + 2]
+        A[2 * h, 0] = k1  # B_0 k = k, B_1 k = w1 (k2, k1), B_2 k = w2 (−i k2, i k1), B_3 k = w3 (k1, −k2)
+        A[2 * h + 1, 0] = k2
+        A[2 * h, 1] = w1 * k2
+        A[2 * h + 1, 1] = w1 * k1
+        A[2 * h, 2] = -1j * w2 * k2
+        A[2 * h + 1, 2] = 1j * w2 * k1
+        A[2 * h, 3] = w3 * k1
+        A[2 * h + 1, 3] = -w3 * k2
+    best = -1.0
+    n = np.empty(4, dtype=np.complex128)
+    rn = np.empty(4)
+    for q in range(4):
+        rn[q] = _abs2(A[q, 0]) + _abs2(A[q, 1]) + _abs2(A[q, 2]) + _abs2(A[q, 3])
+    for i in range(4):
+        skip = 3 - i  # rows 0, 1, 2 first; the others only when their cofactors are small (Hadamard-relative)
+        r0 = (skip + 1) % 4  # any order of the three rows: the null vector is defined up to a factor
+        r1 = (skip + 2) % 4
+        r2 = (skip + 3) % 4
+        n[0] = _det3(A, r0, r1, r2, 1, 2, 3)
+        n[1] = -_det3(A, r0, r1, r2, 0, 2, 3)
+        n[2] = _det3(A, r0, r1, r2, 0, 1, 3)
+        n[3] = -_det3(A, r0, r1, r2, 0, 1, 2)
+        s = _abs2(n[0]) + _abs2(n[1]) + _abs2(n[2]) + _abs2(n[3])
+        if s > best:
+            best = s
+            for q in range(4):
+                c[q] = n[q]
+        if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
+            break
+    scale = 1.0 / np.sqrt(best)
+    for q in range(4):
+        c[q] *= scale
+
+
+@njit(cache=True)
 def _coefficients(rule, gk, a1, a2, c):
     """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
     and 1: P = 6; a new family adds its rule here)."""
@@ -47,6 +106,8 @@ def _coefficients(rule, gk, a1, a2, c):
         c[3] = -cc * a1.conjugate() * a2
         c[4] = 1.0
         c[5] = -eta.conjugate() - cc * q
+    elif rule == 2:
+        _elliptic_coefficients(gk, a1, a2, c)
     else:  # trigonometric: families.trigonometric.gauge_rule("symmetric")
         e1m = gk[0]
         e2m = gk[1]
@@ -195,7 +256,8 @@ def orbit_constants(model, xi):
     P = fam.n_dressing
     full = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
     for i, (p, N) in enumerate(model.sites):
-        full[i, :N] = fam.dressing_taylor(p, N).reshape(N, P, 4)
+        T = fam.dressing_taylor(p, N, complex(xi)) if fam.dressing_needs_xi else fam.dressing_taylor(p, N)
+        full[i, :N] = T.reshape(N, P, 4)
     used = np.any(full != 0, axis=(0, 1))  # (P, 4): which basis matrices feed which entry
     K = max(1, int(used.sum(axis=0).max()))
     pidx = np.zeros((4, K), dtype=np.int64)

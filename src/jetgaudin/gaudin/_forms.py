@@ -24,16 +24,17 @@ from ..families._series import shift_derivative
 __all__ = ["generic_forms", "evaluate", "gradients"]
 
 
-def _laurent(model, a: int, j: int) -> np.ndarray:
-    """``L[c, p + N_j]`` for ``p = −N_j … N_j − 1``: the expansion at ``λ_j`` of every component's function."""
+def _laurent(model, a: int, j: int, more: int = 0) -> np.ndarray:
+    """``L[c, p + N_j]`` for ``p = −N_j … N_j − 1 + more``: the expansion at ``λ_j`` of every component's
+    function."""
     fam = model.family
     lam_j, N_j = model.sites[j]
-    out = np.zeros((model.M, 2 * N_j), dtype=complex)
+    out = np.zeros((model.M, 2 * N_j + more), dtype=complex)
     for i, (lam_i, N_i) in enumerate(model.sites):
-        t = fam.regular(a, N_j + N_i) if i == j else fam.taylor(a, lam_j - lam_i, N_j + N_i)
+        t = fam.regular(a, N_j + N_i + more) if i == j else fam.taylor(a, lam_j - lam_i, N_j + N_i + more)
         for k in range(N_i):
             c = model.offsets[i] + k
-            out[c, N_j:] = shift_derivative(t, k, N_j)
+            out[c, N_j:] = shift_derivative(t, k, N_j + more)
             if i == j and k < N_j:
                 out[c, N_j - k - 1] = 1.0
     return out
@@ -59,9 +60,40 @@ def generic_forms(model):
             if m <= N_j:
                 lin[row, model.offsets[j] + m - 1] = 1.0
             row += 1
+    if model.family.constant_integral:
+        q = np.concatenate([q, constant_form(model, q)[:, None]], axis=1)
+        lin = np.concatenate([lin, np.zeros((1, M))], axis=0)
     q.setflags(write=False)
     lin.setflags(write=False)
     return q, lin
+
+
+def constant_form(model, q) -> np.ndarray:
+    r"""The quadratic form ``(3, M, M)`` of the constant ``c_0`` of ``ν² = c_0 + Σ_{j,m} h_{j,m} ψ_m(λ − λ_j)``
+    (a family with :attr:`~jetgaudin.families.Family.constant_integral`; needs ``b = 0``): the ``x^0`` Laurent
+    coefficient of ``ν²`` at the first site ``λ_1`` minus that of the sum,
+
+    .. math:: c_0 = [x^0]\nu^2(\lambda_1 + x) - \sum_m h_{1,m}\, [x^0](\psi_m(x) - x^{-m})
+              - \sum_{i \ne 1} \sum_m h_{i,m}\, \psi_m(\lambda_1 - \lambda_i),
+
+    with ``q`` the forms of the ``h_{j,m}`` (rows in the order of the integrals)."""
+    fam = model.family
+    M = model.M
+    _, N_1 = model.sites[0]
+    out = np.zeros((3, M, M))
+    for a in range(3):
+        L = _laurent(model, a + 1, 0, more=1)
+        acc = np.zeros((M, M), dtype=complex)
+        for p in range(-N_1, N_1 + 1):
+            acc += np.outer(L[:, p + N_1], L[:, -p + N_1])
+        out[a] = (0.5 * (acc + acc.T)).real
+    row = 0
+    for i, (lam_i, N_i) in enumerate(model.sites):
+        for m in range(1, 2 * N_i + 1):
+            coef = fam.nu2_basis_constant(m) if i == 0 else fam.nu2_basis(m, np.asarray(model.sites[0][0] - lam_i))
+            out -= float(np.real(coef)) * q[:, row]
+            row += 1
+    return out
 
 
 def evaluate(model, q, lin, X) -> np.ndarray:
@@ -77,6 +109,6 @@ def gradients(model, q, lin, X) -> np.ndarray:
     y = X.reshape(X.shape[:-1] + (model.M, 3))
     g = 2.0 * np.einsum("aIcd,...da->...Ica", q, y)
     g[..., 2] += 2.0 * model.b * lin
-    g = g.reshape(X.shape[:-1] + (2 * model.M, 3 * model.M))
+    g = g.reshape(X.shape[:-1] + (q.shape[1], 3 * model.M))
     forms = model.family.extra_integrals(model.sites)[1]
     return np.concatenate([g, np.broadcast_to(forms, X.shape[:-1] + forms.shape).astype(g.dtype)], axis=-2)

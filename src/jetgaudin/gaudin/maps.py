@@ -98,6 +98,7 @@ def _check_eta(model: GaudinModel, eta) -> complex:
                 ": the branch rule of nu starts at the real point Re(eta), a pole of the Lax matrix there; choose "
                 "Re(eta) off the sites"
             )
+    model.family.check_xi(eta)
     return eta
 
 
@@ -439,7 +440,7 @@ class ChainTwoPointBacklund(_ChainMap):
         X = self.model.check_state(X)
         M0 = self._setup(X.reshape(-1, X.shape[-1]), carry)[3]
         if not self.model.family.uniform:
-            return dressing_at(self.model, M0, lam).reshape(X.shape[:-1] + (2, 2))
+            return dressing_at(self.model, M0, lam, self.eta).reshape(X.shape[:-1] + (2, 2))
         M0 = M0.reshape(X.shape[:-1] + (2, 2))
         return M0 + np.asarray(lam, dtype=complex)[..., None, None] * _ID
 
@@ -457,9 +458,9 @@ class ChainTwoPointBacklund(_ChainMap):
             res = _residual(M0 + self.eta * _ID, L, A0 + self.eta * _ID, scale) / abs(2 * self.eta.imag)
             series = None
         else:  # the family's dressing: residual relative to |D(η)|², principal parts from its Taylor series
-            D1 = dressing_at(self.model, M0, self.eta)
+            D1 = dressing_at(self.model, M0, self.eta, self.eta)
             res = _residual(D1, L, adj(D1), scale) / np.max(np.abs(D1), axis=(-2, -1)) ** 2
-            series = site_series(self.model, M0)
+            series = site_series(self.model, M0, self.eta)
         if np.any(res > _RESIDUAL_TOL):
             raise SingularStepError(
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "

@@ -50,6 +50,7 @@ __all__ = [
     "gaudin_magnet",
     "lagrange_chain",
     "twisted_chain",
+    "clebsch_top",
 ]
 
 
@@ -139,10 +140,13 @@ class GaudinModel:
     sites : sequence of (float, int)
         Distinct real positions (modulo the family's period, ``π/γ`` for the trigonometric family) and integer
         orders ``N_i ≥ 1``.
-    family : {"rational", "trigonometric"} or jetgaudin.families.Family
+    family : {"rational", "trigonometric", "elliptic"} or jetgaudin.families.Family
         The family (default rational: the paper's chains).
     gamma : float, optional
         The anisotropy ``γ > 0`` of the trigonometric family (default 1); the rational family has none.
+    modulus : float, optional
+        The modulus ``k ∈ [0, 1)`` of the elliptic (XYZ) family (required by it; ``b`` must be 0 there,
+        :mod:`jetgaudin.families.elliptic`).
 
     Raises
     ------
@@ -156,6 +160,7 @@ class GaudinModel:
     sites: tuple = field(default=((0.0, 1),))
     family: Any = "rational"
     gamma: float | None = None
+    modulus: float | None = None
 
     def __post_init__(self):
         if np.iscomplexobj(self.b) or isinstance(self.b, bool):
@@ -168,10 +173,11 @@ class GaudinModel:
             raise InvalidParameterError(f"the field strength b must be finite, got {b}")
         object.__setattr__(self, "b", b)
         object.__setattr__(self, "sites", _check_sites(self.sites))
-        fam = make_family(self.family, gamma=self.gamma)
+        fam = make_family(self.family, gamma=self.gamma, modulus=self.modulus)
         fam.check(b, self.sites)
         object.__setattr__(self, "family", fam)
         object.__setattr__(self, "gamma", fam.describe().get("gamma"))
+        object.__setattr__(self, "modulus", fam.describe().get("modulus"))
 
     # ---- layout ---------------------------------------------------------------------------
 
@@ -222,7 +228,7 @@ class GaudinModel:
     @classmethod
     def from_description(cls, d: dict) -> GaudinModel:
         """The model :meth:`describe` (or a map's description) describes."""
-        extra = {k: d[k] for k in ("gamma",) if k in d}
+        extra = {k: d[k] for k in ("gamma", "modulus") if k in d}
         return cls(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]), d.get("family", "rational"), **extra)
 
     # ---- integrals as quadratic forms --------------------------------------------------------
@@ -268,15 +274,22 @@ class GaudinModel:
         lin.setflags(write=False)
         return q, lin
 
+    def _extra_labels(self) -> list[str]:
+        """The integrals after the ``h_{j,m}``: the constant term of ``ν²`` when it is one (elliptic ``c0``), then
+        the family's linear extras (trigonometric ``J``)."""
+        c = self.family.constant_integral
+        return ([c] if c else []) + self.family.extra_integrals(self.sites)[0]
+
     @property
     def n_integrals(self) -> int:
-        """``2M`` plus the family's extra integrals (trigonometric: ``J``)."""
-        return 2 * self.M + len(self.family.extra_integrals(self.sites)[0])
+        """``2M`` plus the family's extra integrals (trigonometric: ``J``; elliptic: ``c0``)."""
+        return 2 * self.M + len(self._extra_labels())
 
     def integral_labels(self) -> list[str]:
-        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1), then the family's extras (``J``)."""
+        """Names ``h{i},{m}`` of the ``2M`` integrals (site ``i`` from 1), then the family's extras (``J``,
+        ``c0``)."""
         return [f"h{i + 1},{m}" for i, (_, N) in enumerate(self.sites) for m in range(1, 2 * N + 1)] + \
-            self.family.extra_integrals(self.sites)[0]
+            self._extra_labels()
 
     def casimir_mask(self) -> np.ndarray:
         """Boolean ``(n_integrals,)``: ``True`` for the Casimirs ``h_{i,m}``, ``m > N_i``; ``False`` for the ``M``
@@ -501,3 +514,19 @@ def lagrange_chain(b: float, positions) -> GaudinModel:
 def twisted_chain(b: float, positions) -> GaudinModel:
     """The twisted (generalised Lagrange) chain: ``N_i = 3`` at each position."""
     return _uniform(b, positions, 3, "twisted_chain")
+
+
+def clebsch_top(modulus: float, position: float = 0.0) -> GaudinModel:
+    r"""The Clebsch top: one elliptic (XYZ) jet site of order 2 at ``position`` (modulus ``k``), the coalescence of two
+    order-1 sites (``docs/tutorials/xyz.md``).  State ``(M, p) = (y_0, y_1)`` with the bracket of ``e(3)`` (``g^(2)``):
+    ``{M_a, M_b} = ε_{abc} M_c``, ``{M_a, p_b} = ε_{abc} p_c``, ``{p_a, p_b} = 0``.  Integrals (``integrals(X)``):
+    ``h_{1,1} = 0``, ``h_{1,2} = |M|² − 2 Σ_a r_a p_a²``, the Casimirs ``h_{1,3} = 2 M·p``, ``h_{1,4} = |p|²``, and
+    ``c0 = Σ_a A_a M_a² + Σ_a B_a p_a²`` with ``A = (1, k'², 0) − E/K``, ``r_a`` the ``x`` coefficients of ``w_a − 1/x``
+    (``(1+k²)/6``, ``(1−2k²)/6``, ``−(2−k²)/6``).  Every ``H_μ = c0 + μ h_{1,2} = Σ a_i M_i² + Σ b_i p_i²``
+    (``a_i = A_i + μ``) is a Kirchhoff Hamiltonian (a rigid body in an ideal fluid) in **Clebsch's case**
+    ``b_i = a_j a_k + const`` (``(i, j, k)`` cyclic; equivalently ``Σ_cyc (b_j − b_k)/a_i = 0``), with
+    ``k² = (a_1 − a_2)/(a_1 − a_3)``.  Conversely a Clebsch Hamiltonian ``Σ a_i M_i² + Σ (θ a_j a_k + c) p_i²`` with
+    ``a_1 > a_2 > a_3`` and ``θ > 0`` is a member of this pencil plus Casimirs after rescaling time (``H → sH``,
+    ``s = 1/(a_1 − a_3)``) and ``p`` (``p → λp``, ``λ² = s/θ``, an automorphism of ``e(3)``), with that ``k``
+    (derived in the tutorial; the pencil's Clebsch form and ``k`` are tested in ``tests/test_elliptic.py``)."""
+    return GaudinModel(0.0, ((position, 2),), family="elliptic", modulus=modulus)

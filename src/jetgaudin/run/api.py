@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import _fs
 from .._errors import InvalidParameterError, JetGaudinError, RecordingError, RunDirectoryError
-from ..maps import Backend, Map, map_from_description
+from ..maps import Backend, Map, map_from_description, with_resolved_backend
 from .driver import CompileInterrupted, Driver, Position, RaiseOnSignal, RunInterrupted
 from .files import (
     ENSEMBLE_H5,
@@ -220,7 +220,7 @@ def _resolved(spec: RunSpec) -> RunSpec:
     """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
     resolve = getattr(spec.map, "resolved_backend", None)
     if spec.map.backend is Backend.AUTO and resolve is not None:
-        m = dataclasses.replace(spec.map, backend=resolve(spec.steps, spec.X0))  # type: ignore[type-var]
+        m = with_resolved_backend(spec.map, resolve(X=spec.X0, steps=spec.steps))
         return dataclasses.replace(spec, map=m)
     return spec
 

@@ -115,8 +115,9 @@ def open_h5_read(path: str | os.PathLike[str]):
 
 
 def csv_header(N: int, index: str = "n") -> str:
-    """``n,y0_1,y0_2,y0_3,y1_1,…`` (``y{i}_{a}`` is the component ``a`` of ``y_i``)."""
-    return ",".join([index] + [f"y{i}_{a}" for i in range(N) for a in (1, 2, 3)]) + "\n"
+    """``n,y0^1,y0^2,y0^3,y1^1,…`` (``y{i}^{a}`` is the component ``a`` of ``y_i``: the chains' ``s{j}_y{i}^{a}``
+    without the site; older files name them ``y{i}_{a}`` and load the same: nothing reads the names back)."""
+    return ",".join([index] + [f"y{i}^{a}" for i in range(N) for a in (1, 2, 3)]) + "\n"
 
 
 def format_rows(index: Any, X: Any) -> str:

@@ -210,7 +210,7 @@ class OrbitStore(Store):
     def __init__(self, out_dir: Path, run: dict, n_state: int, *, fresh: bool, csv: bool, stem: str = "orbit",
                  time_step: float | None = None, columns: list[str] | None = None):
         self.csv = csv
-        self.columns = columns  # names of the n_state columns (default y{i}_{a}; the chains name them by site)
+        self.columns = columns  # names of the n_state columns (default y{i}^{a}; the chains name them by site)
         self.h5_name, self.csv_name = f"{stem}.h5", f"{stem}.csv"
         self.time_step = time_step  # a flow: the CSV's index column is the time t = n dt
         self.h_csv: Any = None

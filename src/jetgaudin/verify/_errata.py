@@ -18,6 +18,12 @@ Every entry below is a formula of the paper that fails **as printed** and holds 
 both verdicts being computed by the check named in the entry (`jetgaudin verify --only LABEL`), derived
 independently of the numpy implementation (exact SymPy, or mpmath at 50 digits at seeded random points).
 
+Most entries are **misprints**: a sign, a factor or an index that the derivation fixes. Entries headed *an
+interpretation* are not: the printed text is a loose phrase that we read one way (`App2-timestep`), or the
+correction was fitted so that the statement holds (the generating function `fu` and its spectrality
+`Rem-spectrality`); their check shows that the reading works, not that it is what the authors meant, and the
+coverage map counts them as partly checked.
+
 The account of the whole paper, statement by statement (checked, partly checked with the reason, definition, or
 not checkable with the reason), is `jetgaudin verify --coverage` (`--json` for a JSON array).
 
@@ -84,7 +90,8 @@ def errata_markdown() -> str:
         n += 1
         parts.append(f"\n## {_heading(n, chk)}\n")
         parts.append(f"\n*Statement checked:* {chk.statement}\n")
-        parts.append(f"\n- **As printed:** `{e.printed}`\n- **Corrected:** `{e.corrected}`\n")
+        corrected = "Our reading" if e.kind == "interpretation" else "Corrected"
+        parts.append(f"\n- **As printed:** `{e.printed}`\n- **{corrected}:** `{e.corrected}`\n")
         if e.comment:
             parts.append(f"- **Note:** {e.comment}\n")
         parts.append(f"- **Check:** `jetgaudin verify --only {chk.label}` ({chk.method})\n")

@@ -26,6 +26,8 @@ __all__ = [
     "Verdict",
     "Outcome",
     "Erratum",
+    "MISPRINT",
+    "INTERPRETATION",
     "Check",
     "CheckResult",
     "Context",
@@ -42,7 +44,8 @@ __all__ = [
 ]
 
 #: the modules holding the checks, in the paper's order (the order of docs/errata.md)
-MODULES = ("structure", "sec2", "sec4", "sec5", "sec6", "maps", "appendix", "chains", "trigonometric")
+MODULES = ("structure", "sec2", "sec4", "sec5", "sec6", "maps", "appendix", "chains", "trigonometric",
+           "elliptic")
 
 HOLDS, FAILS, UNDECIDED = "holds", "fails", "undecided"
 DEFAULT_SEED = 20261122
@@ -92,13 +95,25 @@ def exact_pair_for_each(cases, holds: Callable[[Any], tuple[bool, bool]]) -> Out
     return Outcome(Verdict.exact(all(p for p, _ in verdicts)), Verdict.exact(all(c for _, c in verdicts)))
 
 
+#: the kinds of an erratum: a located misprint (a sign, a factor, an index that the derivation fixes), or an
+#: interpretation (a loose phrase read one way, or a correction fitted so that the statement holds: the check shows
+#: that the reading works, not that it is what the authors meant)
+MISPRINT, INTERPRETATION = "misprint", "interpretation"
+
+
 @dataclass(frozen=True)
 class Erratum:
-    """One entry of ``docs/errata.md``: the formula as printed and our correction."""
+    """One entry of ``docs/errata.md``: the formula as printed and our correction; ``kind`` :data:`MISPRINT` or
+    :data:`INTERPRETATION`."""
 
     printed: str
     corrected: str
     comment: str = ""
+    kind: str = MISPRINT
+
+    def __post_init__(self) -> None:
+        if self.kind not in (MISPRINT, INTERPRETATION):
+            raise ValueError(f"Erratum kind must be {MISPRINT!r} or {INTERPRETATION!r}, got {self.kind!r}")
 
 
 @dataclass(frozen=True)
@@ -169,7 +184,8 @@ def paper_order(chk: Check) -> tuple[int, int]:
 def erratum_heading(n: int, chk: Check) -> str:
     """The heading of entry ``n`` of ``docs/errata.md``."""
     where = f"Section {chk.section}" if chk.section[:1].isdigit() else chk.section
-    return f"{n}. `{chk.label}` ({where})"
+    kind = ", an interpretation" if chk.erratum is not None and chk.erratum.kind == INTERPRETATION else ""
+    return f"{n}. `{chk.label}` ({where}{kind})"
 
 
 def slug(heading: str) -> str:

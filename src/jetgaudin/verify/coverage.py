@@ -56,12 +56,18 @@ _MAP = r"""
 == 1
 - C Prop1, Prop2-involution, LP-rank | Abstract/Intro: a hierarchy of Liouville completely integrable models with a
   linear r-matrix structure
-- C Intro-algebras | Intro: N = 1 is the Euler top on su(2); N = 2 the Lagrange top on e(3) = su(2) (+)_s R^3
-- P Chain-r, Chain-integrals, Trig-r, Trig-integrals | Intro: direct sums give n-body chains (Gaudin model,
-  Lagrange chain) with rational, trigonometric, elliptic r-matrices
-  reason: the rational and trigonometric cases are checked (r-matrix structure of the sum over sites, integrals in
-  involution; the trigonometric family of jetgaudin, issue 23); the elliptic case is cited, not derived in this
-  paper
+- P Intro-algebras, Sec4-lagrange | Intro: N = 1 is the Euler top on su(2); N = 2 the Lagrange top on e(3) = su(2)
+  (+)_s R^3
+  reason: the algebras are checked (structure constants of (LP) for N = 1, 2: su(2) and e(3)), and for N = 2 the
+  flow of H_2/2 is the Lagrange top's (Sec4-lagrange); for N = 1 the model's only non-Casimir integral is
+  H_1 = 2<b, y> (a spin in the field), so only the phase space su(2)* is the Euler top's: no Euler top Hamiltonian
+  (quadratic, with moments of inertia) is derived or checked
+- P Chain-r, Chain-integrals, Trig-r, Trig-integrals, XYZ-w, XYZ-r, XYZ-nu2, XYZ-Clebsch | Intro: direct sums give
+  n-body chains (Gaudin model, Lagrange chain) with rational, trigonometric, elliptic r-matrices
+  reason: the rational, trigonometric and elliptic cases are checked (r-matrix structure of the sum over sites,
+  integrals in involution; jetgaudin's trigonometric family, issue 23; the elliptic family, issue 24: the addition
+  identity of ns, ds, cs and the r-matrix relation, the exact expansion of nu^2, the Clebsch case of the order-2
+  site); the constructions themselves are cited, not derived in this paper
 - NC | Intro: the construction generalises to any simple Lie algebra
   reason: $CITED
 - P Sec3-structure, Sec3-cocycle | Intro: the N = 3 algebra includes su(2) and R^3 as proper subalgebras but is no
@@ -188,7 +194,10 @@ _MAP = r"""
 - P BT-integrals, 2p-real | BT property 3: multi-valued, but single-valued on a level manifold of the integrals
   reason: the two values are the two signs of nu(eta), and nu(eta)^2 is a function of the integrals (checked, so the
   choice is fixed on a level set); 'single-valued' is a property of a choice, not a formula
-- C Rem-spectrality | BT property 4: a one-parameter family, eta conjugate to mu (spectrality)
+- P Rem-spectrality | BT property 4: a one-parameter family, eta conjugate to mu (spectrality)
+  reason: an interpretation: the generating function as printed fails; the corrected F of the check fu was fitted
+  (factors, the missing term, b eta) so that (e1), (e2) and the spectrality hold, so the check shows that such an F
+  exists, not that the paper's F is right
 - P BT-poisson-two-point, App2-timestep | BT property 5: the BT is iterative, a symplectic integrator, eta an
   adjustable time step
   reason: the step is -2 Im(eta) of the flow of nu(Re eta) (checked), not eta itself
@@ -215,12 +224,18 @@ _MAP = r"""
   reason: definition
 - D | Psi, Psi~, chi^-, chi~^+ notation
   reason: notation
-- C fu | Prop. 6, (e1), (e2), (fu): the generating function (misprinted)
+- P fu | Prop. 6, (e1), (e2), (fu): the generating function (fails as printed; corrected by interpretation)
+  reason: an interpretation, not a located misprint: the corrected F (gamma_i read as 2C^(i), the term -k/(4 eta^2)
+  added, the factor -i, b eta) was fitted so that (e1), (e2) hold; the check shows that this F works, not which
+  reading the authors meant
 - C Prop4-casimirs | Proof of Prop. 6: the Casimirs do not change under the map
 - C Prop4-leaf | Proof of Prop. 6: y^+, x^+, z^+ and y~^-, x~^-, z~^- eliminated with the Casimirs (misprinted)
 - C Prop4-Psi | Proof of Prop. 6: the map in the variables Psi, chi^-, Psi~, chi~^+ (misprinted), k^2 = 1 + eta z^-
   z~^+
-- C Rem-spectrality | Remark 1: spectrality, mu = u(eta) - y~^+ v(eta)/(2b) = -dF/deta (misprinted)
+- P Rem-spectrality | Remark 1: spectrality, mu = u(eta) - y~^+ v(eta)/(2b) = -dF/deta (fails as printed;
+  corrected by interpretation)
+  reason: the first equality is checked as printed; the second holds with the fitted F of the check fu (an
+  interpretation, see there), with the sign + and mu read as nu
 - C Rem-complex | Remark 2: the one-point map is complex, not a physical BT
 
 == 6.2
@@ -263,8 +278,10 @@ _MAP = r"""
 == Appendix 2
 - NC | Appendix 2: a MAPLE 8 program, a variant of Kuznetsov's MATLAB program
   reason: the program is not available
-- C App2-timestep | Appendix 2: inputs b, eta, number of iterations, initial data; Im(eta) is the time step
-  (misprinted)
+- P App2-timestep | Appendix 2: inputs b, eta, number of iterations, initial data; Im(eta) is the time step
+  reason: an interpretation of a loose phrase, not a misprint: read as 'the map is a step Im(eta) of a flow' it
+  fails, the map being a step -2 Im(eta) of the flow of nu(Re eta) (checked to O(Im(eta)^3)); 'time step' may mean
+  no more than 'proportional to the step', which holds
 - NC | Appendix 2: the output plots x - z (material point) and z (centre of mass of the top)
   reason: $INTERP; the orbit itself is computed by App2-sphere
 - C App2-sphere | Appendix 2: the points z lie on the sphere <z, z> = const

@@ -12,7 +12,7 @@ import mpmath as mp
 import sympy as sp
 
 from . import printed
-from ._registry import FAILS, NUMERIC_TOL, Erratum, Outcome, Verdict, register
+from ._registry import FAILS, INTERPRETATION, NUMERIC_TOL, Erratum, Outcome, Verdict, register
 from ._tools import (
     dress,
     ell_at,
@@ -492,7 +492,10 @@ _F_C = ("F = y^- y~^+/(2b) + k(y^-/z^- + y~^+/z~^+) - [(1 + 2 eta g2)^2 + k^2]/(
         "(the brackets of (Psi, chi) are i times real), with " + _F_C,
         "In F as printed gamma_1, gamma_2 stand for 2C^(1), 2C^(2) (= C_1, C_2 of (cas)) although the leaf is defined "
         "by C^(1) = gamma_1, C^(2) = gamma_2, and the term -k/(4 eta^2) is missing; b eta (independent of chi) makes "
-        "the spectrality exact (check Rem-spectrality).",
+        "the spectrality exact (check Rem-spectrality).  An interpretation, not a located misprint: this F was "
+        "fitted so that (e1), (e2) and the spectrality hold; the check shows that it works, not which reading "
+        "the authors meant.",
+        kind=INTERPRETATION,
     ),
 )
 def _fu(ctx):
@@ -511,7 +514,9 @@ def _fu(ctx):
         "mu = u(eta) - y~^+ v(eta)/(2b) = -dF_eta/deta",
         "nu = u(eta) - y~^+ v(eta)/(2b) = +dF/deta with the corrected F of the check fu (nu the eigenvalue of "
         "ell = -2i L)",
-        "The first equality holds (q = y~^+/(2b) and (hhh)); with the printed F, -dF/deta is not nu.",
+        "The first equality holds (q = y~^+/(2b) and (hhh)); with the printed F, -dF/deta is not nu.  An "
+        "interpretation: it holds with the F fitted in the check fu.",
+        kind=INTERPRETATION,
     ),
 )
 def _spectrality(ctx):

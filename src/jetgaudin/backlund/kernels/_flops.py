@@ -34,9 +34,10 @@ def flops_per_step(N: int, route: str = "auto") -> dict[str, int]:
             "nu": 14 + 9 + 3,  # u² + vw; square root; closest-root test
             "eigenvector": 35,
             "M0": 26,
-            "R_products": 62 + 118 * N + 12 * N,
+            # M(λ)[P, ℓ(λ)]: N + 1 commutators (38 each), N + 1 products M0 C (42 each), N sums (6 each)
+            "R_products": 80 + 86 * N,
             "division": 24 * N + 38,
-            "checks_and_state": 4 * N + 5 + 4 * N + 3 * N + 1,
+            "checks_and_state": 4 * N + 5 + 4 * N + 3 * N + 1 + 5 * N,  # + ℓ_m + Q_m
         }
     else:
         raise ValueError(f"route must be 'auto', 'n3' or 'generic', got {route!r}")

@@ -37,6 +37,7 @@ from ._scalar import (
     _RESIDUAL_TOL2,
     _abs2,
     _cdiv,
+    _commutator,
     _continue_nu,
     _cr,
     _division_constants,
@@ -45,8 +46,7 @@ from ._scalar import (
     _horner_step_u,
     _integrals,
     _m0_from_k,
-    _products,
-    _products0,
+    _m0_times,
     block,
 )
 from ._status import STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
@@ -79,33 +79,23 @@ def _step_generic(x, N, b, eta, z, d1, d2, inv_d2, bottom_up, nu, cont, eu, ev, 
     if st != STATUS_OK:
         return st, nu
     m00, m01, m10, m11 = _m0_from_k(eta, k1, k2, nk)
-    # ---- R_k = (ℓ_k + T1_{k-1}) + T2_{k-2}, k = 0..N+2 (NumPy's order of summation)
-    t1u, t1v, t1w, Qu[0], Qv[0], Qw[0] = _products0(m00, m01, m10, m11, b)
-    Ru[0] = b
+    # ---- R_k of M(λ)[P, ℓ(λ)], k = 0..N+2 (λ^{2-k}; R_0 = 0): C_m = [P, ℓ_m], R_{m+1} = C_m + M0 C_{m-1}
+    # (P = M0 + Re(η) I, the traceless part: its diagonal is i Im m00; _dressing.dress_real_two_point)
+    p00 = complex(0.0, m00.imag)
+    Ru[0] = 0.0
     Rv[0] = 0.0
     Rw[0] = 0.0
-    Ru[1] = complex(eu[1], 0.0) + t1u if N >= 1 else t1u
-    Rv[1] = ev[1] + t1v
-    Rw[1] = ew[1] + t1w
+    cu, cv, cw = _commutator(p00, m01, m10, b, 0.0, 0.0)
+    Ru[1] = cu
+    Rv[1] = cv
+    Rw[1] = cw
     for m in range(1, N + 1):
-        t1u, t1v, t1w, Qu[m], Qv[m], Qw[m] = _products(m00, m01, m10, m11, eu[m], ev[m], ew[m])
-        if m + 1 <= N:
-            Ru[m + 1] = complex(eu[m + 1], 0.0) + t1u
-            Rv[m + 1] = ev[m + 1] + t1v
-            Rw[m + 1] = ew[m + 1] + t1w
-        else:
-            Ru[m + 1] = t1u
-            Rv[m + 1] = t1v
-            Rw[m + 1] = t1w
-    for m in range(N + 1):  # T2_m was parked in Q
-        if m + 2 <= N + 1:
-            Ru[m + 2] = Ru[m + 2] + Qu[m]
-            Rv[m + 2] = Rv[m + 2] + Qv[m]
-            Rw[m + 2] = Rw[m + 2] + Qw[m]
-        else:
-            Ru[m + 2] = Qu[m]
-            Rv[m + 2] = Qv[m]
-            Rw[m + 2] = Qw[m]
+        au, av, aw = _m0_times(m00, m01, m10, m11, cu, cv, cw)
+        cu, cv, cw = _commutator(p00, m01, m10, eu[m], ev[m], ew[m])
+        Ru[m + 1] = cu + au
+        Rv[m + 1] = cv + av
+        Rw[m + 1] = cw + aw
+    Ru[N + 2], Rv[N + 2], Rw[N + 2] = _m0_times(m00, m01, m10, m11, cu, cv, cw)
     # ---- exact division by λ² + d1 λ + d2 (d1, d2 real; ÷d2 as ×(1/d2))
     if bottom_up:
         for k in range(N + 2, 1, -1):
@@ -165,12 +155,14 @@ def _step_generic(x, N, b, eta, z, d1, d2, inv_d2, bottom_up, nu, cont, eu, ev, 
     sc = 1.0 + math.sqrt(e2)
     if not (res2 <= _RESIDUAL_TOL2 * sc * sc):
         return STATUS_RESIDUAL, nu
-    # ---- new state (state_from_ell, real part)
+    # ---- new state ℓ_m + Q_m (state_from_ell, real part)
     acc = 0.0
     for m in range(1, N + 1):
-        y1 = 0.5 * (Qv[m].real + Qw[m].real)
-        y2 = 0.5 * (Qw[m].imag - Qv[m].imag)
-        y3 = Qu[m].real
+        nv = ev[m] + Qv[m]
+        nw = ew[m] + Qw[m]
+        y1 = 0.5 * (nv.real + nw.real)
+        y2 = 0.5 * (nw.imag - nv.imag)
+        y3 = eu[m] + Qu[m].real
         xnew[3 * (m - 1)] = y1
         xnew[3 * (m - 1) + 1] = y2
         xnew[3 * (m - 1) + 2] = y3

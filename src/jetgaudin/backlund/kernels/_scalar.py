@@ -245,43 +245,17 @@ def _horner_step_u(acc, z, u):
 
 
 @block(inline="always")
-def _products(m00, m01, m10, m11, u, v, w):
-    r"""``T1 = M0 ℓ_m + ℓ_m adj M0`` and ``T2 = M0 ℓ_m adj M0`` (entries 00, 01, 10) for
-    ``ℓ_m = [[u, v], [w, −u]]``, ``u`` real (``m ≥ 1``)."""
-    a00 = m11
-    a01 = -m01
-    a10 = -m10
-    lx = -u
-    p00 = _cr(m00, u) + m01 * w
-    p01 = m00 * v + _cr(m01, lx)
-    p10 = _cr(m10, u) + m11 * w
-    p11 = m10 * v + _cr(m11, lx)
-    t1u = p00 + (_cr(a00, u) + v * a10)
-    t1v = p01 + (_cr(a01, u) + v * m00)
-    t1w = p10 + (w * a00 + _cr(a10, lx))
-    t2u = p00 * a00 + p01 * a10
-    t2v = p00 * a01 + p01 * m00
-    t2w = p10 * a00 + p11 * a10
-    return t1u, t1v, t1w, t2u, t2v, t2w
+def _commutator(p00, p01, p10, u, v, w):
+    r"""``[P, ℓ_m]`` (entries 00, 01, 10; traceless) for the traceless ``P = [[p00, p01], [p10, −p00]]`` and
+    ``ℓ_m = [[u, v], [w, −u]]``: ``(p01 w − v p10, 2 (p00 v − u p01), 2 (u p10 − p00 w))``."""
+    return (p01 * w - v * p10, 2.0 * (p00 * v - u * p01), 2.0 * (u * p10 - p00 * w))
 
 
 @block(inline="always")
-def _products0(m00, m01, m10, m11, b):
-    r""":func:`_products` for ``ℓ_0 = diag(b, −b)`` (the zero entries dropped: ``x + 0·y = x``)."""
-    a00 = m11
-    a01 = -m01
-    a10 = -m10
-    p00 = _cr(m00, b)
-    p01 = _cr(m01, -b)
-    p10 = _cr(m10, b)
-    p11 = _cr(m11, -b)
-    t1u = p00 + _cr(a00, b)
-    t1v = p01 + _cr(a01, b)
-    t1w = p10 + _cr(a10, -b)
-    t2u = p00 * a00 + p01 * a10
-    t2v = p00 * a01 + p01 * m00
-    t2w = p10 * a00 + p11 * a10
-    return t1u, t1v, t1w, t2u, t2v, t2w
+def _m0_times(m00, m01, m10, m11, cu, cv, cw):
+    r"""``M0 C`` (entries 00, 01, 10) for a traceless ``C = [[cu, cv], [cw, −cu]]`` (``M0 [P, ℓ]`` is traceless:
+    ``tr(P [P, ℓ]) = 0``)."""
+    return (m00 * cu + m01 * cw, m00 * cv - m01 * cu, m10 * cu + m11 * cw)
 
 
 @block()

@@ -1,0 +1,195 @@
+r"""The elliptic (XYZ) Gaudin family (issue 24; ``docs/families.md``, tutorial ``docs/tutorials/xyz.md``).
+
+Modulus ``k ∈ [0, 1)``, ``K = K(k)``, ``K' = K(√(1−k²))``; **no field** (``b ≠ 0`` is refused: the XYZ r-matrix
+has no continuous symmetry).  Basis functions (Jacobi functions of modulus ``k``, :mod:`._jacobi`):
+
+.. math:: w_1 = \operatorname{ns},\quad w_2 = \operatorname{ds},\quad w_3 = \operatorname{cs},\qquad
+          \xi^a(\lambda) = \sum_j \sum_{k<N_j} y^{(j)a}_k \frac{(-1)^k}{k!} w_a^{(k)}(\lambda-\lambda_j),
+
+``ℓ = Σ_a ξ^a σ_a`` (Pauli), ``L = (i/2) ℓ``; at ``k = 0`` they are ``1/sin``, ``1/sin``, ``cot``: the
+trigonometric family (``γ = 1``) with ``b = 0``.  ``w_a(x + 2K) = ε_a w_a(x)``, ``ε = (−1, −1, 1)``;
+``w_a(x + 2iK') = ε'_a w_a(x)``, ``ε' = (1, −1, −1)``: sites must be distinct modulo ``2K``.
+
+**r-matrix.**  With ``{y^a, y^b} = ε_{abc} y^c`` per site (``g^(N)``, as for every family), the identity
+``w_a(x) w_b(y) = w_a(x−y) w_c(y) − w_b(x−y) w_c(x)`` (``(a, b, c)`` distinct; its ``k = 0`` and rational
+limits are the partial fractions of ``1/(xy)``) gives
+
+.. math:: \{\ell(\lambda) \otimes \ell(\mu)\} = [\, r(\lambda-\mu),\ \ell(\lambda)\otimes 1 + 1\otimes\ell(\mu)\,],
+          \qquad r(x) = \tfrac{i}{2} \sum_a w_a(x)\, \sigma_a \otimes \sigma_a
+
+(for ``L = (i/2)ℓ``: ``r_L = (i/2) r``), tested in ``tests/test_elliptic.py``.
+
+**Integrals.**  ``ν² = Σ_a (ξ^a)²`` is elliptic (periods ``2K``, ``2iK'``: the signs ``ε_a`` cancel in the
+squares) with poles only at the sites.  With ``F(x) = cs(x) dn(x) + Z(x)`` (``Z`` Jacobi's zeta; ``F = 1/x`` +
+odd regular part, regular at ``iK'``, ``F(x + 2K) = F(x)``, ``F(x + 2iK') = F(x) − iπ/K``, ``F' = 1 − E/K − ns²``,
+``cot x`` at ``k = 0``) and ``ψ_m = (−1)^{m−1} F^{(m−1)}/(m−1)!`` (principal part ``x^{−m}``; ``ψ_2 = ns² − 1 + E/K``,
+``1/sin²`` at ``k = 0``):
+
+.. math:: \nu^2(\lambda) = c_0 + \sum_j \sum_{m=1}^{2N_j} h_{j,m}\, \psi_m(\lambda-\lambda_j),
+          \qquad \sum_j h_{j,1} = 0,
+
+exactly: ``ν² − Σ h ψ`` has no pole and, since ``Σ_j h_{j,1} = 0`` (the residues of an elliptic function), is
+doubly periodic, hence a constant ``c_0``.  For order-1 sites ``h_{j,2} = C_j = |s_j|²`` (Casimirs) and
+``h_{j,1} = 2H_j``, ``H_j = Σ_{k≠j} Σ_a w_a(λ_j − λ_k) s^a_j s^a_k`` (the Gaudin Hamiltonians, ``Σ_j H_j = 0``);
+``c_0`` is one more commuting quadratic integral (its form: :func:`jetgaudin.gaudin._forms.constant_form`; at
+``k = 0`` it is ``−J²``).  ``integrals(X)`` = ``(h_{1,1} … h_{1,2N_1}, h_{2,1}, …, c0)``; the Casimirs are the
+``h_{j,m}``, ``m > N_j`` (``casimir_mask``).
+
+**Dressing** (Sklyanin's classical XYZ L-operator with a shifted spectral parameter):
+
+.. math:: D(\lambda) = S_0\,\mathbb 1 + \sum_a S_a\, w_a(\lambda - \lambda_0)\, \sigma_a,
+          \qquad \lambda_0 = \operatorname{Re}\xi + \omega,\ \omega \in \{0, K, iK', K + iK'\}.
+
+``D(λ + 2K) = σ_3 D σ_3`` and ``D(λ + 2iK') = σ_1 D σ_1`` like ``ℓ``; ``det D = S_0² − S_1² − k'² S_2² −
+|S|² cs²(λ − λ_0)`` (``ns² = 1 + cs²``, ``ds² = k'² + cs²``) vanishes at ``λ_0 ± x_*`` modulo the periods of
+``cs²``; ``x_* = iIm ξ − ω`` puts the zeros at ``ξ`` and ``ξ̄`` for every half period ``ω``, and ``ℓ̃ = Dℓ adj D/det D``
+is regular at ``λ_0`` (``det D ∼ −|S|²/x²`` there), so it has the form of ``ℓ``.  Spectrality ``D(ξ) k_1 = 0``,
+``D(ξ̄) k_2 = 0`` (``k_2 ⊥ k_1``, the eigenvector of ``ℓ(ξ̄)`` for ``−conj ν_1``) is 4 linear equations of rank 3
+in ``S``: ``S`` is fixed up to scale (:func:`spectral_null_vector`).  For a real state ``(S_0, iS_a)`` is real up
+to a common factor, so ``D(λ̄)^† ∝ adj D(λ)`` and the map is real.  The four half periods give four real, Poisson,
+integral-preserving maps: ``D_ω`` differs from ``D_0`` by the symmetry ``ℓ → σ_b ℓ σ_b`` (a π-rotation of every
+spin about the axis ``b``; ``ω = K, iK', K + iK'`` ↔ ``b = 3, 1, 2``).  Only ``ω = 0`` tends to the identity as
+``Im ξ → 0`` (``D → S_0 1``: ``det D`` then has its zeros near the pole of ``cs²``) and is the time-1 flow of
+``G_ξ = i∫_{ξ̄}^{ξ} ν dλ``; the others are that flow composed with the π-rotation (tested).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import special
+
+from .._errors import InvalidParameterError
+from . import _jacobi
+from ._base import Family
+
+__all__ = ["EllipticFamily", "spectral_null_vector", "HALF_PERIODS", "PAULI"]
+
+#: Pauli matrices σ_1, σ_2, σ_3
+PAULI = np.array([[[0, 1], [1, 0]], [[0, -1j], [1j, 0]], [[1, 0], [0, -1]]], dtype=complex)
+PAULI.setflags(write=False)
+#: the half-period shifts ω of the dressing as multiples (of K, of iK'); the map's is (0, 0)
+HALF_PERIODS = {"0": (0, 0), "K": (1, 0), "iK'": (0, 1), "K+iK'": (1, 1)}
+#: |Im ξ| must stay below this fraction of K' (at K' the points ξ, ξ̄ coincide modulo the period 2iK')
+_IM_FRACTION = 0.9
+
+
+class EllipticFamily(Family):
+    """The XYZ family of modulus ``modulus`` (module docstring).  ``half_period`` (a key of
+    :data:`HALF_PERIODS`) chooses the dressing's shift; only ``"0"`` is the time-1 flow of ``G_ξ``: the others
+    exist to test that."""
+
+    name = "elliptic"
+    uniform = False
+    n_dressing = 4  # 1, w_1 σ_1, w_2 σ_2, w_3 σ_3
+    constant_integral = "c0"
+    dressing_needs_xi = True
+    kernel_rule = 2  # jetgaudin.gaudin._family_kernel: the null vector of spectrality
+
+    def __init__(self, modulus: float = 0.5, half_period: str = "0"):
+        self.modulus = _jacobi.check_modulus(modulus)
+        if half_period not in HALF_PERIODS:
+            raise InvalidParameterError(f"half_period must be one of {list(HALF_PERIODS)}, got {half_period!r}")
+        self.half_period = half_period
+        self.K, self.Kp = _jacobi.periods(self.modulus)
+        m = self.modulus**2
+        self._e_over_k = float(special.ellipe(m)) / self.K
+
+    @property
+    def period(self) -> float:
+        return 2.0 * self.K
+
+    def describe(self) -> dict:
+        d: dict = {"modulus": self.modulus}
+        if self.half_period != "0":
+            d["half_period"] = self.half_period
+        return d
+
+    def check(self, b, sites):
+        if b != 0.0:
+            raise InvalidParameterError(
+                f"the elliptic (XYZ) family has no field: b must be 0 (the XYZ r-matrix has no continuous symmetry "
+                f"to align a field with), got b = {b}; use GaudinModel(0.0, sites, family='elliptic', ...)")
+        super().check(b, sites)
+
+    def check_xi(self, xi):
+        if abs(xi.imag) >= _IM_FRACTION * self.Kp:
+            raise InvalidParameterError(
+                f"|Im(eta)| = {abs(xi.imag):.6g} is too close to K' = {self.Kp:.6g} (modulus {self.modulus}): at "
+                f"|Im eta| = K' the points eta and conj(eta) coincide modulo the period 2iK'; give "
+                f"|Im(eta)| < {_IM_FRACTION} K' = {_IM_FRACTION * self.Kp:.6g}")
+
+    # ---- basis functions -------------------------------------------------------------------------------------
+
+    def taylor(self, a, x0, order):
+        return _jacobi.w_taylor(x0, self.modulus, order)[a - 1]
+
+    def regular(self, a, order):
+        return _jacobi.w_regular(self.modulus, order)[a - 1].astype(complex)
+
+    # ---- ν² ----------------------------------------------------------------------------------------------
+
+    def nu2_basis(self, m, x):
+        return (-1) ** (m - 1) * _jacobi.curve_function_taylor(x, self.modulus, m)[m - 1]
+
+    def nu2_basis_constant(self, m):
+        # ψ_m = (−1)^{m−1} F^{(m−1)}/(m−1)!, F = 1/x + Σ f_n x^n: the constant of ψ_m − x^{−m} is (−1)^{m−1} f_{m−1}
+        return (-1) ** (m - 1) * float(_jacobi.curve_function_regular(self.modulus, m)[m - 1])
+
+    def nu2_constant(self, b, extra):
+        return extra[..., 0]
+
+    def nu2_constant_gradient(self, b, extra):
+        return np.ones(np.shape(extra))
+
+    # ---- dressing -------------------------------------------------------------------------------------------
+
+    def _lam0(self, xi) -> complex:
+        nK, nKp = HALF_PERIODS[self.half_period]
+        if nKp and not np.isfinite(self.Kp):
+            raise InvalidParameterError("the half periods iK', K + iK' do not exist at k = 0 (K' = inf)")
+        return complex(np.real(xi)) + nK * self.K + (1j * self.Kp if nKp else 0.0)
+
+    def dressing_basis(self, lam, xi):
+        lam = np.asarray(lam, dtype=complex)
+        W = _jacobi.w_values(lam - self._lam0(xi), self.modulus)  # (3,) + shape
+        out = np.zeros(lam.shape + (4, 2, 2), dtype=complex)
+        out[..., 0, :, :] = np.eye(2)
+        for a in range(3):
+            out[..., a + 1, :, :] = W[a][..., None, None] * PAULI[a]
+        return out
+
+    def dressing_taylor(self, lam0, order, xi):
+        T = _jacobi.w_taylor(np.asarray(lam0 - self._lam0(xi), dtype=complex), self.modulus, order)  # (3, order)
+        out = np.zeros((order, 4, 2, 2), dtype=complex)
+        out[0, 0] = np.eye(2)
+        for a in range(3):
+            out[:, a + 1] = T[a][:, None, None] * PAULI[a]
+        return out
+
+    def real_dressing(self, xi, k1, k2):
+        return spectral_null_vector(self, xi, k1, k2)
+
+    def kernel_constants(self, xi):
+        """``(w_a(ξ − λ_0), w_a(ξ̄ − λ_0))``, ``a = 1, 2, 3``: the dressing basis at the two spectral points."""
+        xi = complex(xi)
+        lam0 = self._lam0(xi)
+        return _jacobi.w_values(np.array([xi - lam0, np.conj(xi) - lam0]), self.modulus).T.ravel()
+
+
+def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
+    r"""``S = (S_0, S_1, S_2, S_3)`` ``(B, 4)`` with ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` (module docstring): the right
+    singular vector of the smallest singular value of the ``4 × 4`` system (rank 3), normalised to ``|S| = 1`` with
+    its largest component real (if it is ``S_0``) or imaginary (an ``S_a``), so that ``(S_0, iS_a)`` is real for a
+    real state."""
+    xi = complex(xi)
+    cols = []
+    for lam, k in ((xi, k1), (np.conj(xi), k2)):
+        B = family.dressing_basis(np.asarray(lam), xi)  # (4, 2, 2)
+        cols.append(np.einsum("pij,bj->bip", B, k))  # rows i of D(λ) k = Σ_p S_p (B_p k)_i
+    A = np.concatenate(cols, axis=-2)  # (B, 4, 4)
+    _, _, vh = np.linalg.svd(A)
+    S = np.conj(vh[..., -1, :])
+    big = np.argmax(np.abs(S), axis=-1)
+    top = np.take_along_axis(S, big[..., None], axis=-1)[..., 0]
+    phase = np.abs(top) / top * np.where(big == 0, 1.0, 1j)
+    return S * phase[..., None]

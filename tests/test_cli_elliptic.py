@@ -1,0 +1,116 @@
+"""`--family elliptic --modulus k` on orbit, ensemble, flow and info (issue 24), through the real entry point
+in-process; references are the library's model and map called directly (bit for bit for orbit.h5 / ensemble.h5)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from jetgaudin import run as rl
+from jetgaudin.gaudin import GaudinModel
+from test_cli_chains import one_line_error
+from test_run import run_cli
+
+SITES = "-0.5:1,0.4:2"
+MODEL = GaudinModel(0.0, [(-0.5, 1), (0.4, 2)], family="elliptic", modulus=0.6)
+ETA = 1.5 + 0.2j
+X0 = np.round(np.random.default_rng(7).normal(size=9), 3)
+INIT = ",".join(repr(float(v)) for v in X0)
+COMMON = ("--sites", SITES, "--family", "elliptic", "--modulus", "0.6", "--b", "0", "--eta", "1.5+0.2i")
+
+
+def test_orbit_and_init_from(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "orbit", *COMMON, "--init", INIT, "--steps", "6", "--kernel", "numpy",
+                           "--out", tmp_path / "o")
+    assert code == 0, err
+    ref = MODEL.two_point_backlund(ETA).iterate(X0, 6, kernel="numpy")
+    assert np.array_equal(rl.load(tmp_path / "o").X, ref)
+    run = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert run["map"]["family"] == "elliptic" and run["map"]["modulus"] == 0.6
+    assert run["integral_names"][-1] == "c0"
+    code, _, err = run_cli(capsys, "orbit", "--init-from", tmp_path / "o", "--steps", "2", "--kernel", "numpy",
+                           "--out", tmp_path / "o2")
+    assert code == 0, err
+    assert np.array_equal(rl.load(tmp_path / "o2").X, MODEL.two_point_backlund(ETA).iterate(ref[-1], 2))
+
+
+def test_ensemble(tmp_path, capsys):
+    X = np.random.default_rng(8).normal(size=(2, 9))
+    np.savetxt(tmp_path / "in.csv", X, delimiter=",")
+    code, _, err = run_cli(capsys, "ensemble", *COMMON, "--input", tmp_path / "in.csv", "--steps", "3",
+                           "--out", tmp_path / "e")
+    assert code == 0, err
+    d = rl.load(tmp_path / "e")
+    B = MODEL.two_point_backlund(ETA)
+    for k in range(2):
+        assert np.array_equal(d.X[:, k], B.iterate(X[k], 3))
+
+
+def test_flow_compare(tmp_path, capsys):
+    """The flow of G_eta against the map: the CLI's compare.csv distance below 1e-9 (DOP853 at the default rtol)."""
+    code, out, err = run_cli(capsys, "flow", *COMMON, "--init", INIT, "--steps", "2", "--compare",
+                             "--out", tmp_path / "f")
+    assert code == 0, err
+    d = np.loadtxt(tmp_path / "f" / "compare.csv", delimiter=",", skiprows=1)
+    assert np.abs(d[:, 1]).max() < 1e-9
+
+
+def test_info_json(capsys):
+    code, out, err = run_cli(capsys, "info", *COMMON, "--init", INIT, "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["family"] == "elliptic" and d["modulus"] == 0.6
+    assert [r["name"] for r in d["integrals"]] == MODEL.integral_labels()
+    assert np.allclose([r["value"] for r in d["integrals"]], MODEL.integrals(X0), rtol=1e-15, atol=0)
+    assert np.isclose(complex(*d["nu_default"]), MODEL.nu(X0, ETA), rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("args, words", [
+    (("--b", "0.5"), ["--b", "no field"]),
+    (("--modulus", "1"), ["--modulus", "[0, 1)"]),
+    (("--modulus", "-0.2"), ["--modulus", "[0, 1)"]),
+    (("--modulus", "abc"), ["--modulus"]),
+    (("--gamma", "0.5"), ["--gamma", "anisotropy"]),
+    (("--eta", f"{2 * 1.9953027776647296!r}+0.3i"), ["is a site", "modulo"]),  # Re eta = 2K, K(0.8) = 1.9953
+    (("--eta", "0.5+1.7i"), ["too close to K'"]),  # 1.7 > 0.9 K'(0.8) = 1.576
+])
+def test_bad_input_one_line_exit_2(tmp_path, capsys, args, words):
+    base = ["orbit", "--sites", "0:1,1:1", "--family", "elliptic", "--modulus", "0.8", "--b", "0", "--eta",
+            "0.5+0.3i", "--init", "1,0,0.3,0.2,0.1,-0.5", "--steps", "3", "--out", tmp_path / "x"]
+    for i in range(0, len(args), 2):  # later options override
+        j = base.index(args[i]) if args[i] in base else None
+        if j is None:
+            base += [args[i], args[i + 1]]
+        else:
+            base[j + 1] = args[i + 1]
+    code, _, err = run_cli(capsys, *base)
+    assert one_line_error(code, err, *words), err
+
+
+def test_family_needs_modulus_and_modulus_needs_elliptic(tmp_path, capsys):
+    code, _, err = run_cli(capsys, "info", "--sites", "0:1,1:1", "--family", "elliptic", "--b", "0", "--init",
+                           "1,0,0.3,0.2,0.1,-0.5")
+    assert one_line_error(code, err, "--modulus"), err
+    code, _, err = run_cli(capsys, "info", "--sites", "0:1,1:1", "--family", "trigonometric", "--modulus", "0.3",
+                           "--b", "1", "--init", "1,0,0.3,0.2,0.1,-0.5")
+    assert one_line_error(code, err, "--modulus", "elliptic"), err
+
+
+@pytest.mark.parametrize("backend", ["numpy", "compiled"])
+def test_resume_and_plot(tmp_path, capsys, backend):
+    """An interrupted elliptic run (SIGINT after step 6, chunks of 3) resumed from run.json (the map rebuilt from its
+    description: family and modulus) equals the uninterrupted orbit bit for bit; `plot` draws the finished run."""
+    from test_gaudin_run import _interrupt_once
+
+    B = MODEL.two_point_backlund(ETA, kernel=backend)
+    progress, sent = _interrupt_once(6)
+    with pytest.raises(rl.RunInterrupted):
+        rl.start(rl.RunSpec(B, X0, 24, 2, checkpoint_seconds=0.0, program="jetgaudin orbit"), tmp_path / "i",
+                 progress=progress, max_chunk_steps=3)
+    assert sent
+    assert rl.resume(tmp_path / "i").state is rl.RunStatus.COMPLETED
+    assert np.array_equal(rl.load(tmp_path / "i").X, B.iterate(X0, 24, save_every=2))
+    code, out, err = run_cli(capsys, "plot", tmp_path / "i")
+    assert code == 0 and "wrote" in out, err

@@ -1,0 +1,155 @@
+"""Mutation testing of the mathematical core with Cosmic Ray: a seeded, bounded sample of mutants per module.
+
+Usage (needs ``pip install -e '.[mutation]'``; see docs/mutation.md)::
+
+    python tools/mutation.py                      # the default sample (61 mutants, ~20 min on 2 cores)
+    python tools/mutation.py --per-module 2 --only algebra.py --json out.json
+
+For each module of :data:`GROUPS` the script copies ``src/`` and ``tests/`` into a temporary directory (Cosmic Ray
+mutates files in place: the working tree is never touched), lets ``cosmic-ray init`` enumerate every mutant, keeps
+those of :data:`OPERATORS` (the plausible slips: arithmetic, comparison, sign, constant, boolean; not the bitwise
+operators, which fail on floats at once), draws ``--per-module`` of them with ``--seed``, marks the others skipped,
+and runs ``cosmic-ray exec`` with the module's fast test selection (``pytest -x``: the first failing test kills),
+after checking that the selection passes on the unmutated copy (a baseline).
+It prints one line per module and writes a JSON report (counts and every survivor with its diff).  The gaudin
+package is not mutated this round: it is being rebuilt (issue 27).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: module (under src/jetgaudin) -> the tests that decide it (fast selections: each mutant runs them once)
+GROUPS: dict[str, tuple[str, ...]] = {
+    "algebra.py": ("tests/test_algebra.py",),
+    "lax.py": ("tests/test_lax.py",),
+    "spectral.py": ("tests/test_spectral.py", "tests/test_branch_rule.py"),
+    "hamiltonians.py": ("tests/test_hamiltonians.py",),
+    "backlund/_dressing.py": ("tests/test_backlund.py", "tests/test_routes.py"),
+    "backlund/maps.py": ("tests/test_backlund.py", "tests/test_maps.py"),
+    "backlund/closed_form.py": ("tests/test_closed_form.py",),
+    "backlund/generating.py": ("tests/test_generating.py",),
+    "backlund/kernels/_scalar.py": ("tests/test_routes.py", "tests/test_kernels.py"),
+    "backlund/kernels/_n3.py": ("tests/test_routes.py", "tests/test_kernels.py"),
+    "backlund/kernels/_generic.py": ("tests/test_routes.py", "tests/test_kernels.py"),
+    "backlund/kernels/_branch.py": ("tests/test_branch_rule.py", "tests/test_kernels.py"),
+}
+
+#: the default sample size per module (the kernels recompile for every mutant: fewer there)
+PER_MODULE = {"backlund/kernels/_scalar.py": 5, "backlund/kernels/_n3.py": 5, "backlund/kernels/_generic.py": 4,
+              "backlund/kernels/_branch.py": 3, "backlund/closed_form.py": 4, "backlund/generating.py": 4}
+DEFAULT_PER_MODULE = 6
+
+_ARITH = ("Add", "Sub", "Mul", "Div", "Pow")
+_CMP = ("Lt", "LtE", "Gt", "GtE", "Eq", "NotEq")
+
+
+def plausible(operator: str) -> bool:
+    """The operators of the sample: slips a person could make in this code."""
+    name = operator.split("/", 1)[-1]
+    if name.startswith("ReplaceBinaryOperator_"):
+        _, a, b = name.split("_")
+        return a in _ARITH and b in _ARITH
+    if name.startswith("ReplaceComparisonOperator_"):
+        _, a, b = name.split("_")
+        return a in _CMP and b in _CMP
+    return name.startswith("ReplaceUnaryOperator_") or name in {
+        "NumberReplacer", "ReplaceTrueWithFalse", "ReplaceFalseWithTrue", "ReplaceAndWithOr", "ReplaceOrWithAnd",
+        "AddNot", "ZeroIterationForLoop"}
+
+
+def _cosmic(*args: str, cwd: Path) -> None:
+    subprocess.run([sys.executable, "-m", "cosmic_ray.cli", *args], cwd=cwd, check=True,
+                   stdout=subprocess.DEVNULL)
+
+
+def run_module(module: str, tests: tuple[str, ...], k: int, seed: int, timeout: float, work: Path) -> dict:
+    """Sample ``k`` plausible mutants of ``module`` and run them; returns the counts and the survivors."""
+    from cosmic_ray.work_db import WorkDB, use_db
+    from cosmic_ray.work_item import TestOutcome, WorkerOutcome, WorkResult
+
+    path = f"src/jetgaudin/{module}"
+    cfg = work / f"{module.replace('/', '_')}.toml"
+    session = work / f"{module.replace('/', '_')}.sqlite"
+    command = f"{sys.executable} -m pytest -x -q -p no:cacheprovider -p no:randomly " + " ".join(tests)
+    cfg.write_text(f'[cosmic-ray]\nmodule-path = "{path}"\ntimeout = {timeout}\nexcluded-modules = []\n'
+                   f'test-command = "env PYTHONPATH=src {command}"\n\n[cosmic-ray.distributor]\nname = "local"\n')
+    # baseline: the selection must pass on the unmutated copy, or every mutant would count as killed
+    base = subprocess.run(["env", "PYTHONPATH=src", *command.split()], cwd=work, capture_output=True, text=True)
+    if base.returncode != 0:
+        raise SystemExit(f"{module}: the tests fail without a mutant (fix them first):\n{base.stdout[-2000:]}")
+    _cosmic("init", str(cfg), str(session), cwd=work)
+    with use_db(str(session), WorkDB.Mode.open) as db:
+        items = list(db.work_items)
+        pool = sorted((i for i in items if plausible(i.mutations[0].operator_name)),
+                      key=lambda i: (i.mutations[0].operator_name, i.mutations[0].occurrence))  # job ids are random
+        chosen = {i.job_id for i in random.Random(f"{seed}:{module}").sample(pool, min(k, len(pool)))}
+        db.set_multiple_results([i.job_id for i in items if i.job_id not in chosen],
+                                WorkResult(worker_outcome=WorkerOutcome.SKIPPED))
+    _cosmic("exec", str(cfg), str(session), cwd=work)
+    out = {"module": module, "tests": list(tests), "mutants": len(items), "plausible": len(pool),
+           "sampled": len(chosen), "killed": 0, "survived": [], "incompetent": 0, "timeout": 0}
+    with use_db(str(session), WorkDB.Mode.open) as db:
+        for item, result in db.completed_work_items:
+            if item.job_id not in chosen:
+                continue
+            m = item.mutations[0]
+            if result.worker_outcome != WorkerOutcome.NORMAL or result.test_outcome == TestOutcome.INCOMPETENT:
+                out["incompetent"] += 1
+            elif result.test_outcome == TestOutcome.KILLED and result.output == "timeout":  # Cosmic Ray's timeout
+                out["timeout"] += 1
+            elif result.is_killed:
+                out["killed"] += 1
+            else:
+                out["survived"].append({"operator": m.operator_name, "occurrence": m.occurrence,
+                                        "line": m.start_pos[0], "definition": m.definition_name,
+                                        "diff": result.diff})
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--per-module", type=int, default=None, help="mutants per module (default: PER_MODULE)")
+    ap.add_argument("--seed", type=int, default=27)
+    ap.add_argument("--timeout", type=float, default=300.0, help="seconds per mutant (compiles included)")
+    ap.add_argument("--only", nargs="*", default=None, help="modules of GROUPS to run (default: all)")
+    ap.add_argument("--json", type=Path, default=None, help="write the report here")
+    args = ap.parse_args(argv)
+    modules = list(GROUPS) if not args.only else args.only
+    unknown = [m for m in modules if m not in GROUPS]
+    if unknown:
+        ap.error(f"unknown modules {unknown}; known: {list(GROUPS)}")
+    report = []
+    with tempfile.TemporaryDirectory(prefix="jetgaudin-mutation-") as tmp:
+        work = Path(tmp)
+        ignore = shutil.ignore_patterns("__pycache__", ".hypothesis", "*.nbi", "*.nbc")
+        shutil.copytree(ROOT / "src", work / "src", ignore=ignore)
+        shutil.copytree(ROOT / "tests", work / "tests", ignore=ignore)
+        shutil.copy(ROOT / "pyproject.toml", work / "pyproject.toml")
+        for module in modules:
+            k = args.per_module if args.per_module is not None else PER_MODULE.get(module, DEFAULT_PER_MODULE)
+            r = run_module(module, GROUPS[module], k, args.seed, args.timeout, work)
+            report.append(r)
+            decided = r["killed"] + len(r["survived"])
+            print(f"{module:32s} sampled {r['sampled']:3d} of {r['plausible']:4d} plausible ({r['mutants']} in all): "
+                  f"killed {r['killed']}/{decided}, survived {len(r['survived'])}, timeout {r['timeout']}, "
+                  f"incompetent {r['incompetent']}", flush=True)
+    killed = sum(r["killed"] for r in report)
+    decided = killed + sum(len(r["survived"]) for r in report)
+    print(f"kill rate {killed}/{decided}" + (f" = {killed / decided:.1%}" if decided else ""))
+    if args.json:
+        args.json.write_text(json.dumps({"seed": args.seed, "modules": report}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
