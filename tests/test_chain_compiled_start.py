@@ -1,6 +1,6 @@
 """The compiled per-call set-up of the chain maps: the branch rule of ν at the first state, compiled for every
 family (``jetgaudin.gaudin._family_kernel.branch_rule``), against the NumPy rule (``ChainTwoPointBacklund.start``:
-the exact root product in the uniformizer)."""
+the exact root product in the uniformizer; the numerical continuation for the elliptic family)."""
 
 import numpy as np
 import pytest
@@ -11,6 +11,7 @@ MODELS = {
     "rational": GaudinModel(0.8, [(-1.0, 2), (0.3, 1), (1.1, 1)]),
     "trigonometric": GaudinModel(0.8, [(-1.0, 2), (0.3, 1), (1.1, 1)], family="trigonometric", gamma=0.7),
     "trig-b0": GaudinModel(0.0, [(-1.0, 1), (0.3, 3)], family="trigonometric"),
+    "elliptic": GaudinModel(0.0, [(-0.5, 1), (0.4, 2)], family="elliptic", modulus=0.6),  # numerical NumPy rule
 }
 
 
