@@ -138,8 +138,10 @@ def test_ensemble_sites_members_equal_single_orbits(tmp_path, capsys):
     m = jg.ChainTwoPointBacklund(MODEL, ETA, backend=d.record["map"]["backend"])
     for k in range(3):
         assert np.array_equal(d.X[:, k], m.iterate(X[k], 20))
-    code, _, err = run_cli(capsys, "ensemble", "--sites", SITES, "--sample", "leaf", "--out", tmp_path / "s")
-    assert one_line_error(code, err, "--sites", "--input")
+    # the chain's sampler is its leaf (tests/test_chain_capabilities.py); the top's energy shell is refused
+    code, _, err = run_cli(capsys, "ensemble", "--sites", SITES, "--sample", "energy", "--energy", "1", "--out",
+                           tmp_path / "s")
+    assert one_line_error(code, err, "--sites", "leaf")
 
 
 def test_info_sites_marks_casimirs_and_hamiltonians(capsys):
@@ -172,9 +174,10 @@ def test_flow_sites_integrates_the_chains_G_eta(tmp_path, capsys):
     assert run["map"]["kind"] == "chain_flow" and run["integral_names"] == MODEL.integral_labels()
     assert run["compare"]["max_distance"] <= 1e-8 * (1 + np.abs(ref).max())
     assert {"chain_y0.png", "chain_integrals.png"} <= set(run["files"])
+    # the chain's physical Hamiltonian (tests/test_chain_capabilities.py); --compare stays G_η's
     code, _, err = run_cli(capsys, "flow", "--sites", SITES, "--init", INIT, "--hamiltonian", "physical",
-                           "--out", tmp_path / "g")
-    assert one_line_error(code, err, "--sites", "interpolating")
+                           "--compare", "--out", tmp_path / "g")
+    assert one_line_error(code, err, "--compare", "interpolating")
 
 
 def test_the_commands_of_docs_chains_run(tmp_path, capsys, monkeypatch):

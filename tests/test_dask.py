@@ -70,3 +70,77 @@ def test_recorded_ensemble_on_dask_equals_local(cluster, tmp_path):
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert np.array_equal(er.load_ensemble(tmp_path / "b").states, ref.states[n])
+
+
+# ---- chains of every family (issue 23): any map's batch through jetgaudin.ensemble.DaskBatch -------------------
+@pytest.mark.parametrize(("family", "kw", "backend"), [("rational", {}, "numpy"), ("rational", {}, "compiled"),
+                                                       ("trigonometric", {"gamma": 0.7}, "numpy"),
+                                                       ("trigonometric", {"gamma": 0.7}, "compiled"),
+                                                       ("elliptic", {"modulus": 0.6}, "numpy"),
+                                                       ("elliptic", {"modulus": 0.6}, "compiled")])
+def test_chain_ensemble_on_dask_equals_local_bit_for_bit(cluster, family, kw, backend):
+    from jetgaudin.ensemble import DaskBatch, sample_chain_on_leaf
+
+    model = jg.GaudinModel(0.0 if family == "elliptic" else 0.8, [(-1.0, 1), (0.3, 2)], family=family, **kw)
+    X0 = sample_chain_on_leaf(model, None, 7, seed=3)
+    m = model.two_point_backlund(0.5 + 0.05j, backend=backend)
+    local = m.advance(X0, None, 9, 3)
+    remote = DaskBatch(m, cluster.scheduler_address, chunk_size=3).advance(X0, None, 9, 3)  # chunks 3, 3, 1
+    for k in ("rows", "X", "carry", "imag_max"):
+        assert np.array_equal(getattr(local, k), getattr(remote, k)), k
+    # continuing from the carry: the same bits as the unsplit run
+    more = DaskBatch(m, cluster.scheduler_address, chunk_size=2).advance(remote.X, remote.carry, 4, 4)
+    assert np.array_equal(more.X, m.advance(X0, None, 13, 13).X)
+
+
+def test_chain_ensemble_cli_scheduler(cluster, tmp_path, monkeypatch):
+    """`ensemble --sites --scheduler`: the file holds the local run's bits (the orbits split over the workers)."""
+    import json
+
+    from jetgaudin import run as rl
+    from jetgaudin.cli import main
+
+    def cli(*args):
+        try:
+            return main([str(a) for a in args]) or 0
+        except SystemExit as exc:
+            return exc.code or 0
+
+    common = ["--sites", "-1:1,0.3:2", "--family", "trigonometric", "--gamma", "0.7", "--b", "0.8", "--eta",
+              "0.5+0.05i", "--orbits", "5", "--steps", "30", "--save-every", "5"]
+    assert cli("ensemble", *common, "--out", tmp_path / "local") == 0
+    calls = _count_dask_calls(monkeypatch)
+    assert cli("ensemble", *common, "--scheduler", cluster.scheduler_address, "--chunk-size", "2",
+               "--out", tmp_path / "dask") == 0
+    a, b = rl.load(tmp_path / "local"), rl.load(tmp_path / "dask")
+    assert np.array_equal(a.X, b.X) and a.X.shape == (7, 5, 9) and calls
+    assert json.loads((tmp_path / "dask" / "run.json").read_text())["map"]["kind"] == "chain_two_point"
+
+
+def _count_dask_calls(monkeypatch):
+    """Count the calls of the one Dask path (jetgaudin.ensemble.dask_chunks): the runs below really use it."""
+    from jetgaudin import ensemble as ens
+
+    calls, real = [], ens.dask_chunks
+    monkeypatch.setattr(ens, "dask_chunks", lambda *a, **k: calls.append(1) or real(*a, **k))
+    return calls
+
+
+def test_interrupted_chain_ensemble_resumes_on_dask_bit_for_bit(cluster, tmp_path, monkeypatch):
+    from jetgaudin import ensemble_recording as er
+    from jetgaudin import run as rl
+    from jetgaudin.ensemble import DaskBatch, sample_chain_on_leaf
+    from test_gaudin_run import _interrupt_once
+
+    model = jg.GaudinModel(0.8, [(-1.0, 1), (0.3, 2)], family="trigonometric", gamma=0.7)
+    X0 = sample_chain_on_leaf(model, None, 5, seed=1)
+    m = model.two_point_backlund(0.5 + 0.05j, backend="numpy")
+    spec = rl.RunSpec(DaskBatch(m, cluster.scheduler_address, 2), X0, 24, 4, program="jetgaudin ensemble")
+    progress, sent = _interrupt_once(9)
+    with pytest.raises(rl.RunInterrupted):
+        rl.start(spec, tmp_path / "r", progress=progress, max_chunk_steps=3)
+    assert sent and rl.read_run(tmp_path / "r")["status"] == "interrupted"
+    calls = _count_dask_calls(monkeypatch)
+    res = er.run_ensemble(None, tmp_path / "r", resume=True, scheduler=cluster.scheduler_address, chunk_size=2)
+    assert res.status == "completed" and calls
+    assert np.array_equal(rl.load(tmp_path / "r").X, m.iterate(X0, 24, save_every=4))

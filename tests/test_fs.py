@@ -259,3 +259,42 @@ def test_real_full_disk_is_reported_as_disk_full(tmp_path):
     with open("/dev/full", "wb", buffering=0) as fh, pytest.raises(OSError) as info:
         fh.write(b"x")
     assert fs.io_failure(info.value) == "disk full"
+
+
+def test_reserved_space_cannot_be_taken_by_another_writer(tmp_path):
+    """Issue 26: ``_space.reserve_space`` allocates the blocks past the end of a file (``FALLOC_FL_KEEP_SIZE``), so
+    that a library that crashes on ENOSPC (HDF5) can write them even after the disk filled up; a reservation that
+    does not fit is a ``RunIOError`` saying ``disk full`` before anything is written; the file size limit too."""
+    import resource
+    import subprocess
+
+    from jetgaudin import _space
+
+    m = tmp_path / "M"
+    m.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(m)],
+                                           capture_output=True).returncode != 0:
+        pytest.skip("mount -t tmpfs is not permitted here")
+    try:
+        (m / "data").write_bytes(b"head")
+        _space.reserve_space(m, "data", 200 << 10)
+        assert (m / "data").stat().st_size == 4  # the size is unchanged
+        with open(m / "filler", "wb", buffering=0) as fh, pytest.raises(OSError) as info:  # another writer fills it
+            while True:
+                fh.write(b"\0" * 4096)
+
+        assert info.value.errno == errno.ENOSPC
+        with open(m / "data", "ab") as fh:  # the reserved bytes are still there
+            fh.write(b"x" * (200 << 10))
+        with pytest.raises(RunIOError, match="^disk full"):
+            _space.reserve_space(m, "data", 1 << 20)
+        os.unlink(m / "filler")
+        soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100 << 10, hard))
+        try:
+            with pytest.raises(RunIOError, match="file size limit"):
+                _space.reserve_space(m, "data", 1)
+        finally:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+    finally:
+        subprocess.run(["umount", "-l", str(m)], check=False)

@@ -116,11 +116,13 @@ def test_hdf5_write_error_ends_failed_not_killed(tmp_path, monkeypatch):
     from jetgaudin.run import store
 
     calls = {"n": 0}
+    real = store.OrbitStore._append_more
 
     def broken(self, n_idx, S):
         calls["n"] += 1
         if calls["n"] == 4:
             raise RuntimeError("Can't write data (file write failed)")  # what h5py raises on a failed write
+        real(self, n_idx, S)
 
     monkeypatch.setattr(store.OrbitStore, "_append_more", broken)
     res = rl.start(spec(60), tmp_path / "h", chunk_rows=4)

@@ -1,7 +1,7 @@
 """jetgaudin: jet-extended su(2) Gaudin models, the generalised Lagrange top and its
 Bäcklund discretisation (Musso, Petrera, Ragnisco, Satta)."""
 
-from . import _errors, hamiltonians
+from . import _errors, _startup, hamiltonians  # noqa: F401  (_startup before NumPy: the command line's start-up guard)
 from ._errors import *  # noqa: F403  (the exception hierarchy: all of _errors.__all__ is public)
 from .algebra import bracket, casimirs, hamiltonian_vector_field, poisson_tensor, structure_constants
 from .backlund import MapProperties, OnePointBacklund, TwoPointBacklund

@@ -34,10 +34,12 @@ __all__ = [
     "LOCK_NAME",
     "RunDirLock",
     "check_new_run_dir",
+    "clearable",
     "make_run_dir",
     "plain_name",
     "open_dir",
     "open_write",
+    "open_nofollow",
     "atomic_write_bytes",
     "atomic_write_text",
     "read_bytes",
@@ -50,6 +52,7 @@ __all__ = [
     "fsync_dir",
     "io_failure",
     "is_disk_full",
+    "FILE_SIZE_LIMIT",
 ]
 
 #: the lock file every writer holds (never deleted: deleting a lock file races with its next holder)
@@ -100,7 +103,7 @@ def _refuse_special(path: Path, st: os.stat_result) -> None:
         raise RunDirectoryError(f"{path} is not a regular file (a FIFO, device or directory); remove it")
 
 
-def _open_nofollow(dfd: int, dirpath: Path, name: str, flags: int, mode: int = 0o644) -> int:
+def open_nofollow(dfd: int, dirpath: Path, name: str, flags: int, mode: int = 0o644) -> int:
     """``os.open`` of ``name`` relative to ``dfd`` with ``O_NOFOLLOW``, refusing links and non-regular files."""
     try:
         fd = os.open(name, flags | _NOFOLLOW | _CLOEXEC, mode, dir_fd=dfd)
@@ -144,7 +147,19 @@ def is_disk_full(exc: BaseException) -> bool:
         if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
             return True
         text = str(exc).lower()
-        if "no space left" in text or "disk quota" in text:
+        if "no space left" in text or "disk quota" in text or text.startswith("disk full"):
+            return True
+        exc = exc.__cause__ or exc.__context__  # type: ignore[assignment]
+        seen += 1
+    return False
+
+
+def _is_too_large(exc: BaseException) -> bool:
+    seen = 0
+    while exc is not None and seen < 8:
+        if isinstance(exc, OSError) and exc.errno == errno.EFBIG:
+            return True
+        if "file too large" in str(exc).lower() or str(exc).startswith(FILE_SIZE_LIMIT):
             return True
         exc = exc.__cause__ or exc.__context__  # type: ignore[assignment]
         seen += 1
@@ -152,9 +167,12 @@ def is_disk_full(exc: BaseException) -> bool:
 
 
 def io_failure(exc: BaseException) -> str:
-    """One line for a failed write: ``"disk full"`` or ``"I/O error (...)"`` (HDF5 errors included)."""
+    """One line for a failed write: ``"disk full"``, ``"file size limit reached (ulimit -f)"`` or
+    ``"I/O error (...)"`` (HDF5 errors included)."""
     if is_disk_full(exc):
         return "disk full"
+    if _is_too_large(exc):
+        return FILE_SIZE_LIMIT
     if isinstance(exc, RunIOError):
         return str(exc)
     if isinstance(exc, OSError) and exc.strerror:
@@ -164,6 +182,8 @@ def io_failure(exc: BaseException) -> str:
     return f"I/O error ({what})"
 
 
+#: the failure of a write past the process's file size limit (``ulimit -f``, EFBIG)
+FILE_SIZE_LIMIT = "file size limit reached (ulimit -f)"
 # -------------------------------------------------------------------------------------------- sync
 def fsync_dir(dirpath: str | os.PathLike[str]) -> None:
     """fsync the directory entry table (after a rename or a file creation)."""
@@ -175,7 +195,7 @@ def fsync_file(dirpath: str | os.PathLike[str], name: str) -> None:
     """fsync ``dirpath/name`` (a regular file, opened without following links)."""
     dirpath = Path(dirpath)
     with open_dir(dirpath) as dfd:
-        fd = _open_nofollow(dfd, dirpath, plain_name(name), os.O_RDONLY)
+        fd = open_nofollow(dfd, dirpath, plain_name(name), os.O_RDONLY)
         try:
             os.fsync(fd)
         finally:
@@ -189,7 +209,7 @@ def open_write(dirpath: str | os.PathLike[str], name: str, *, append: bool = Fal
     dirpath = Path(dirpath)
     flags = os.O_WRONLY | os.O_CREAT | (os.O_APPEND if append else 0)
     with open_dir(dirpath) as dfd:
-        fd = _open_nofollow(dfd, dirpath, plain_name(name), flags)
+        fd = open_nofollow(dfd, dirpath, plain_name(name), flags)
     if not append:
         try:
             os.ftruncate(fd, 0)
@@ -257,7 +277,7 @@ def read_bytes(dirpath: str | os.PathLike[str], name: str, max_bytes: int) -> by
     dirpath = Path(dirpath)
     name = plain_name(name)
     with open_dir(dirpath) as dfd:
-        fd = _open_nofollow(dfd, dirpath, name, os.O_RDONLY | os.O_NONBLOCK)
+        fd = open_nofollow(dfd, dirpath, name, os.O_RDONLY | os.O_NONBLOCK)
         try:
             return _read_fd(fd, dirpath / name, max_bytes)
         finally:
@@ -331,6 +351,8 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
     if not entries:
         _probe_lock(path, option)
         return path
+    if overwrite:
+        clearable(path, entries, option)
     if not overwrite:
         if _RUN_JSON in entries:
             status = _run_status(path)
@@ -342,6 +364,25 @@ def check_new_run_dir(path: str | os.PathLike[str], *, overwrite: bool = False, 
                                 "directory, or pass --overwrite")
     _probe_lock(path, option)
     return path
+
+
+def clearable(path: Path, entries: list[str], option: str = "--overwrite") -> list[str]:
+    """The entries ``--overwrite`` removes from ``path`` (all but the lock), after checking that every one is a
+    file or a link (removed itself, never followed): a directory inside is refused, before anything is removed
+    (a refusal changes nothing)."""
+    names = []
+    for name in entries:
+        if name == LOCK_NAME:
+            continue
+        try:
+            st = os.lstat(path / name)
+        except FileNotFoundError:
+            continue
+        if stat.S_ISDIR(st.st_mode):
+            raise RunDirectoryError(f"{option}: {path} holds a directory {name!r}; not a run directory, refusing to "
+                                    "clear it (nothing was removed); choose another directory")
+        names.append(name)
+    return names
 
 
 def _probe_creatable(path: Path, option: str) -> None:
@@ -366,7 +407,7 @@ def _probe_lock(path: Path, option: str) -> None:
         return
     if not stat.S_ISREG(st.st_mode):
         raise RunDirectoryError(f"{option}: {lock} is not a regular file; remove it")
-    with RunDirLock(path):
+    with RunDirLock(path, claim=False):
         pass
 
 
@@ -393,9 +434,10 @@ class RunDirLock:
     :class:`~jetgaudin.RunLockedError`.
     """
 
-    def __init__(self, path: str | os.PathLike[str]):
+    def __init__(self, path: str | os.PathLike[str], *, claim: bool = True):
         self.path = Path(path)
         self._fd: int | None = None
+        self._claim = claim
 
     @property
     def held(self) -> bool:
@@ -408,7 +450,7 @@ class RunDirLock:
             return self
         try:
             with open_dir(self.path) as dfd:
-                fd = _open_nofollow(dfd, self.path, LOCK_NAME, os.O_RDWR | os.O_CREAT)
+                fd = open_nofollow(dfd, self.path, LOCK_NAME, os.O_RDWR | os.O_CREAT)
         except RunDirectoryError:
             raise
         except OSError as exc:
@@ -425,13 +467,22 @@ class RunDirLock:
                 raise RunLockedError(f"{self.path} is in use by {who} (one writer per run directory); wait for it "
                                      "to finish or stop it, then try again") from None
             raise RunDirectoryError(f"cannot lock run directory {self.path}: {exc.strerror or exc}") from None
+        self._fd = fd
+        if self._claim:
+            self.claim()
+        return self
+
+    def claim(self) -> None:
+        """Write this process's PID into the lock file (for the message a second writer gets).  A holder that may
+        still refuse (a resume checking its run) takes the lock with ``claim=False`` and claims it once it writes:
+        a refusal leaves the lock file as it was."""
+        if self._fd is None:
+            return
         try:
-            os.ftruncate(fd, 0)
-            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+            os.ftruncate(self._fd, 0)
+            os.pwrite(self._fd, f"{os.getpid()}\n".encode(), 0)
         except OSError:
             pass  # the PID is only for the message of a second writer
-        self._fd = fd
-        return self
 
     def release(self) -> None:
         if self._fd is not None:

@@ -47,8 +47,17 @@ def check_N(N) -> int:
     return int(N)
 
 
+def _refuse_text_and_bool(value, name: str) -> None:
+    """A number is given as a number: a string (``"1"``) or a bool (``True``) is refused, not converted."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or (
+            isinstance(value, np.ndarray) and value.dtype.kind in "bSUO"):
+        raise InvalidParameterError(f"{name} must be a real number, got {value!r} ({type(value).__name__}); pass a "
+                                    "float")
+
+
 def field_vector(b) -> np.ndarray:
     """Return the external field as a 3-vector; a scalar ``b`` means ``(0, 0, b)``."""
+    _refuse_text_and_bool(b, "the field b")
     if np.iscomplexobj(b):
         raise InvalidParameterError("the field b must be real")
     try:
@@ -65,7 +74,8 @@ def field_vector(b) -> np.ndarray:
 
 
 def real_number(value, name: str) -> float:
-    """Validate a finite real number; the messages call it ``name``."""
+    """Validate a finite real number (not a string or a bool); the messages call it ``name``."""
+    _refuse_text_and_bool(value, name)
     try:
         val = float(value)
     except (TypeError, ValueError):
@@ -153,3 +163,18 @@ def finite_result(arr, what: str):
             "above ~1e154); rescale the state and the field"
         )
     return arr
+
+
+def jet_constants(c, N: int) -> np.ndarray:
+    """The constants ``c_1, …, c_(N-1)`` of the jet (Section 2) as a complex array: exactly ``N - 1`` finite numbers
+    (more are refused, not ignored: ``c_k`` for ``k >= N`` do not enter the order-``N`` jet, so extra values are a
+    mistake about ``N``)."""
+    c = np.atleast_1d(np.asarray(c, dtype=complex))
+    if c.ndim != 1 or len(c) != N - 1:
+        raise InvalidParameterError(
+            f"the constants c_1..c_(N-1) must be a sequence of exactly N-1 = {N - 1} numbers for N = {N}, got "
+            f"{len(c) if c.ndim == 1 else c.shape}"
+        )
+    if not np.all(np.isfinite(c)):
+        raise InvalidParameterError("the constants c_k must be finite")
+    return c

@@ -14,7 +14,7 @@ Prop. 2 fixed) and :func:`sample_on_energy_shell` (states with ``H = H_2/2`` of 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -22,11 +22,13 @@ import numpy as np
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
 from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
-from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop
+from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop, with_resolved_backend
 from .spectral import integrals as _jg_integrals
 
-__all__ = ["EnsembleResult", "BatchBacklund", "iterate_ensemble", "dask_client", "sample_on_leaf",
-           "sample_on_energy_shell", "DEFAULT_CASIMIRS", "DRIFT_QUANTILES", "drift_quantiles"]
+__all__ = ["EnsembleResult", "BatchBacklund", "DaskBatch", "iterate_ensemble", "dask_client", "dask_chunks",
+           "sample_on_leaf",
+           "sample_on_energy_shell", "sample_chain_on_leaf", "default_chain_casimirs", "DEFAULT_CASIMIRS",
+           "DRIFT_QUANTILES", "drift_quantiles"]
 
 #: the leaf ``ensemble`` samples when given neither ``--input`` nor ``--sample`` (N = 3): the Casimirs of the
 #: Appendix 2 initial state rounded, ``C = (0.4, -0.3, 1.5)`` (any leaf with ``C_N > 0`` works)
@@ -336,27 +338,123 @@ def dask_client(scheduler, timeout: float = 30.0):
         raise InvalidParameterError(f"cannot connect to the Dask scheduler {scheduler!r}: {exc}") from None
 
 
-def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+def dask_chunks(scheduler, chunk_size, B: int, fn, per_orbit: tuple, shared: tuple, timeout: float = 30.0) -> list:
+    """The one Dask path of the ensembles: ``fn(*chunk, *shared)`` for the chunks ``[i, j)`` of ``chunk_size``
+    orbits (default: ``B`` over twice the number of worker threads) of the per-orbit arrays ``per_orbit`` (``None``
+    entries passed as ``None``), on the cluster ``scheduler`` (an address or a ``distributed.Client``); the results
+    in the order of the chunks.  Used by :func:`iterate_ensemble` (the top's kernels) and :class:`DaskBatch` (any
+    map: the chains of every family)."""
     client = dask_client(scheduler, timeout)
     own = client is not scheduler
     try:
-        B = X.shape[0]
         if chunk_size is None:
             threads = sum(client.nthreads().values()) or 1
             chunk_size = max(1, -(-B // (2 * threads)))
         chunk_size = _check_int(chunk_size, "chunk_size", 1)
-        bounds = [(i, min(i + chunk_size, B)) for i in range(0, B, chunk_size)]
-        futures = [
-            client.submit(
-                _run_chunk, X[i:j], b[i:j], eta[i:j], nu0[i:j], cont, steps, save_every, specialise, pure=False
-            )
-            for i, j in bounds
-        ]
-        parts = client.gather(futures)
+        futures = [client.submit(fn, *[None if a is None else a[i:min(i + chunk_size, B)] for a in per_orbit],
+                                 *shared, pure=False) for i in range(0, B, chunk_size)]
+        return client.gather(futures)
     finally:
         if own:
             client.close()
+
+
+def _run_dask(scheduler, chunk_size, X, b, eta, nu0, cont, steps, save_every, specialise, timeout):
+    parts = dask_chunks(scheduler, chunk_size, X.shape[0], _run_chunk, (X, b, eta, nu0),
+                        (cont, steps, save_every, specialise), timeout)
     return tuple(np.concatenate([p[k] for p in parts], axis=0) for k in range(6))
+
+
+def _advance_chunk(X, carry, m: Map, steps: int, save_every: int) -> Advance:
+    return m.advance(X, carry, steps, save_every)
+
+
+@dataclass(frozen=True, eq=False)
+class DaskBatch(Map):
+    r"""Any map's batch ``(B, n)`` split by orbits over a Dask cluster: each :meth:`advance` runs
+    ``inner.advance`` on chunks of ``chunk_size`` orbits on the workers (:func:`dask_chunks`, the path of
+    :func:`iterate_ensemble`) and joins them.  The maps of the chains advance every orbit independently, so the
+    result is the local run's bit for bit; the ``auto`` route is resolved on the whole batch first (every chunk on
+    the same route).  Everything else (``integrals``, ``start``, ``step``, ``describe``: the inner map's, so a run
+    records and resumes the inner map) is the inner map's.  Needs ``pip install 'jetgaudin[distributed]'``."""
+
+    inner: Map
+    scheduler: Any = field(default=None, repr=False)
+    chunk_size: int | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.inner, Map):
+            raise InvalidParameterError(f"DaskBatch needs a map, got {type(self.inner).__name__}")
+        if self.chunk_size is not None:
+            _check_int(self.chunk_size, "chunk_size", 1)
+
+    @property
+    def properties(self) -> MapProperties:  # type: ignore[override]
+        return self.inner.properties
+
+    @property
+    def n_state(self) -> int | None:
+        return self.inner.n_state
+
+    @property
+    def backend(self) -> Backend:
+        return self.inner.backend
+
+    @property
+    def chunk_invariant(self) -> bool:
+        return bool(getattr(self.inner, "chunk_invariant", True))
+
+    @property
+    def has_compiled(self) -> bool:
+        return self.inner.has_compiled
+
+    def resolved_backend(self, X: Any, steps: Any) -> Backend:
+        """The inner map's route for ``steps`` steps of the whole batch ``X``."""
+        return self.inner.resolved_backend(X=X, steps=steps)
+
+    def prepare_kernels(self, *args: Any, **kwargs: Any) -> Any:
+        """The inner map's (compiled here; workers on this machine load Numba's cache, others compile their own)."""
+        return self.inner.prepare_kernels(*args, **kwargs)
+
+    def __getattr__(self, name: str) -> Any:
+        # the inner map's parameters and optional surface (b, eta, branch, model, integral_names, state_labels);
+        # dunder and private names are not forwarded (pickling, copying)
+        if name.startswith("_") or name == "inner":
+            raise AttributeError(name)
+        return getattr(self.inner, name)
+
+    def with_backend(self, backend: Backend | str) -> DaskBatch:  # type: ignore[override]
+        """The same split with the inner map on another route."""
+        return replace(self, inner=self.inner.with_backend(backend))
+
+    def integrals(self, X: np.ndarray) -> np.ndarray:
+        return self.inner.integrals(X)
+
+    def start(self, X: np.ndarray) -> np.ndarray:
+        return self.inner.start(X)
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        return self.inner.step(X, carry)
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        X = np.asarray(X)
+        inner = self.inner
+        if X.ndim != 2 or len(X) == 0:
+            return inner.advance(X, carry, steps, save_every)
+        if inner.backend is Backend.AUTO:  # every chunk on the route of the whole batch
+            inner = with_resolved_backend(inner, inner.resolved_backend(X=X, steps=steps))
+        c = None if carry is None else np.asarray(carry)
+        parts = dask_chunks(self.scheduler, self.chunk_size, len(X), _advance_chunk, (X, c), (inner, steps, save_every))
+        carries = [p.carry for p in parts]
+        return Advance(rows=np.concatenate([p.rows for p in parts], axis=1), X=np.concatenate([p.X for p in parts]),
+                       carry=None if any(x is None for x in carries) else np.concatenate(carries),
+                       imag_max=np.concatenate([p.imag_max for p in parts]))
+
+    def inverse(self) -> DaskBatch:
+        return replace(self, inner=self.inner.inverse())
+
+    def describe(self) -> dict:
+        return self.inner.describe()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -436,3 +534,45 @@ def sample_on_energy_shell(N: int, b: float, energy: float, size: int, *, seed=N
         )
     y[:, 0] = np.sqrt(r2)[:, None] * _unit(rng, (size,))
     return y.reshape(size, 3 * N)
+
+
+def default_chain_casimirs(orders) -> list[float]:
+    r"""The leaf a chain ensemble samples by default: per site of order ``N``, the one-body default
+    :data:`DEFAULT_CASIMIRS` ``(C_{N-2}, C_{N-1}, C_N) = (0.4, −0.3, 1.5)`` right-aligned (its last ``N`` entries for
+    ``N < 3``, zeros before it for ``N > 3``); so a site of order 3 gets the one-body default and a spin
+    (``N = 1``) ``|s|² = 1.5``.  Flat, site by site, in the order of the state (``M = Σ N_i`` numbers)."""
+    out: list[float] = []
+    for N in orders:
+        N = check_N(N)
+        out += [0.0] * max(0, N - 3) + list(DEFAULT_CASIMIRS[max(0, 3 - N):])
+    return out
+
+
+def sample_chain_on_leaf(model, casimirs=None, size: int = 1, *, seed=None, scale: float = 1.0) -> np.ndarray:
+    r"""``size`` random states (``(size, 3M)``) of the chain ``model`` (a :class:`jetgaudin.GaudinModel` of any
+    family) on the symplectic leaf given site by site.
+
+    The Poisson structure of a chain is per site that of ``g^(N_i)`` (the same for every family), so its leaves are
+    products of the sites' leaves: site ``i`` has the Casimirs ``C^{(i)}_1..C^{(i)}_{N_i}`` of Prop. 2, which are
+    the integrals ``h_{i,N_i+k} = C^{(i)}_k`` the model marks in :meth:`~jetgaudin.GaudinModel.casimir_mask`.
+    Each site is drawn by :func:`sample_on_leaf` (its rule and ``scale``), the sites one after the other from one
+    generator (``seed``), so one site at 0 of order ``N`` gives exactly ``sample_on_leaf(N, casimirs, size,
+    seed=seed)``.  ``casimirs``: ``M`` numbers, site by site ``C_1..C_{N_i}`` (each site's ``C_{N_i} > 0``);
+    ``None``: :func:`default_chain_casimirs`.
+    """
+    orders = tuple(model.orders)
+    c = np.asarray(default_chain_casimirs(orders) if casimirs is None else casimirs, dtype=float)
+    M = sum(orders)
+    if c.shape != (M,) or not np.all(np.isfinite(c)):
+        raise InvalidParameterError(f"casimirs must be M = {M} finite numbers, site by site C_1..C_(N_i) (orders "
+                                    f"{list(orders)}), got {casimirs!r}")
+    size = _check_int(size, "size", 1)
+    rng = np.random.default_rng(seed)
+    parts, o = [], 0
+    for i, N in enumerate(orders):
+        try:
+            parts.append(sample_on_leaf(N, c[o:o + N], size, seed=rng, scale=scale))
+        except InvalidParameterError as exc:
+            raise InvalidParameterError(f"site {i + 1} (order {N}): {exc}") from None
+        o += N
+    return np.concatenate(parts, axis=-1)

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ._errors import InvalidParameterError
-from ._validate import as_state, check_N, field_vector, spectral_points
+from ._validate import as_state, check_N, field_vector, jet_constants, spectral_points
 
 __all__ = [
     "SIGMA",
@@ -54,14 +54,7 @@ def _check_c(c, N):
         if N > 1:
             c[0] = -1.0
         return c
-    c = np.atleast_1d(np.asarray(c, dtype=complex))
-    if c.ndim != 1 or len(c) < N - 1:
-        raise InvalidParameterError(
-            f"the constants c_1..c_(N-1) must be a sequence of at least N-1 = {N - 1} numbers, got {len(c)}"
-        )
-    if not np.all(np.isfinite(c)):
-        raise InvalidParameterError("the constants c_k must be finite")
-    return c[: N - 1]
+    return jet_constants(c, N)
 
 
 def jet_coefficients(N: int, c=None) -> np.ndarray:

@@ -56,11 +56,44 @@ def _root(
         raise typer.Exit(0)
 
 
+def _app_noting_interrupts(args: list[str]):
+    """Run the Typer app; a SIGINT outside a run (runs and figure writing install their own handlers, which print
+    their own line) is reported here in one line.  Typer turns KeyboardInterrupt into a silent ``Exit(130)``, so
+    the signal is noted by a handler that then raises KeyboardInterrupt as Python's default handler would."""
+    import signal
+    import threading
+
+    seen: list[int] = []
+
+    def note(signum, _frame):
+        seen.append(signum)
+        raise KeyboardInterrupt
+
+    old = None
+    if threading.current_thread() is threading.main_thread():
+        old = signal.signal(signal.SIGINT, note)
+    try:
+        code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+    except KeyboardInterrupt:
+        seen.append(signal.SIGINT)
+        code = 130
+    finally:
+        if old is not None:
+            signal.signal(signal.SIGINT, old)
+    if seen and code == 130:
+        typer.echo("jetgaudin: interrupted", err=True)
+    return code
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        code = app(args=args, prog_name="jetgaudin", standalone_mode=False)
+        bad = _bad_number(args)
+        if bad is not None:
+            typer.echo(bad, err=True)
+            sys.exit(2)
+        code = _app_noting_interrupts(args)
     except SystemExit as exc:
         # Click answers a closed stdout (EPIPE) with exit 1 after wrapping stdout in PacifyFlushWrapper; our exit
         # code 1 means a failed run, and a reader that left early (`jetgaudin info | head`) is not one
@@ -98,6 +131,58 @@ def main(argv: list[str] | None = None) -> None:
     sys.exit(code if isinstance(code, int) else 0)
 
 
+def _bad_number(args: list[str]) -> str | None:
+    """The one-line error for a value of a numeric option (``int``/``float`` typed) that Python's ``float``/``int``
+    would read but the command line does not accept: non-ASCII digits (``١.٥``), underscores (``1_``, ``1_0``), or
+    a non-finite float (``inf``, ``nan``: every float option wants a finite number); ``None`` if all are fine."""
+    import math
+
+    from ._common import _NUMBER
+
+    if not args:
+        return None
+    try:
+        cmd = typer.main.get_command(app)
+        sub = cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001 - the check is an addition; the parser reports anything else
+        return None
+    if sub is None:
+        return None
+    import typing
+
+    kinds: dict[str, str] = {}
+    for p in sub.params:
+        ann = getattr(getattr(p, "type_descriptor", None), "annotation", None)
+        types = set(typing.get_args(ann)) | {ann}
+        kind = "float" if float in types else "integer" if int in types and bool not in types else ""
+        if kind:
+            for opt in getattr(p, "opts", []):
+                if opt.startswith("-"):
+                    kinds[opt] = kind
+    i = 1
+    while i < len(args):
+        a = args[i]
+        opt, value = (a.split("=", 1) + [None])[:2] if a.startswith("--") else (a, None)
+        if opt in kinds:
+            if value is None:
+                if i + 1 >= len(args):
+                    return None
+                value = args[i + 1]
+                i += 1
+            v = value.strip()
+            ok = bool(_NUMBER.fullmatch(v)) if kinds[opt] == "float" else v.lstrip("+-").isascii() and \
+                v.lstrip("+-").isdigit()
+            if ok and kinds[opt] == "float" and not math.isfinite(float(v)):
+                return f"jetgaudin {args[0]}: error: {opt}: {value!r} is not finite; give a finite number"
+            if not ok:
+                return (f"jetgaudin {args[0]}: error: {opt}: cannot read {value!r} as "
+                        f"{'a number' if kinds[opt] == 'float' else 'an integer'} (ASCII digits 0-9, no '_')")
+        elif a == "--":
+            break
+        i += 1
+    return None
+
+
 def entry() -> None:
     """The ``jetgaudin`` console script and ``python -m jetgaudin``: :func:`main`, then the process ends at once with
     its exit code, the standard streams flushed.  Every file a command writes is closed (run files fsynced) before
@@ -106,11 +191,21 @@ def entry() -> None:
     project promises (``docs/reliability.md``).  An exception other than ``SystemExit`` (a bug) propagates as usual."""
     import os
 
+    from .. import _startup
+
+    _startup.release()  # from here on main() reports interrupts and errors itself
     try:
         main()
         code: Any = 0
     except SystemExit as exc:
         code = exc.code
+    except KeyboardInterrupt:  # Ctrl-C between the start-up guard and the command (runs handle it themselves)
+        print("jetgaudin: interrupted", file=sys.stderr)
+        code = 130
+    except (MemoryError, ImportError) as exc:  # out of memory (ulimit -v) while importing or allocating
+        text = " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
+        print(f"jetgaudin: error: {text} (out of memory? check ulimit -v)", file=sys.stderr)
+        code = 1
     if code is None:
         code = 0
     elif not isinstance(code, int):  # as sys.exit("message") would: the message on stderr, exit 1

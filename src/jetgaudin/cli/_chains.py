@@ -131,14 +131,18 @@ def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
 def sites_of(record: dict) -> str | None:
     """The ``--sites`` text of a recorded chain run (its map description), else ``None``."""
     m = record.get("map", {})
-    if not str(m.get("kind", "")).startswith("chain_"):
+    if not isinstance(m, dict) or not str(m.get("kind", "")).startswith("chain_"):
         return None
-    return ",".join(f"{float(p)!r}:{int(N)}" for p, N in m["sites"])
+    try:
+        return ",".join(f"{float(p)!r}:{int(N)}" for p, N in m["sites"])
+    except (KeyError, TypeError, ValueError):
+        raise CliInputError("--init-from: the run's map description has no usable sites; give --sites") from None
 
 
 def multi_site(model) -> bool:
-    """Whether the chain figures replace the paper's (more than one site, or one site not of order 3)."""
-    return len(model.sites) > 1 or model.sites[0][1] != 3
+    """Whether the chain figures replace the paper's (more than one site, one site not of order 3, or a family other
+    than the rational one; the same rule as :func:`jetgaudin.plotting.open_run`)."""
+    return len(model.sites) > 1 or model.sites[0][1] != 3 or model.family.name != "rational"
 
 
 def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | None = None) -> None:

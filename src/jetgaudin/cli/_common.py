@@ -110,6 +110,19 @@ class blame:  # noqa: N801 - a context manager: ``with blame("--b"): ...``
         return False
 
 
+#: a decimal number as the command line writes it: ASCII digits only (``float`` also reads Unicode digits such as
+#: ``١.٥`` and underscores such as ``1_0``, which are refused), an optional sign, fraction and exponent
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|[+-]?(?:inf|infinity|nan)", re.ASCII | re.IGNORECASE)
+
+
+def to_float(text, what: str) -> float:
+    """``float(text)`` for a plain ASCII decimal number (:data:`_NUMBER`); ``ValueError`` naming ``what`` otherwise."""
+    s = str(text).strip()
+    if not _NUMBER.fullmatch(s):
+        raise ValueError(f"{what}: cannot read {text!r} as a number")
+    return float(s)
+
+
 def parse_eta(text: str, option: str = "--eta", *, pole_at_zero: bool = True) -> complex:
     """``5+0.1i``, ``5+0.1j``, ``5 + 0.1 i``, ``0.1i``, ``5`` -> complex (finite).  ``pole_at_zero=False`` (a chain
     without a site at 0: the map checks ``Re η`` against its sites) accepts ``Re η = 0``."""
@@ -147,7 +160,7 @@ def parse_init(text: str, option: str = "--init") -> list[float]:
     vals = []
     for i, p in enumerate(parts, 1):
         try:
-            v = float(p)
+            v = to_float(p, option)
         except ValueError:
             raise CliInputError(
                 f"{option}: value {i} ({p!r}) is not a number; give 3N comma-separated numbers"
@@ -173,9 +186,11 @@ def parse_b(text, option: str = "--b") -> float:
     from jetgaudin._validate import nonzero_field
 
     try:
-        value = float(text)
+        value = to_float(text, option)
     except (TypeError, ValueError):
         try:
+            if not str(text).isascii() or not re.search(r"[ij]", str(text)):
+                raise ValueError(text)
             complex(str(text).replace("i", "j"))
         except ValueError:
             raise CliInputError(f"{option}: cannot read {text!r} as a number; give a real number, e.g. 1.0") from None
@@ -193,12 +208,16 @@ def parse_count(text, option: str, minimum: int = 0) -> int:
     >= minimum that fits in 64 bits) decides."""
     from jetgaudin.maps import check_count
 
-    s = str(text).strip().replace("_", "")
+    s = str(text).strip()
+    if re.fullmatch(r"[+-]?\d+(?:_\d+)+", s, re.ASCII):  # 1_000_000: underscores between digits only
+        s = s.replace("_", "")
     try:
+        if not re.fullmatch(r"[+-]?\d+", s, re.ASCII):
+            raise ValueError(s)
         value = int(s)
     except ValueError:
         try:
-            f = float(s)
+            f = to_float(s, option)
         except ValueError:
             raise CliInputError(f"{option}: cannot read {text!r} as an integer") from None
         if not math.isfinite(f) or f != int(f):

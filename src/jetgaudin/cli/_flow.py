@@ -45,7 +45,8 @@ def flow(
         typer.Option(
             "--hamiltonian",
             help="'interpolating': G_η = i ∫ ν dλ from η̄ to η, whose time-1 flow is "
-            "the map; 'physical': H_2/2 of eq. (H)",
+            "the map; 'physical': H_2/2 of eq. (H) (chains: ½Σ(λ_i h_i,1 + h_i,2) and its trigonometric "
+            "analogue, docs/families.md)",
         ),
     ] = Hamiltonian.interpolating,
     dt: Annotated[float, typer.Option("--dt", help="time between samples (1 = one step of the map for G_η)")] = 1.0,
@@ -70,7 +71,8 @@ def flow(
     overwrite: cm.OverwriteOption = False,
     progress: cm.ProgressOption = None,
     no_plots: cm.NoPlotsOption = False,
-    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η")
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; the flow of the chain's G_η "
+                                              "or physical Hamiltonian")
                      ] = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
@@ -98,9 +100,6 @@ def flow(
         model = None if sites is None else _chains.chain_model(sites, bf, **fam)
         if model is not None:
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
-            if hamiltonian is not Hamiltonian.interpolating:
-                raise cm.CliInputError("--sites: --hamiltonian physical (H_2/2 of eq. (H)) is the one-site top's; a "
-                                       "chain flows under its G_η: use --hamiltonian interpolating")
         else:
             cm.check_state_scale(X0, bf)
         if not (0 < rtol < 1):
@@ -111,8 +110,12 @@ def flow(
             raise cm.CliInputError("--compare needs --dt 1 (one step of the map is the time-1 flow of G_η)")
         if model is not None:
             B = _chains.chain_map(model, eta_c, "default", "numpy")  # the chain map's rules for eta
-            with cm.blame("--eta"):
-                H = model.interpolating_flow_hamiltonian(X0, eta_c)
+            if hamiltonian is Hamiltonian.interpolating:
+                with cm.blame("--eta"):
+                    H = model.interpolating_flow_hamiltonian(X0, eta_c)
+            else:  # ν²/2's coefficient at the family's infinity (H_2/2 for one site at 0): jetgaudin.gaudin.physical
+                with cm.blame("--hamiltonian"):
+                    H = model.physical_hamiltonian()
             with cm.blame("--dt"):
                 fm = _chains.chain_flow_map(H, dt, method.value, rtol)
         else:
@@ -159,8 +162,9 @@ def flow(
             if not no_plots:
                 from .. import plotting
 
+                what = "G_η" if hamiltonian is Hamiltonian.interpolating else "H_2/2" if model is None else "physical H"
                 title = (
-                    f"flow of {'G_η' if hamiltonian is Hamiltonian.interpolating else 'H_2/2'}: b = {bf:g}, "
+                    f"flow of {what}: b = {bf:g}, "
                     f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
                 )
                 if model is not None:
@@ -178,6 +182,8 @@ def flow(
                     written += plotting.save_orbit_figures(out_dir, t, data.X, bf, title=title, xlabel="time t")
             if hamiltonian is Hamiltonian.interpolating:
                 extra["G_eta_weights"] = np.asarray(H.weights).tolist()
+            elif model is not None:
+                extra["physical_weights"] = np.asarray(H.weights).tolist()
             from ..recording import update_run
 
             update_run(out_dir, files=[Path(f).name for f in files + written], plots=not no_plots, **extra)

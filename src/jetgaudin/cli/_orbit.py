@@ -87,7 +87,7 @@ def init_from(path: str, option: str = "--init-from"):
     of one orbit)."""
     if str(path).strip() == "":
         raise CliInputError(f"{option}: empty path; give the directory of a run")
-    d = runlayer.load(path)
+    d = runlayer.load(path, verify=True)  # the checks a resume makes: run.json's digest, the rows' digest
     if len(d.n) == 0:
         raise CliInputError(f"{option}: {path} holds no saved state")
     X = np.asarray(d.last_state, dtype=float)
@@ -232,7 +232,11 @@ def orbit(
                 defaults["init"] = X_last.tolist()
                 m = rec.get("map", {})
                 if m.get("kind") in ("two_point", "chain_two_point"):
-                    defaults.update(b=m["b"], eta=complex(*m["eta"]), branch=m["branch"])
+                    try:
+                        defaults.update(b=float(m["b"]), eta=complex(*m["eta"]), branch=str(m["branch"]))
+                    except (KeyError, TypeError, ValueError):
+                        raise CliInputError(f"--init-from: {init_from_dir}/run.json has no usable map description "
+                                            "(b, eta, branch); give --b, --eta and --branch") from None
                 sites = sites if sites is not None else _chains.sites_of(rec)
             X0 = expect.get("init", defaults["init"])
             bb = expect.get("b", defaults["b"])

@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 
 from . import app
-from ._common import console, reported_errors
+from ._common import CliInputError, OverwriteOption, console, reported_errors
 
 
 @app.command()
@@ -26,6 +26,7 @@ def animate(
     trail: Annotated[int, typer.Option("--trail", help="frames in the fading trail")] = 30,
     orbit: Annotated[int | None, typer.Option("--orbit", help="orbit K of an ensemble run [default: 0]")] = None,
     dpi: Annotated[int, typer.Option("--dpi", help="resolution (the picture is 6 x 6.4 inches)")] = 100,
+    overwrite: OverwriteOption = False,
 ) -> None:
     """Animate the body along a run: the fixed point, the body axis to the centre of mass z on its sphere, the
     material point x − z, with fading trails (N = 3; y_0 and y_{N−1} otherwise).
@@ -34,7 +35,12 @@ def animate(
     saved row j·stride.
     """
     with reported_errors():
+        import os
+
         from .. import plotting
+
+        if os.path.lexists(out) and not overwrite:
+            raise CliInputError(f"--out: {out} exists; choose another file or pass --overwrite to replace it")
 
         path = plotting.animate_run(
             run_dir, out, orbit=orbit, frames=frames, fps=fps, stride=stride, trail=trail, dpi=dpi

@@ -13,7 +13,7 @@ No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
 
 from __future__ import annotations
 
-import warnings
+import dataclasses
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
@@ -37,7 +37,6 @@ from ._common import (
     compile_message,
     console,
     fail,
-    one_line,
     out_path,
     parse_b,
     parse_count,
@@ -47,6 +46,7 @@ from ._common import (
     resume_dir,
     run_with_progress,
     timing_text,
+    to_float,
 )
 
 #: largest --input file read (a CSV of 10^6 states of N = 3 is ~0.2 GB)
@@ -60,7 +60,7 @@ class Sampler(StrEnum):
 
 def _floats(text: str, option: str) -> list[float]:
     try:
-        vals = [float(p) for p in str(text).split(",")]
+        vals = [to_float(p, option) for p in str(text).split(",")]
     except ValueError:
         raise CliInputError(f"{option}: cannot read {text!r}; give comma-separated numbers, e.g. 0.5,0.2,1") from None
     if not all(np.isfinite(vals)):
@@ -69,41 +69,11 @@ def _floats(text: str, option: str) -> list[float]:
 
 
 def _read_input(path: Path):
-    """``(X, b or None, eta or None)`` from a CSV or NPZ file."""
-    import io
+    """``(X, b or None, eta or None)`` from a CSV or NPZ file, memory bounded by the declared shape
+    (:mod:`jetgaudin.cli._input`)."""
+    from ._input import read_input
 
-    from .. import _fs
-
-    raw = _fs.read_user_file(path, MAX_INPUT_BYTES, option="--input")
-    b = eta = None
-    if path.suffix.lower() == ".npz":
-        try:
-            with np.load(io.BytesIO(raw)) as d:
-                if "X" not in d:
-                    raise CliInputError(f"--input: {path} has no array 'X' (the initial states, shape (B, 3N))")
-                X = np.array(d["X"], dtype=float)
-                b = np.array(d["b"]) if "b" in d else None
-                eta = np.array(d["eta"]) if "eta" in d else None
-        except (OSError, ValueError) as exc:
-            raise CliInputError(f"--input: cannot read {path} as NPZ: {exc}") from None
-    else:
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)  # "input contained no data": refused below
-                text = raw.decode("utf-8")
-                lines = text.splitlines()
-                skip = 1 if lines and lines[0].lstrip()[:1].isalpha() else 0  # a header (orbit.csv: n,y0^1,...)
-                X = np.loadtxt(io.StringIO(text), delimiter=",", comments="#", ndmin=2, skiprows=skip)
-                if skip and lines[0].startswith("n,"):
-                    X = X[:, 1:]  # orbit.csv: drop the step column
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise CliInputError(f"--input: cannot read {path} as CSV of numbers: {one_line(exc)}") from None
-    if X.ndim != 2 or X.shape[0] == 0 or X.shape[1] == 0 or X.shape[1] % 3:
-        raise CliInputError(
-            f"--input: the states must form a (B, 3N) table (one state y_0, y_1, ... per row, 3N numbers); "
-            f"got shape {X.shape}"
-        )
-    return X, b, eta
+    return read_input(path, MAX_INPUT_BYTES)
 
 
 @app.command("ensemble")
@@ -157,8 +127,8 @@ def ensemble_command(
         Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
     ] = None,
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
-    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; needs --input or "
-                                              "--init-from")] = None,
+    sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; states from --input, "
+                                              "--init-from or the chain's leaf sampler (--casimirs)")] = None,
     progress: ProgressOption = None,
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
@@ -169,6 +139,8 @@ def ensemble_command(
     from jetgaudin import ensemble_recording as er
 
     with reported_errors():
+        if show < 0:
+            raise CliInputError(f"--show: the number of orbits listed must be >= 0, got {show}")
         chunk = None if chunk_size is None else parse_count(chunk_size, "--chunk-size", 1)
         with blame("--max-drift"):
             runlayer.HealthLimits(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift)
@@ -185,6 +157,10 @@ def ensemble_command(
             expect["max_drift"] = max_drift
         common: dict[str, Any] = dict(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
                       checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk)
+        source = None  # a chain continues as that chain: its sites and family
+        if resume is None and sites is None and init_from_dir is not None and str(init_from_dir).strip():
+            source = runlayer.read_run(init_from_dir)
+            sites = _chains.sites_of(source)
         if resume is not None:
             if input is not None or sample is not None or init_from_dir is not None:
                 raise CliInputError("--resume continues a recorded ensemble: do not give --input, --sample or "
@@ -198,8 +174,10 @@ def ensemble_command(
                 None, out_dir, resume=True, expect=expect, progress=bar, notify=compile_message, **common))
         elif sites is not None:
             out_dir = out_path(out, "jetgaudin-ensemble")
+            draw = dict(orbits=orbits, seed=seed, casimirs=casimirs, scale=scale)
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma, modulus=modulus))
+                                  overwrite, progress, _chains.family_kw(sites, family, gamma, source, modulus=modulus),
+                                  draw)
         else:
             _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
@@ -216,7 +194,8 @@ def ensemble_command(
                 n_orbits = parse_count(orbits, "--orbits", 1)
                 s_seed = parse_count(seed, "--seed", 0)
                 if sample is None:  # the documented default: the leaf DEFAULT_CASIMIRS (N = 3)
-                    sample, casimirs = Sampler.leaf, casimirs or ",".join(map(str, ens.DEFAULT_CASIMIRS))
+                    sample = Sampler.leaf
+                    casimirs = casimirs if casimirs is not None else ",".join(map(str, ens.DEFAULT_CASIMIRS))
                 if sample is Sampler.leaf:
                     if casimirs is None:
                         raise CliInputError("--sample leaf needs --casimirs C_1,...,C_N")
@@ -246,16 +225,17 @@ def ensemble_command(
 
 
 def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir, overwrite,
-                    progress, fam=None):
-    """``ensemble --sites``: the chain's two-point map on the states of ``--input`` or ``--init-from``."""
-    if sample is not None:
-        raise CliInputError("--sites: the samplers (--sample) draw states of one site; give the chain's states with "
-                            "--input FILE or --init-from DIR")
-    if scheduler is not None:
-        raise CliInputError("--sites: chain ensembles run locally; drop --scheduler")
-    if (input is None) == (init_from_dir is None):
-        raise CliInputError("--sites: give the chain's initial states with exactly one of --input FILE and "
-                            "--init-from DIR")
+                    progress, fam=None, draw=None):
+    """``ensemble --sites``: the chain's two-point map on the states of ``--input``, ``--init-from`` or the chain's
+    leaf sampler (:func:`jetgaudin.ensemble.sample_chain_on_leaf`: ``--casimirs`` M numbers site by site, default
+    :func:`jetgaudin.ensemble.default_chain_casimirs`)."""
+    from jetgaudin import ensemble as ens
+
+    if sample is Sampler.energy:
+        raise CliInputError("--sites: the energy-shell sampler (--sample energy) draws states of one top; a chain "
+                            "samples its leaf: --sample leaf [--casimirs C...] (M numbers, site by site)")
+    if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
+        raise CliInputError("--sites: give at most one of --input FILE, --init-from DIR and --sample leaf")
     bb = _chains.parse_chain_b(b)
     ee = parse_eta(eta, pole_at_zero=False)
     model = _chains.chain_model(sites, bb, **(fam or {}))
@@ -264,16 +244,36 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         if b_file is not None or eta_file is not None:
             raise CliInputError("--sites: per-orbit b and eta in --input are not supported for chains; give --b and "
                                 "--eta")
-    else:
+    elif init_from_dir is not None:
         X0 = _init_from(init_from_dir)
-    X0 = _chains.check_chain_state(model, X0, "--input" if input is not None else "--init-from")
+    else:  # the chain's leaf sampler (the default, as --sample leaf for one top)
+        d = draw or {}
+        n_orbits = parse_count(d.get("orbits", "100"), "--orbits", 1)
+        s_seed = parse_count(d.get("seed", "0"), "--seed", 0)
+        c = None if d.get("casimirs") is None else _floats(d["casimirs"], "--casimirs")
+        if c is not None and len(c) != model.M:
+            raise CliInputError(f"--casimirs: the sites need M = {model.M} numbers, site by site C_1..C_N_i "
+                                f"(orders {list(model.orders)}), got {len(c)}")
+        with blame("--orbits"):
+            _check_memory(n_orbits, model.n_state)
+        with blame("--casimirs"):
+            X0 = ens.sample_chain_on_leaf(model, c, n_orbits, seed=s_seed, scale=d.get("scale", 1.0))
+    where = "--input" if input is not None else "--init-from" if init_from_dir is not None else "--casimirs"
+    X0 = _chains.check_chain_state(model, X0, where)
     m = _chains.chain_map(model, ee, expect.get("branch", "default"), None)
-    with blame("--input" if input is not None else "--init-from"):
+    with blame(where):
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
-    return run_with_progress("ensemble", progress, lambda bar: runlayer.start(spec, out_dir, overwrite=overwrite,
-                                                                              progress=bar, notify=compile_message))
+    client = None if scheduler is None else ens.dask_client(scheduler)  # one client for the run (the one-body way)
+    try:
+        if client is not None:  # the orbits split over the cluster (jetgaudin.ensemble.DaskBatch; same bits)
+            spec = dataclasses.replace(spec, map=ens.DaskBatch(m, client, common["chunk_size"]))
+        return run_with_progress("ensemble", progress, lambda bar: runlayer.start(
+            spec, out_dir, overwrite=overwrite, progress=bar, notify=compile_message))
+    finally:
+        if client is not None and client is not scheduler:
+            client.close()
 
 
 def _check_memory(orbits: int, n_state: int) -> None:
@@ -295,7 +295,7 @@ def _check_memory(orbits: int, n_state: int) -> None:
 def _init_from(path: str) -> np.ndarray:
     if str(path).strip() == "":
         raise CliInputError("--init-from: empty path; give the directory of a run")
-    d = runlayer.load(path)
+    d = runlayer.load(path, verify=True)  # the checks a resume makes: run.json's digest, the rows' digest
     if len(d.n) == 0:
         raise CliInputError(f"--init-from: {path} holds no saved state")
     X = np.asarray(d.last_state, dtype=float)

@@ -405,6 +405,14 @@ class GaudinModel:
         """``H = Σ w_{i,m} h_{i,m}`` as an object for :func:`jetgaudin.integrate`."""
         return ChainHamiltonian(self, weights)
 
+    def physical_hamiltonian(self) -> ChainHamiltonian:
+        """The chain's physical Hamiltonian: ``ν²/2``'s first non-trivial coefficient at the family's infinity
+        (rational: ``½Σ_i (λ_i h_{i,1} + h_{i,2})``, the top's ``H_2/2`` for one site at 0;
+        :mod:`jetgaudin.gaudin.physical`)."""
+        from .physical import physical_weights
+
+        return ChainHamiltonian(self, physical_weights(self))
+
     def interpolating_hamiltonian(self, X, eta) -> np.ndarray:
         r"""``G_η(X) = i∫_{η̄}^{η} ν dλ = −2∫_0^{Im η} Re ν(Re η + is) ds``, shape ``(...)``."""
         from ._curve import interpolating_hamiltonian

@@ -39,11 +39,16 @@ class AnimationFormat(StrEnum):
     mp4 = "mp4"
 
 
+#: most frames of one animation (a GIF keeps every frame in memory, ~0.4 MB each at the default size: ~4 GB)
+MAX_FRAMES = 10_000
+
+
 def frame_rows(rows: int, frames: int, stride: int | None) -> tuple[int, int]:
     """``(stride, count)``: frame ``j`` shows saved row ``j·stride``.  The default stride spreads ``frames``
-    frames over the run, ``max(1, floor((rows − 1) / (frames − 1)))``; ``count = min(frames, ceil(rows / stride))``."""
-    if frames < 2:
-        raise InvalidParameterError(f"frames must be >= 2, got {frames}")
+    frames over the run, ``max(1, floor((rows − 1) / (frames − 1)))``; ``count = min(frames, ceil(rows / stride))``.
+    ``frames`` is at most :data:`MAX_FRAMES`."""
+    if isinstance(frames, bool) or not isinstance(frames, int | np.integer) or not 2 <= frames <= MAX_FRAMES:
+        raise InvalidParameterError(f"frames must be an integer between 2 and {MAX_FRAMES}, got {frames!r}")
     if stride is None:
         stride = max(1, (rows - 1) // (frames - 1))
     if stride < 1:
@@ -131,6 +136,22 @@ class _Mp4Sink:
             raise RecordingError("ffmpeg failed to write the .mp4 animation")
 
 
+def _chain_sets(model):
+    """``(sets_of, colours)`` of a chain run: the ``y_0`` of each site (at most :data:`MAX_SITES`), one colour each
+    (for a magnet, the spins)."""
+    from matplotlib import colormaps
+
+    from ._chains import MAX_SITES, site_y0
+
+    S = min(len(model.sites), MAX_SITES)
+
+    def sets_of(X):
+        Y = site_y0(model, X)
+        return [(f"y_0 of site {i + 1} (λ = {p:g}, N = {N})", Y[:, i]) for i, (p, N) in enumerate(model.sites[:S])]
+
+    return sets_of, tuple(colormaps["tab10"](i) for i in range(S))
+
+
 def animate_run(
     run_dir,
     out,
@@ -192,13 +213,15 @@ def animate_run(
         raise RecordingError(f"{run_dir}: no saved row is declared safe in run.json yet; nothing to animate")
     stride, count = frame_rows(run.rows, frames, stride)
     N = run.N
+    model = run.model()  # a chain: each site's y_0 moves (no body, no invariant sphere common to the sites)
+    sets_of, colors = (point_sets, POINT_COLORS) if model is None else _chain_sets(model)
     # pass 1 over the frame rows only: the bounds of the picture
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
-    r = -1.0
+    r = -1.0 if model is None else 0.0
     for _, X in _frame_slices(run, stride, count):
         if r < 0:
             r = float(np.linalg.norm(X[0, 3 * N - 3 :]))
-        for _, P in point_sets(X):
+        for _, P in sets_of(X):
             lo, hi = np.minimum(lo, P.min(axis=0)), np.maximum(hi, P.max(axis=0))
     lo, hi = np.minimum(lo, -r), np.maximum(hi, r)
     mid, half = (lo + hi) / 2, max(float((hi - lo).max()) / 2, 1e-12) * 1.05
@@ -219,12 +242,13 @@ def animate_run(
         r * np.cos(v),
         color="0.55",
         linewidth=0.4,
-        alpha=0.45,
+        alpha=0.45 if model is None else 0.0,
         zorder=0,
-        label=sphere_label(N, r),
+        label=sphere_label(N, r) if model is None else None,
     )
-    ax.scatter([0], [0], [0], s=30, color="black", marker="o", zorder=5, label="fixed point (origin)")
-    labels = [lab for lab, _ in point_sets(np.zeros((1, 3 * N)))]
+    ax.scatter([0], [0], [0], s=30, color="black", marker="o", zorder=5,
+               label="fixed point (origin)" if model is None else "origin")
+    labels = [lab for lab, _ in sets_of(np.zeros((1, 3 * N)))]
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
     trails = [Line3DCollection([], linewidths=1.4, zorder=1) for _ in labels]
@@ -232,9 +256,10 @@ def animate_run(
         ax.add_collection3d(t, autolim=False)
     heads = [
         ax.plot([], [], [], "o", color=c, markersize=7, zorder=4, label=lab)[0]
-        for lab, c in zip(labels, POINT_COLORS, strict=False)
+        for lab, c in zip(labels, colors, strict=False)
     ]
     axis_label = "body axis: fixed point → centre of mass" if N == 3 else f"axis: origin → y_{N - 1}"
+    axis_label = axis_label if model is None else "origin → y_0 of site 1"
     (axis_line,) = ax.plot([], [], [], "-", color="black", linewidth=2.5, zorder=3, label=axis_label)
     (mp_line,) = ax.plot([], [], [], "--", color=POINT_COLORS[0], linewidth=0.8, zorder=2)
     fig.legend(loc="lower center", ncol=2, fontsize=7, frameon=False)
@@ -250,8 +275,8 @@ def animate_run(
     try:
         for idx, X in _frame_slices(run, stride, count):
             for i_row, x in zip(idx, X, strict=True):
-                sets = point_sets(x[None, :])
-                for (_, P), head, h, tr, c in zip(sets, heads, hist, trails, POINT_COLORS, strict=False):
+                sets = sets_of(x[None, :])
+                for (_, P), head, h, tr, c in zip(sets, heads, hist, trails, colors, strict=False):
                     p = P[0]
                     h.append(p)
                     head.set_data_3d([p[0]], [p[1]], [p[2]])
@@ -261,10 +286,13 @@ def animate_run(
                     rgba = np.tile(np.array(to_rgba(c)), (len(segs), 1))
                     rgba[:, 3] = np.linspace(0.05, 0.9, len(segs)) if len(segs) else rgba[:, 3]
                     tr.set_color(rgba)
-                a = sets[-1][1][0]
+                # the top: the axis to the last point set and the dashed line to the first (x − z); a chain: only
+                # the line from the origin to site 1's y_0
+                a = sets[-1][1][0] if model is None else sets[0][1][0]
                 axis_line.set_data_3d([0, a[0]], [0, a[1]], [0, a[2]])
-                m = sets[0][1][0]
-                mp_line.set_data_3d([0, m[0]], [0, m[1]], [0, m[2]])
+                if model is None:
+                    m = sets[0][1][0]
+                    mp_line.set_data_3d([0, m[0]], [0, m[1]], [0, m[2]])
                 label = "t" if run.index_name == "t" else "n"
                 step_text.set_text(f"{label} = {i_row:g}" if label == "t" else f"step n = {int(i_row)}")
                 canvas.draw()

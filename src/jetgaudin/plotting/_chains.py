@@ -129,11 +129,13 @@ def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "
     return fig
 
 
-def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "step n") -> list[Path]:
-    """Write ``chain_y0.png`` and ``chain_integrals.png`` into ``out_dir``; return their paths."""
+def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "step n", dpi: int = 130,
+                       fmt: str = "png") -> list[Path]:
+    """Write ``chain_y0.<fmt>`` and ``chain_integrals.<fmt>`` into ``out_dir``; return their paths (``orbit``,
+    ``flow`` and ``plot`` of a chain run)."""
     out_dir = Path(out_dir)
     paths = []
-    for name, fig in (("chain_y0.png", figure_chain_y0(model, X, title=title, n=n)),
-                      ("chain_integrals.png", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
-        paths.append(save_figure(fig, out_dir / name, 130))  # atomic, never through a symlink
+    for name, fig in (("chain_y0", figure_chain_y0(model, X, title=title, n=n)),
+                      ("chain_integrals", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
+        paths.append(save_figure(fig, out_dir / f"{name}.{fmt}", dpi))  # atomic, never through a symlink
     return paths

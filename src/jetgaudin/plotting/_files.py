@@ -208,6 +208,12 @@ def save_run_figures(
     )
     if k == 1:
         note += f"; status: {run.status}"
+    if run.chain is not None:  # a chain: each site's y_0 and the drift of its integrals h_(i,m) (not the top's)
+        from ._chains import save_chain_figures
+
+        what = f"orbit {run.orbit} of {run.inputs.get('B')}, " if run.kind == "ensemble" else ""
+        return save_chain_figures(out_dir, idx, X, run.model(), title=f"{title}\nchain run ({what}{note})",
+                                  xlabel=unit, dpi=dpi, fmt=fmt)
     overlay = None
     if run.kind == "flow" and run.inputs.get("compare"):
         mrun = open_run(run_dir, map_of_flow=True)

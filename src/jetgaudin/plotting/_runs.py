@@ -42,18 +42,26 @@ class RunRows:
     orbit: int | None
     status: str
     inputs: dict
+    #: the map description of a chain run (``run.json`` ``"map"``, kind ``chain_*``: ``b``, ``sites``, ``family``,
+    #: ``gamma``), else ``None``; :meth:`model` builds its :class:`jetgaudin.GaudinModel`
+    chain: dict | None = None
+
+    def model(self):
+        """The :class:`jetgaudin.GaudinModel` of a chain run (``None`` for a run of the top)."""
+        if self.chain is None:
+            return None
+        from ..gaudin import GaudinModel
+
+        return GaudinModel.from_description(self.chain)
 
     def read(self, start: int, stop: int, step: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """``(index, X)`` of the rows ``start:stop:step`` (clipped to the safe rows); ``X`` of shape ``(k, 3N)``."""
-        import h5py
+        from ..run.files import open_h5_read
 
         stop = min(stop, self.rows)
         try:
-            try:
-                f = h5py.File(self.path, "r")
-            except OSError:  # a run killed while writing leaves the SWMR flag set: read as a SWMR reader
-                f = h5py.File(self.path, "r", swmr=True)
-            with f:
+            # a regular file only (a FIFO or a link is refused, never waited on), complete; SWMR after a kill
+            with open_h5_read(self.path) as f:
                 idx = np.asarray(f[self.index_name][start:stop:step])
                 ds = f[self.dataset]
                 X = ds[start:stop:step] if self.orbit is None else ds[start:stop:step, self.orbit, :]
@@ -116,9 +124,12 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     program, inp = run.get("program", ""), run.get("inputs", {})
     status = str(run.get("status", "unknown"))
     safe = int(run.get("checkpoint", {}).get("rows", 0))
-    common = dict(run_dir=run_dir, status=status, inputs=inp)
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
     described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
+    chain = described if str(described.get("kind", "")).startswith("chain_") else None
+    if chain is not None and len(chain["sites"]) == 1 and chain["sites"][0][1] == 3 and "family" not in chain:
+        chain = None  # one rational site of order 3 is the paper's top: its figures (as `orbit --sites` draws it)
+    common = dict(run_dir=run_dir, status=status, inputs=inp, chain=chain)
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
@@ -136,10 +147,10 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
         B = int(inp["B"])
         if not 0 <= k < B:
             raise RecordingError(f"--orbit: the ensemble in {run_dir} has orbits 0..{B - 1}, got {orbit}")
-        import h5py
+        from ..run.files import open_h5_read
 
         try:
-            with h5py.File(run_dir / ENSEMBLE_H5, "r") as f:
+            with open_h5_read(run_dir / ENSEMBLE_H5) as f:
                 b, eta = float(f["b"][k]), complex(f["eta"][k])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {run_dir / ENSEMBLE_H5}: {exc}") from None
@@ -148,12 +159,12 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     if program == "jetgaudin flow":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is a flow run: --orbit must be 0 or omitted, got {orbit}")
-        import h5py
+        from ..run.files import open_h5_read
 
         path = run_dir / ("orbit.h5" if map_of_flow else "flow.h5")
         index_name = "n" if map_of_flow else "t"
         try:
-            with h5py.File(path, "r") as f:
+            with open_h5_read(path) as f:
                 rows = int(f["X"].shape[0])
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {path}: {exc}") from None

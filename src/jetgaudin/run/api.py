@@ -29,6 +29,7 @@ from .files import (
     unhex,
 )
 from .health import Health
+from .replay import replay
 from .spec import HealthLimits, Layout, RunSpec, RunStatus
 from .store import EnsembleStore, OrbitStore, Store, now, read_checkpoint_npz
 
@@ -220,7 +221,11 @@ def _resolved(spec: RunSpec) -> RunSpec:
     """The spec with the map's ``AUTO`` backend resolved (recorded, so that a resume uses the same route)."""
     resolve = getattr(spec.map, "resolved_backend", None)
     if spec.map.backend is Backend.AUTO and resolve is not None:
-        m = with_resolved_backend(spec.map, resolve(X=spec.X0, steps=spec.steps))
+        backend = resolve(X=spec.X0, steps=spec.steps)
+        inner = getattr(spec.map, "inner", None)  # a wrapper (jetgaudin.ensemble.DaskBatch): its inner map's route
+        wrapper: Any = spec.map
+        m = dataclasses.replace(wrapper, inner=with_resolved_backend(inner, backend)) if isinstance(inner, Map) \
+            else with_resolved_backend(spec.map, backend)
         return dataclasses.replace(spec, map=m)
     return spec
 
@@ -256,7 +261,8 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
         run = dict(_new_record(spec, health), **(record or {}))
         store = _open_store(spec, out_dir, run, fresh=True)
         pos = Position(0, spec.X0.copy(), None)
-        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, compile_s=compile_s, **options)
+        return _drive(spec, out_dir, store, pos, health, 0.0, first=True, fresh=True, compile_s=compile_s,
+                      **options)
 
 
 def _prepare(spec: RunSpec, X: np.ndarray, out_dir: Path, notify: Callable[[str], None] | None,
@@ -279,21 +285,17 @@ def _prepare(spec: RunSpec, X: np.ndarray, out_dir: Path, notify: Callable[[str]
 
 
 def _clear(out_dir: Path) -> None:
-    """Remove the files of an old run (``--overwrite``; the lock is held): links removed, never followed."""
+    """Remove the files of an old run (``--overwrite``; the lock is held): every entry is checked first
+    (:func:`jetgaudin._fs.clearable`: a directory inside refuses the whole clear, nothing removed), then the files
+    and links are removed (links never followed)."""
     import os
 
-    for name in os.listdir(out_dir):
-        if name == _fs.LOCK_NAME:
-            continue
-        path = out_dir / name
-        if path.is_dir() and not path.is_symlink():
-            raise RunDirectoryError(f"--overwrite: {out_dir} holds a directory {name!r}; not a run directory, "
-                                    "refusing to clear it")
+    for name in _fs.clearable(out_dir, sorted(os.listdir(out_dir))):
         _fs.remove_file(out_dir, name)
 
 
 def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: Health, elapsed0: float, *,
-           first: bool, compile_s: float = 0.0, progress: Callable[[int, int], None] | None = None,
+           first: bool, fresh: bool = False, compile_s: float = 0.0, progress: Callable[[int, int], None] | None = None,
            handle_signals: bool = True, max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20,
            chunk_rows: int = 4096) -> RunResult:
     if isinstance(store, EnsembleStore):
@@ -314,7 +316,7 @@ def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: He
     n0 = pos.n
     driver = Driver(spec, store, pos, health, summary=summary, elapsed0=elapsed0, progress=progress,
                     handle_signals=handle_signals, max_chunk_steps=max_chunk_steps, max_chunk_bytes=max_chunk_bytes,
-                    chunk_rows=chunk_rows, first=first)
+                    chunk_rows=chunk_rows, first=first, fresh=fresh)
     try:
         out = driver.run()
     except BaseException as exc:  # a bug or an unexpected error: the checkpointed data stay valid and resumable
@@ -349,7 +351,7 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
         raise RecordingError(f"{out_dir} does not exist: not a jetgaudin run directory")
-    with _fs.RunDirLock(out_dir):
+    with _fs.RunDirLock(out_dir, claim=False) as lock:
         run = read_run(out_dir, verify=True)
         if program is not None and run.get("program") != program:
             kind = "an ensemble" if program == "jetgaudin ensemble" else f"a {program!r} run"
@@ -361,7 +363,7 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
         if not state.resumable:
             raise RecordingError(f"the run in {out_dir} {run['status']}; it cannot be resumed (it would fail again)")
         try:
-            spec, pos, health, elapsed0 = _restore(out_dir, run, map_options or {})
+            spec, pos, health, elapsed0, anchor = _restore(out_dir, run, map_options or {})
         except (KeyError, TypeError, ValueError, IndexError, OSError, AttributeError, JetGaudinError) as exc:
             if isinstance(exc, RunDirectoryError):
                 raise
@@ -372,12 +374,14 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
         if diff:
             raise RecordingError(f"cannot resume {out_dir} with different inputs ({', '.join(diff)}); drop those "
                                  "options or start a new run in another --out directory")
+        compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
+                             f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
+                             f"{spec.program} --resume {out_dir}")
+        lock.claim()  # from here on the directory is written: the lock names this process
         store = _open_store(spec, out_dir, run, fresh=False)
         try:
-            _cross_check(store, spec, pos, health)
-            compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
-                                 f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
-                                 f"{spec.program} --resume {out_dir}")
+            store.anchor = anchor
+            replay(store, spec, pos, anchor, str(out_dir / RUN_JSON))
         except BaseException:
             store.close()
             raise
@@ -385,7 +389,7 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
                       **options)
 
 
-def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float]:
+def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float, Any]:
     rec, ck = run["inputs"], run["checkpoint"]
     limits = HealthLimits(float(rec["max_drift"]), float(rec.get("max_imag", np.inf)))
     program = str(run.get("program", "jetgaudin orbit"))
@@ -400,8 +404,10 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         health.imag = float(run["max_imag_residue"])
         health.sphere = float(run["sphere"]["max_deviation"])
         X = unhex(ck["X_hex"])
-        carry: Any = None if ck["nu1_hex"] is None else np.complex128(complex(*unhex(ck["nu1_hex"])))
+        carry: Any = _unhex_carry(ck["nu1_hex"])
         n0 = int(ck["step"])
+        a = ck.get("anchor")
+        anchor = None if a is None else (int(a["step"]), unhex(a["X_hex"]), _unhex_carry(a["nu1_hex"]))
         if X.shape != spec.X0.shape or health.drift.shape != I0.shape or I0.shape != health.scale.shape:
             raise ValueError("inconsistent checkpoint")
     else:
@@ -414,51 +420,35 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         if inputs_digest(X0, b, eta) != rec["inputs_sha256"]:
             raise ValueError("the stored X0, b, eta do not match their digest in run.json")
         m = map_from_description(run["map"]) if "map" in run else BatchBacklund(b, eta, rec["branch"], **map_options)
+        if "map" in run and map_options.get("scheduler") is not None:  # a chain ensemble resumed on a cluster
+            from ..ensemble import DaskBatch
+
+            m = DaskBatch(m, **map_options)
         spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
-        d = read_checkpoint_npz(out_dir, ck, X0.shape)
+        if "file" not in ck and int(ck["rows"]) == 0 and int(ck["step"]) == 0:  # stopped before its first slot
+            d: dict[str, np.ndarray] = {"step": np.array(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
+                 "drift": np.zeros((X0.shape[0], 2 * (X0.shape[1] // 3)))}
+        else:
+            d = read_checkpoint_npz(out_dir, ck, X0.shape)
         n0, X = int(d["step"]), d["X"]
         carry = d["nu1"] if d["nu1"].size else None
         health = Health(spec.map, spec.X0, limits)
         if d["drift"].shape != health.I0.shape or X.shape != X0.shape or n0 != int(ck["step"]):
             raise ValueError("inconsistent checkpoint")
         health.drift = d["drift"] * health.scale
+        anchor = None
+        if "anchor_step" in d and int(d["anchor_step"]) >= 0:
+            anchor = (int(d["anchor_step"]), d["anchor_X"], d["anchor_nu1"] if d["anchor_nu1"].size else None)
     if not (0 <= n0 <= spec.steps) or not np.all(np.isfinite(X)):
         raise ValueError("inconsistent checkpoint")
-    return spec, Position(n0, X, carry), health, elapsed0
+    return spec, Position(n0, X, carry), health, elapsed0, anchor
+
+
+def _unhex_carry(h: Any) -> Any:
+    return None if h is None else np.complex128(complex(*unhex(h)))
 
 
 def _legacy_two_point(rec: dict) -> Map:
     from ..backlund.maps import TwoPointBacklund
 
     return TwoPointBacklund(rec["b"], complex(*rec["eta"]), rec["branch"], Backend.parse(rec["kernel"]))
-
-
-def _cross_check(store: Store, spec: RunSpec, pos: Position, health: Health) -> None:
-    """Refuse a checkpoint that does not belong to its rows: its step must follow the last saved row within one
-    save interval, its state must equal that row bit for bit when on it, its integrals must match the run's, and
-    ``ν1`` must be the branch-rule root at its state (a hand-edited ``run.json`` with a recomputed digest is
-    refused)."""
-    bad = RecordingError(f"{store.out_dir / RUN_JSON}: the checkpoint does not match the saved rows (edited or "
-                         "corrupted); cannot resume")
-    if store.rows < 1:  # nothing was durable (a failure at the first checkpoint): start again from X0
-        if pos.n != 0 or not np.array_equal(pos.X, spec.X0):
-            raise bad
-        return
-    n_last = int(store.dn[store.rows - 1])
-    X_last = np.array(store.dS[store.rows - 1])
-    if not (n_last <= pos.n < n_last + spec.save_every or pos.n == n_last):
-        raise bad
-    if pos.n == n_last and not np.array_equal(X_last, pos.X):
-        raise bad
-    with np.errstate(all="ignore"):  # the checkpoint state was health-checked: its drift is within the record
-        d = np.abs(spec.map.integrals(pos.X) - health.I0)
-    if not np.all(d <= 2 * health.drift + 1e-10 * health.scale):
-        raise bad
-    if pos.carry is not None:
-        try:
-            ref = np.asarray(spec.map.start(pos.X), dtype=complex)
-        except JetGaudinError:
-            raise bad from None
-        c = np.asarray(pos.carry, dtype=complex)
-        if not np.all(np.abs(c - ref) <= 1e-6 * np.maximum(1.0, np.abs(ref))):
-            raise bad

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import _fs
 from .._errors import JetGaudinError, RunIOError
 from ..maps import Backend
 from .files import one_line
@@ -174,8 +175,9 @@ class Driver:
                  summary: Callable[[Health, float], dict], elapsed0: float = 0.0,
                  progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
                  max_chunk_steps: int | None = None, max_chunk_bytes: int = 64 << 20, chunk_rows: int = 4096,
-                 first: bool = False):
+                 first: bool = False, fresh: bool = False):
         self.spec, self.store, self.pos, self.health = spec, store, pos, health
+        self.fresh = fresh
         self.summary_fn, self.elapsed0, self.progress = summary, elapsed0, progress
         self.handle_signals, self.first = handle_signals, first
         row_bytes = 8 * spec.B * spec.n_state
@@ -212,10 +214,12 @@ class Driver:
         t_ck = time.monotonic()
         with SignalFlag(self.handle_signals) as sig:
             try:
+                store.begin(self.fresh)
                 if self.first:
                     bad = health.check([0], pos.X[None])
                     failure = bad.reason if bad else None
                     store.append(np.array([0]), pos.X[None])
+                    store.anchor = (0, pos.X, None)
                     store.checkpoint(0, pos.X, pos.carry, self.summary("running"))
                 while failure is None and pos.n < steps and not sig.signum:
                     failure = self._chunk(sig, L if not invariant else None, sample_imag, per_step)
@@ -232,8 +236,8 @@ class Driver:
                 else:
                     status, text = RunStatus.COMPLETED, "completed"
                 store.checkpoint(pos.n, pos.X, pos.carry, self.summary(text))
-            except RunIOError as exc:
-                reason = one_line(exc)
+            except RunIOError as exc:  # the status says what failed in one word: "disk full", ...
+                reason = _fs.io_failure(exc)
                 store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())
                 return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
             if self.progress is not None:
@@ -253,6 +257,7 @@ class Driver:
         rows_n: list[int] = []
         rows: list[np.ndarray] = []
         end: tuple[int, np.ndarray, Any] | None = None  # (step, X, carry) after the last call
+        anchor: tuple[int, np.ndarray, Any] | None = None  # where the call that made the last row started
         failure: str | None = None
         t_enter = time.monotonic()
         if sample_imag:  # the compiled route does not compute the residue: one reference step per chunk
@@ -273,6 +278,7 @@ class Driver:
             L = fixed if fixed is not None else (1 if per_step else self._limit(self._L))
             k, se = piece(n, L, steps, every)
             tc = time.monotonic()
+            start = (n, X, carry)
             try:
                 adv = m.advance(X, carry, k, se)
             except JetGaudinError as exc:  # SingularStepError, BranchPointError met along the orbit
@@ -285,9 +291,11 @@ class Driver:
             if se == every and k >= every:
                 rows_n.extend(range(n + every, n + k + 1, every))
                 rows.extend(adv.rows)
+                anchor = start
             elif (n + k) % every == 0 or n + k == steps:
                 rows_n.append(n + k)
                 rows.append(adv.rows[-1])
+                anchor = start
             n, X, carry = n + k, adv.X, adv.carry
             if per_step or not sample_imag:
                 failure = health.check_imag(n, adv.imag_max)
@@ -303,6 +311,8 @@ class Driver:
             if fixed is not None or sig.signum or time.monotonic() - t0 >= flush or len(rows_n) >= self.max_rows:
                 break
         failure = self._commit(rows_n, rows, end, failure)
+        if failure is None and anchor is not None:
+            self.store.anchor = anchor  # the last saved row is the end of that call (a resume replays it)
         self._overhead = max(0.0, time.monotonic() - t_enter - t_calls)
         return failure
 

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import _fs
+from .. import _fs, _space
 from .._errors import RecordingError, RunIOError
 from .files import (
     ENSEMBLE_H5,
@@ -36,6 +36,13 @@ from .files import (
 
 #: errors that mean "writing failed" (h5py raises RuntimeError or OSError subclasses for HDF5 failures)
 WRITE_ERRORS = (OSError, RuntimeError)
+#: bytes of HDF5 metadata (chunk index, object headers, superblock) one append or flush may add, reserved with the
+#: data: measured below 20 kB for an append of up to 4096 chunks (``tests/test_data_safety.py``)
+H5_META_BYTES = 64 << 10
+#: bytes kept free for the last ``run.json`` of a session (plus twice the record's size)
+RESERVE_BYTES = 64 << 10
+#: HDF5 objects of a file whose write failed: never closed (HDF5 crashes closing them after a real ENOSPC)
+_ABANDONED: list = []
 
 
 def now() -> str:
@@ -54,6 +61,9 @@ class Store:
         self.out_dir, self.run, self.shape = Path(out_dir), run, tuple(shape)
         self.h_rows = RowDigest()
         self.rows = 0 if fresh else int(run["checkpoint"]["rows"])
+        #: ``(step, X, carry)`` where the kernel call that made the last saved row started: recorded with every
+        #: checkpoint, replayed by a resume (:mod:`jetgaudin.run.replay`)
+        self.anchor: tuple[int, np.ndarray, Any] | None = None
         self.f: Any = None
         self._build_h5(fresh, extra or {})
         import h5py
@@ -101,6 +111,7 @@ class Store:
         if not fresh and self.h_rows.hexdigest() != self.run["checkpoint"].get("rows_sha256"):
             _fs.remove_file(self.out_dir, tmp)
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        _space.release_space(self.out_dir, tmp)
         try:
             _fs.check_regular_or_absent(self.out_dir, self.h5_name)
             os.replace(tmp_path, path)
@@ -116,6 +127,8 @@ class Store:
         rows = self.rows if old is not None else 0
         row_values = int(np.prod(self.shape))
         with h5py.File(path, "w", libver="latest") as f:
+            extra_bytes = sum(int(np.asarray(v).nbytes) for v in extra.values())
+            _space.reserve_space(path.parent, path.name, extra_bytes + self._h5_bytes(0, rows), what="writing")
             for k, v in extra.items():
                 f.create_dataset(k, data=v)
             per_chunk = self._h5_chunks()
@@ -143,11 +156,16 @@ class Store:
         if k == 0:
             return
         r = self.rows
+        _space.reserve_space(self.out_dir, self.h5_name, self._h5_bytes(r, k), what="appending rows to")
         try:
             self.dn.resize((r + k,))
             self.dS.resize((r + k,) + self.shape)
             self.dn[r : r + k] = n_idx
             self.dS[r : r + k] = S
+        except WRITE_ERRORS as exc:
+            self._abandon()
+            raise RunIOError(f"{_fs.io_failure(exc)} while appending rows") from exc
+        try:
             self._append_more(n_idx, S)
         except WRITE_ERRORS as exc:
             raise RunIOError(f"{_fs.io_failure(exc)} while appending rows") from exc
@@ -157,11 +175,38 @@ class Store:
     def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         pass
 
+    def _h5_bytes(self, r: int, k: int) -> int:
+        """An upper bound of the bytes HDF5 writes to append ``k`` rows after row ``r`` (every chunk the rows touch,
+        of ``n`` and of the data, in full, and :data:`H5_META_BYTES`), reserved before the rows are handed to it."""
+        if k <= 0:
+            return H5_META_BYTES
+        chunks = self._h5_chunks()
+        per_row = 1
+        for size, c in zip(self.shape, chunks[1:], strict=True):
+            per_row *= -(-size // c)
+        touched = (r + k - 1) // chunks[0] - r // chunks[0] + 1
+        n_touched = (r + k - 1) // 4096 - r // 4096 + 1
+        return touched * per_row * 8 * int(np.prod(chunks)) + n_touched * 8 * 4096 + H5_META_BYTES
+
     def _sync_data(self) -> None:
-        self.dn.flush()
-        self.dS.flush()
-        self.f.flush()
+        _space.reserve_space(self.out_dir, self.h5_name, H5_META_BYTES, what="flushing")
+        try:
+            self.dn.flush()
+            self.dS.flush()
+            self.f.flush()
+        except WRITE_ERRORS as exc:
+            self._abandon()
+            raise RunIOError(f"{_fs.io_failure(exc)} while flushing {self.out_dir / self.h5_name}") from exc
         _fs.fsync_file(self.out_dir, self.h5_name)
+        _space.release_space(self.out_dir, self.h5_name)
+
+    def _abandon(self) -> None:
+        """After a failed HDF5 write, never touch the file's objects again: HDF5 may crash closing them (a real
+        ENOSPC: SIGSEGV in ``H5D_close``); they are kept referenced and the file is left as the last durable
+        checkpoint declared it (the rows after it are not data)."""
+        if self.f is not None:
+            _ABANDONED.append((self.f, self.dn, self.dS))
+            self.f = None
 
     def checkpoint(self, step: int, X: np.ndarray, carry: Any, summary: dict) -> None:
         """Make everything appended durable and record ``(step, X, carry)`` as the checkpoint: data → fsync →
@@ -188,9 +233,18 @@ class Store:
     def _committed(self) -> None:
         pass
 
+    def begin(self, fresh: bool) -> None:
+        """Start a session of writing: a new run's first ``run.json`` (no row yet: a failure at the first append
+        leaves a run that resumes from ``X0``), then the reserve (:func:`jetgaudin._space.make_reserve`) that
+        :meth:`mark` frees to record a full disk."""
+        if fresh:
+            write_run(self.out_dir, copy.deepcopy(self.run))
+        _space.make_reserve(self.out_dir, RESERVE_BYTES + 2 * len(json.dumps(self.run)))
+
     def mark(self, status: str, **fields: Any) -> None:
         """Best effort: record ``status`` (and ``fields``) over the last durable checkpoint (the disk may be what
-        failed)."""
+        failed: the reserve is freed first)."""
+        _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             new = copy.deepcopy(self.run)
             new.update(fields, status=status, updated=now())
@@ -198,6 +252,7 @@ class Store:
             self.run = new
 
     def close(self) -> None:
+        _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             if self.f is not None:
                 self.f.close()
@@ -247,7 +302,7 @@ class OrbitStore(Store):
         self.h_csv = hashlib.sha256()
         ck = self.run["checkpoint"]
         path = self.out_dir / self.csv_name
-        if fresh or int(ck.get("csv_bytes", 0)) == 0:  # new, or nothing durable yet: start the file again
+        if fresh or (int(ck.get("csv_bytes", 0)) == 0 and self.rows == 0):  # nothing durable yet: start again
             head = self._header().encode()
             self.csv_fh = _fs.open_write(self.out_dir, self.csv_name)
             self.csv_fh.write(head)
@@ -255,6 +310,7 @@ class OrbitStore(Store):
             self.csv_bytes = len(head)
             return
         self.csv_bytes = int(ck["csv_bytes"])
+        lines, tail = 0, b""
         try:
             _fs.check_regular_or_absent(self.out_dir, self.csv_name)
             size = os.lstat(path).st_size
@@ -265,6 +321,8 @@ class OrbitStore(Store):
                     if not block:
                         break
                     self.h_csv.update(block)
+                    lines += block.count(b"\n")
+                    tail = (tail + block)[-(1 << 16):]
                     left -= len(block)
         except OSError:
             raise RecordingError(f"{path} is missing or unreadable; cannot resume") from None
@@ -272,13 +330,24 @@ class OrbitStore(Store):
             raise RecordingError(f"{path} is truncated (shorter than run.json records); cannot resume")
         if self.h_csv.hexdigest() != ck.get("csv_sha256"):
             raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
+        if lines != self.rows + 1 or (self.rows and not tail.endswith(self._row_text(self.rows - 1))):
+            # the declared CSV must hold the header and exactly the declared rows (a resume never cuts a durable row)
+            raise RecordingError(f"{path}: run.json's csv_bytes does not cover exactly the {self.rows} saved rows "
+                                 "(edited or corrupted); cannot resume")
         self.csv_fh = _fs.open_write(self.out_dir, self.csv_name, append=True)
         os.ftruncate(self.csv_fh.fileno(), self.csv_bytes)
 
+    def _row_text(self, i: int) -> bytes:
+        """The CSV line of saved row ``i``."""
+        return self._csv_text(np.array([self.dn[i]]), np.array(self.dS[i : i + 1]))
+
+    def _csv_text(self, n_idx: np.ndarray, S: np.ndarray) -> bytes:
+        index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
+        return format_rows(index, S).encode()
+
     def _append_more(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         if self.csv_fh is not None:
-            index = n_idx.tolist() if self.time_step is None else (n_idx * self.time_step).tolist()
-            text = format_rows(index, S).encode()
+            text = self._csv_text(n_idx, S)
             self.csv_fh.write(text)
             self.h_csv.update(text)
 
@@ -291,8 +360,10 @@ class OrbitStore(Store):
     def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
         ck = new["checkpoint"]
         ck["X_hex"] = hex_floats(X)
-        c = None if carry is None else complex(np.asarray(carry).reshape(-1)[0])
-        ck["nu1_hex"] = None if c is None else [c.real.hex(), c.imag.hex()]
+        ck["nu1_hex"] = _hex_carry(carry)
+        if self.anchor is not None:
+            a_n, a_X, a_c = self.anchor
+            ck["anchor"] = {"step": int(a_n), "X_hex": hex_floats(a_X), "nu1_hex": _hex_carry(a_c)}
         if self.csv_fh is not None:
             ck["csv_bytes"] = self.csv_fh.tell()
             ck["csv_sha256"] = self.h_csv.hexdigest()
@@ -302,6 +373,11 @@ class OrbitStore(Store):
         if self.csv_fh is not None:
             with contextlib.suppress(Exception):
                 self.csv_fh.close()
+
+
+def _hex_carry(carry: Any) -> list[str] | None:
+    c = None if carry is None else complex(np.asarray(carry).reshape(-1)[0])
+    return None if c is None else [c.real.hex(), c.imag.hex()]
 
 
 class EnsembleStore(Store):
@@ -333,8 +409,10 @@ class EnsembleStore(Store):
     def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
         name = f"checkpoint-{self.slot}.npz"
         buf = io.BytesIO()
+        a_n, a_X, a_c = self.anchor if self.anchor is not None else (-1, np.zeros((0,) + X.shape[1:]), None)
         np.savez(buf, step=np.int64(step), X=X, nu1=np.zeros(0, complex) if carry is None else carry,
-                 drift=self.drift_rel)
+                 drift=self.drift_rel, anchor_step=np.int64(a_n), anchor_X=a_X,
+                 anchor_nu1=np.zeros(0, complex) if a_c is None else a_c)
         data = buf.getvalue()
         _fs.atomic_write_bytes(self.out_dir, name, data)
         import hashlib
@@ -350,8 +428,12 @@ def read_checkpoint_npz(out_dir: Path, ck: dict, shape: tuple[int, int]) -> dict
     file of bounded size, matching its digest)."""
     name = _fs.plain_name(ck["file"])
     B, n = shape
-    cap = 8 * B * n + 16 * B + 8 * B * n + (1 << 16)
+    cap = 2 * (8 * B * n + 16 * B) + 8 * B * n + (1 << 16)  # X, nu1 and the anchor's, the drift, the zip's own
     if file_sha256(out_dir, name, cap) != ck["sha256"]:
         raise ValueError(f"{name} does not match its digest")
-    with np.load(io.BytesIO(_fs.read_bytes(out_dir, name, cap))) as d:
-        return {k: np.array(d[k]) for k in ("step", "X", "nu1", "drift")}
+    with np.load(io.BytesIO(_fs.read_bytes(out_dir, name, cap)), allow_pickle=False) as d:
+        out = {k: np.array(d[k]) for k in ("step", "X", "nu1", "drift")}
+        for k in ("anchor_step", "anchor_X", "anchor_nu1"):
+            if k in d:
+                out[k] = np.array(d[k])
+        return out
