@@ -16,7 +16,11 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
 (e) an ensemble (trig magnet M = 4, 64 orbits): the batch on all cores (``prange``) against the orbits one by one
     (wall time, median of 3; orbit-steps/s);
 (f) the elliptic map (modulus 0.6, issue 24), compiled and NumPy, on the sites of (b), the trigonometric kernel
-    beside it.
+    beside it;
+(g) short calls (the per-call set-up): ``advance`` of one step from a new state, the branch rule of ``ν`` compiled
+    (:func:`jetgaudin.gaudin._family_kernel.branch_rule`, today's route) against the NumPy rule that started every
+    compiled call before (``advance(X, start(X), 1)``, the same kernel after it), rational and trigonometric M = 4,
+    and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call).
 """
 
 import argparse
@@ -166,19 +170,40 @@ def ensemble(args, rng):
           f"{64 * n / tb:.3g} orbit-steps/s, one by one {64 * n / ts:.3g} ({ts / tb:.2f}x)")
 
 
+def short_calls(args, rng):
+    sites = TRIG["trig magnet M=4"]
+    for fam in ("rational", "trigonometric"):
+        m = GaudinModel(0.8, sites, family=fam)
+        B = m.two_point_backlund(XI, kernel="compiled")
+        for what, X, n in (("1 step", rng.normal(size=m.n_state), 1),
+                           ("256 orbits x 10 steps", rng.normal(size=(256, m.n_state)), 10)):
+            def new(B=B, X=X, n=n):
+                return B.advance(X, None, n)
+
+            def old(B=B, X=X, n=n):
+                return B.advance(X, B.start(X), n)
+
+            new(), old()
+            tn = float(np.median(timed(new, 5, time.perf_counter)))
+            to = float(np.median(timed(old, 5, time.perf_counter)))
+            print(f"(g) {fam} M=4, {what}: compiled set-up {1e3 * tn:.3f} ms, NumPy set-up {1e3 * to:.3f} ms "
+                  f"({to / tn:.1f}x)")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=1_000_000)
     p.add_argument("--numpy-steps", type=int, default=1000)
     p.add_argument("--work-steps", type=int, default=1000)
     p.add_argument("--baseline-src", default=None, help="a source tree (its src/) for the rational baseline")
-    p.add_argument("--parts", default="abcdef")
+    p.add_argument("--parts", default="abcdefg")
     a = p.parse_args()
     print("machine:", machine())
     rng = np.random.default_rng(1)
     for part, fn in (("a", lambda: rational_kernel(a)), ("b", lambda: trigonometric(a, rng)),
                      ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng)),
-                     ("e", lambda: ensemble(a, rng)), ("f", lambda: elliptic(a, rng))):
+                     ("e", lambda: ensemble(a, rng)), ("f", lambda: elliptic(a, rng)),
+                     ("g", lambda: short_calls(a, rng))):
         if part in a.parts:
             fn()
 

@@ -50,8 +50,10 @@ def test_a_resumed_run_reports_the_rate_and_time_of_its_own_stepping():
 
 @pytest.mark.slow
 def test_warmup_leaves_nothing_to_compile_for_a_chain_ensemble(tmp_path):
-    """In a fresh Numba cache: ``warmup``, then an orbit and an ensemble of a chain on the compiled route; neither
-    announces a compile (the chain ensemble compiled for 5 s after a warmup that did not cover its CPU target)."""
+    """In a fresh Numba cache: ``warmup``, then an orbit and an ensemble of a rational and of a trigonometric chain on
+    the compiled route; none announces a compile and none adds a compiled object to the cache (Numba writes one
+    ``.nbc`` per compiled signature and target: the chain ensemble, importing the chains' kernel before the
+    Bäcklund kernels chose Numba's target, compiled for another one for 5 s after a warmup in one process)."""
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache"), "PYTHONPATH": str(ROOT / "src")}
 
     def cli(*args):
@@ -59,6 +61,8 @@ def test_warmup_leaves_nothing_to_compile_for_a_chain_ensemble(tmp_path):
                               cwd=tmp_path, timeout=600)
 
     assert cli("warmup").returncode == 0
+    compiled = sorted(p.name for p in (tmp_path / "cache").rglob("*.nbc"))
+    assert compiled  # the warmup wrote the cache the runs below must only read
     init = ("1.288,1.449,0.066,-0.765,-1.092,0.031,-1.022,-1.437,0.199,0.133,0.546,-0.914,0.005,-0.065,-1.506,"
             "0.538,0.321,2.389")
     chain = ["--sites", "-1:2,0.5:3,2:1", "--b", "0.8", "--eta", "0.9+0.05i", "--no-progress"]
@@ -67,3 +71,11 @@ def test_warmup_leaves_nothing_to_compile_for_a_chain_ensemble(tmp_path):
     r = cli("ensemble", *chain, "--steps", "100", "--input", "o/orbit.csv", "--out", "e")  # 301 orbits: compiled
     assert r.returncode == 0 and "compiling" not in r.stderr, r.stderr
     assert "kernels compiled or loaded" in r.stdout  # the compiled route was taken (and its kernel loaded)
+    trig = ["--sites", "-1:1,0.5:1,2:1", "--family", "trigonometric", "--b", "0.8", "--eta", "0.9+0.05i",
+            "--no-progress"]
+    init3 = ",".join(init.split(",")[:9])
+    r = cli("orbit", *trig, "--steps", "30000", "--save-every", "100", "--out", "t", f"--init={init3}")
+    assert r.returncode == 0 and "compiling" not in r.stderr, r.stderr
+    r = cli("ensemble", *trig, "--steps", "100", "--input", "t/orbit.csv", "--out", "te")  # 301 orbits: compiled
+    assert r.returncode == 0 and "compiling" not in r.stderr, r.stderr
+    assert sorted(p.name for p in (tmp_path / "cache").rglob("*.nbc")) == compiled

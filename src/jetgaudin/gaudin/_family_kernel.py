@@ -25,10 +25,12 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numba import njit, prange
 
-from ._kernels import _abs2
+from ._kernels import _abs2  # first: it applies the Bäcklund kernels' Numba target (``_target.configure``)
 
 
 @njit(cache=True)
@@ -266,3 +268,61 @@ def orbit_constants(model, xi):
             T[:, :, e, t] = full[:, :, p, e]
     return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx, P,
             np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))
+
+
+#: points of the vertical segment ``[Re η, η]`` on which :func:`branch_rule` continues ``ν`` (``n`` steps)
+SEGMENT_STEPS = 64
+
+
+@lru_cache(maxsize=64)
+def segment_constants(model, eta, n: int = SEGMENT_STEPS) -> np.ndarray:
+    """``F[k, a, c] = φ_{a,k_c}(t_k − λ_{i_c})`` at ``t_k = Re η + i (k/n) Im η``, ``k = 0..n``, shape
+    ``(n + 1, 3, M)`` (every family: :meth:`jetgaudin.families.Family.phi`; rational ``φ = x^{−k−1}``), so that
+    ``ξ^a(t_k) = b δ_{a3} + Σ_c F[k, a, c] y^a_c`` costs ``3M`` products per point (the constants of
+    :func:`branch_rule`, computed once per ``(model, η)`` and read-only)."""
+    eta = complex(eta)
+    t = eta.real + 1j * eta.imag * np.arange(n + 1) / n
+    F = np.zeros((n + 1, 3, model.M), dtype=complex)
+    for i, (p, N) in enumerate(model.sites):
+        o = model.offsets[i]
+        for a in range(3):
+            F[:, a, o:o + N] = model.family.phi(a + 1, t - p, N).T
+    F.setflags(write=False)
+    return F
+
+
+@njit(cache=True)
+def branch_rule(X, b, F, sheet):
+    r"""The branch rule of ``ν(η)`` compiled, for every family: for each state ``X[i]`` (real, (B, 3M)) the root
+    ``√ν²(t_0) > 0`` at ``t_0 = Re η`` continued over the points ``t_k`` of :func:`segment_constants`, each time
+    the root of ``ν²(t_k) = u² + vw`` nearer to the previous one — the numerical rule of
+    :func:`jetgaudin.gaudin._curve._nu_numerical` at its first ``n``.  Returns ``(sheet · ν(η) (B,), ok (B,))``;
+    ``ok`` is false where a step moved ``ν`` by more than a quarter of its size (the nearer root would not be
+    unambiguous: a branch point on or near the segment), ``ν`` vanished or is not finite: the caller takes the
+    exact NumPy rule for those states."""
+    B, n3 = X.shape
+    M = n3 // 3
+    K = F.shape[0]
+    nu = np.empty(B, dtype=np.complex128)
+    ok = np.ones(B, dtype=np.bool_)
+    for i in range(B):
+        v = 0j
+        for k in range(K):
+            x1 = 0j
+            x2 = 0j
+            x3 = complex(b)
+            for c in range(M):
+                x1 += F[k, 0, c] * X[i, 3 * c]
+                x2 += F[k, 1, c] * X[i, 3 * c + 1]
+                x3 += F[k, 2, c] * X[i, 3 * c + 2]
+            r = np.sqrt(x3 * x3 + (x1 - 1j * x2) * (x1 + 1j * x2))
+            if k > 0:
+                if abs(r - v) > abs(r + v):
+                    r = -r
+                if not abs(r - v) <= 0.25 * max(abs(r), abs(v)):
+                    ok[i] = False
+            v = r
+        if not (v != 0 and np.isfinite(v.real) and np.isfinite(v.imag)):
+            ok[i] = False
+        nu[i] = sheet * v
+    return nu, ok

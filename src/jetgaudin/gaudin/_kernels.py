@@ -20,6 +20,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..backlund.kernels._target import configure
+
+# Numba's CPU target as for the Bäcklund kernels, chosen before this module's first dispatcher creates it: a process
+# that imports the chains' kernels first (``ensemble --sites``) then loads the cache entries ``jetgaudin warmup``
+# wrote instead of compiling for another target (``tests/test_cli_interface.py``).
+configure()
+
 
 @njit(cache=True, inline="always")
 def _mm(a00, a01, a10, a11, b00, b01, b10, b11):

@@ -174,7 +174,7 @@ class _ChainMap(Map):
     branch: Branch
     properties: MapProperties
     kind: str
-    kernel: Any  # the alias of backend given to the constructor (then equal to backend)
+    kernel: Any  # the alias of backend given to the constructor (None once parsed into backend)
 
     def _setup(self, X: np.ndarray, carry: Any) -> tuple:  # pragma: no cover - every concrete map defines it
         raise NotImplementedError
@@ -185,7 +185,9 @@ class _ChainMap(Map):
         object.__setattr__(self, "branch", Branch.parse(self.branch))
         backend = Backend.parse(self.backend if self.kernel is None else self.kernel)  # kernel=: an alias
         object.__setattr__(self, "backend", backend)
-        object.__setattr__(self, "kernel", backend)
+        # the alias is consumed: ``dataclasses.replace(m, backend=...)`` (the run layer's resolution of AUTO) must
+        # not be overridden by the constructor's old alias (it was: every chunk resolved AUTO again on its steps)
+        object.__setattr__(self, "kernel", None)
 
     @property
     def has_compiled(self) -> bool:
@@ -379,7 +381,7 @@ class ChainTwoPointBacklund(_ChainMap):
             return step_loop(self, X, carry, steps, save_every)
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
-        nu = np.reshape(self.start(Xb) if carry is None else carry, -1)
+        nu = self._compiled_start(Xb) if carry is None else np.reshape(carry, -1)
         name, _, run_orbit = self._kernel()
         if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
             from . import _family_kernel
@@ -395,6 +397,20 @@ class ChainTwoPointBacklund(_ChainMap):
             out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
         return self._finish(rows, final, last, shape)
+
+    def _compiled_start(self, Xb: np.ndarray) -> np.ndarray:
+        """``ν1`` at the states ``Xb`` ``(B, 3M)`` by the compiled branch rule
+        (:func:`jetgaudin.gaudin._family_kernel.branch_rule`, every family), the exact NumPy rule (:meth:`start`)
+        for the states it flags; only the sign of ``ν1`` reaches the kernels (they take the root of ``ν²`` nearest
+        to it), so the orbits are the NumPy-started ones bit for bit wherever the two rules agree
+        (``tests/test_chain_compiled_start.py``)."""
+        from ._family_kernel import branch_rule, segment_constants
+
+        nu, ok = branch_rule(np.ascontiguousarray(Xb, dtype=float), float(self.model.b),
+                             segment_constants(self.model, self.eta), self.sheet)
+        if not np.all(ok):
+            nu[~ok] = self.start(Xb[~ok])
+        return nu
 
     @staticmethod
     def _finish(rows, final, last, shape) -> Advance:
