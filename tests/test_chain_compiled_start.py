@@ -78,6 +78,6 @@ def test_replace_backend_is_not_overridden_by_the_kernel_alias(name):
 
     B = MODELS[name].two_point_backlund(0.2 + 0.05j, kernel="auto")
     assert dataclasses.replace(B, backend=Backend.COMPILED).backend is Backend.COMPILED
-    assert dataclasses.replace(B, backend=Backend.COMPILED).resolved_backend(1, np.zeros(B.n_state)) \
+    assert dataclasses.replace(B, backend=Backend.COMPILED).resolved_backend(np.zeros(B.n_state), 1) \
         is Backend.COMPILED
     assert MODELS[name].two_point_backlund(0.2 + 0.05j, kernel="numpy").backend is Backend.NUMPY

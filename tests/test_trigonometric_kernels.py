@@ -74,9 +74,9 @@ def test_backend_rule():
     B = m.two_point_backlund(0.5 + 0.2j)
     X = np.array([0.3, -0.2, 0.5, 0.1, 0.4, -0.3])
     assert B.backend is jg.Backend.AUTO and B.has_compiled
-    assert B.resolved_backend(10, X) is jg.Backend.NUMPY
-    assert B.resolved_backend(10**6, X) is jg.Backend.COMPILED
-    assert m.two_point_backlund(0.5 + 0.2j, kernel="numpy").resolved_backend(10**6, X) is jg.Backend.NUMPY
+    assert B.resolved_backend(X, 10) is jg.Backend.NUMPY
+    assert B.resolved_backend(X, 10**6) is jg.Backend.COMPILED
+    assert m.two_point_backlund(0.5 + 0.2j, kernel="numpy").resolved_backend(X, 10**6) is jg.Backend.NUMPY
     with pytest.raises(jg.InvalidParameterError, match="backend"):
         m.two_point_backlund(0.5 + 0.2j, kernel="fast")
     report = m.two_point_backlund(0.5 + 0.2j, kernel="compiled").prepare_kernels(X, 5)

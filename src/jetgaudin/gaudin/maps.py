@@ -59,7 +59,7 @@ _AUTO_MIN_WORK = 20000
 _CHAIN_COMPILE_S = 10.0
 
 
-def resolve_backend(backend: Backend, has_compiled: bool, steps: int, X, kind: str = "map") -> Backend:
+def resolve_backend(backend: Backend, has_compiled: bool, X, steps: int, kind: str = "map") -> Backend:
     """The one rule of the chain maps (every family): ``NUMPY`` as given; ``COMPILED`` needs a compiled route
     (:class:`InvalidParameterError` otherwise); ``AUTO`` is the compiled route from ``_AUTO_MIN_WORK`` orbit-steps
     on where the map has one, NumPy otherwise."""
@@ -194,10 +194,10 @@ class _ChainMap(Map):
         """Whether the map has a compiled route (the one backend rule, :func:`resolve_backend`, reads it)."""
         return False
 
-    def resolved_backend(self, steps: int, X: np.ndarray) -> Backend:
+    def resolved_backend(self, X: Any, steps: Any) -> Backend:
         """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
-        (:func:`resolve_backend`)."""
-        return resolve_backend(self.backend, self.has_compiled, steps, X, self.kind)
+        (:func:`resolve_backend`; the argument order of :meth:`jetgaudin.maps.Map.resolved_backend`)."""
+        return resolve_backend(self.backend, self.has_compiled, X, steps, self.kind)
 
     def with_backend(self, backend=None, kernel=None):
         """This map on another route (``kernel`` an alias of ``backend``; both ``None``: itself)."""
@@ -269,7 +269,7 @@ class _ChainMap(Map):
         """``steps`` steps from ``X`` ``(..., 3M)`` continuing from ``carry = ν1`` (``None``: the branch rule at
         ``X``), rows every ``save_every`` steps: a loop over :meth:`step` (:func:`jetgaudin.maps.step_loop`);
         ``backend`` / ``kernel``: checked by the backend rule (NumPy is this map's only route)."""
-        self.with_backend(backend, kernel).resolved_backend(steps, X)
+        self.with_backend(backend, kernel).resolved_backend(X, steps)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
 
@@ -348,12 +348,15 @@ class ChainTwoPointBacklund(_ChainMap):
 
         return "_family_kernel", F.run_orbit, lambda x, nu, n, se: F.run_orbit(x, b, nu, *c, n, se)
 
-    def prepare_kernels(self, X: np.ndarray, steps: int, notify=None):
+    def prepare_kernels(self, X: np.ndarray | None = None, steps: int | None = None, notify=None):
         """Compile (or load) the chain kernel visibly before a compiled run of ``steps`` steps from ``X`` (as
         :meth:`jetgaudin.TwoPointBacklund.prepare_kernels`: a message with the expected time first, one when done;
         nothing when it is loaded already, in Numba's cache (loaded quietly, timed) or the NumPy route is used).
         Returns a ``CompileReport`` or ``None``."""
-        if self.resolved_backend(steps, X) is not Backend.COMPILED or np.size(X) == 0:
+        if X is None:  # everything it could need: the kernel on one state of the model
+            X, steps = np.ones(self.model.n_state), _AUTO_MIN_WORK
+        if self.resolved_backend(X, _AUTO_MIN_WORK if steps is None else steps) is not Backend.COMPILED \
+                or np.size(X) == 0:
             return None
         from ..backlund._compiled import kernels
 
@@ -377,7 +380,7 @@ class ChainTwoPointBacklund(_ChainMap):
         if backend is not None or kernel is not None:
             return self.with_backend(backend, kernel).advance(X, carry, steps, save_every)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
-        if self.resolved_backend(steps, X) is not Backend.COMPILED or X.size == 0:
+        if self.resolved_backend(X, steps) is not Backend.COMPILED or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
