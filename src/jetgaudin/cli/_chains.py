@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._common import CliInputError, blame, one_line, parse_b
+from ._common import CliInputError, blame, complex_text, one_line, parse_b
 
 SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer orders N_i >= 1), e.g. '
               '"-1:2,0.5:3,2:1"; --init then takes 3M numbers, M = N1 + N2 + ... [default: one site 0:N, '
@@ -204,4 +204,4 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
     t.add_row(f"G_η, η = {eta_s}", "", f"{d['G_eta']:.17g}" if d["G_eta"] is not None else
               f"undefined: {d['G_eta_note']}")
     con.print(t)
-    con.print("branch points (zeros of ν²): " + ", ".join(f"{x:.6g}{y:+.6g}i" for x, y in d["branch_points"]))
+    con.print("branch points (zeros of ν²): " + ", ".join(complex_text(complex(x, y)) for x, y in d["branch_points"]))

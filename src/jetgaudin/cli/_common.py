@@ -70,6 +70,12 @@ class CliInputError(Exception):
 MAX_SCALE = 1e150
 
 
+def complex_text(z) -> str:
+    """A complex number with 17 significant digits in each part (round-trips exactly): ``a + b i``."""
+    z = complex(z)
+    return f"{z.real:.17g} {'+' if z.imag >= 0 else '-'} {abs(z.imag):.17g} i"
+
+
 def one_line(msg) -> str:
     return re.sub(r"\s+", " ", str(msg)).strip()
 

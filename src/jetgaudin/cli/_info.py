@@ -26,6 +26,7 @@ from ._common import (
     parse_init,
     reported_errors,
 )
+from ._common import complex_text as _fmt
 
 
 def _canonical_leaf(X, tol):
@@ -43,11 +44,6 @@ def _canonical_leaf(X, tol):
 def _c(z) -> list[float]:
     z = complex(z)
     return [z.real, z.imag]
-
-
-def _fmt(z) -> str:
-    z = complex(z)
-    return f"{z.real:.17g} {'+' if z.imag >= 0 else '-'} {abs(z.imag):.17g} i"
 
 
 @app.command()
