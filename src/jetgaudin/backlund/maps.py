@@ -158,6 +158,15 @@ _ONE_POINT_PROPERTIES = MapProperties(
 )
 
 
+def _init_parameters(m) -> None:
+    """Validate the parameters every Bäcklund map of the top shares (``b ≠ 0``, ``η``, the branch, the backend and
+    its alias ``kernel``), in place on the frozen dataclass ``m``."""
+    object.__setattr__(m, "b", nonzero_field(m.b))
+    object.__setattr__(m, "eta", spectral_parameter(m.eta))
+    object.__setattr__(m, "branch", Branch.parse(m.branch))
+    m._init_backend()
+
+
 @dataclass(frozen=True)
 class TwoPointBacklund(Map):
     r"""The real two-point Bäcklund map ``B_η: X ↦ X̆`` (Section 6.2, Appendix 1), any N.
@@ -192,10 +201,7 @@ class TwoPointBacklund(Map):
     kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "b", nonzero_field(self.b))
-        object.__setattr__(self, "eta", spectral_parameter(self.eta))
-        object.__setattr__(self, "branch", Branch.parse(self.branch))
-        self._init_backend()
+        _init_parameters(self)
         if self.eta.imag == 0:
             raise InvalidParameterError(
                 "eta must have a nonzero imaginary part (Im eta = 0 is the identity map: the real two-point map is "
@@ -397,10 +403,7 @@ class OnePointBacklund(Map):
     kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "b", nonzero_field(self.b))
-        object.__setattr__(self, "eta", spectral_parameter(self.eta))
-        object.__setattr__(self, "branch", Branch.parse(self.branch))
-        self._init_backend()
+        _init_parameters(self)
 
     @property
     def sheet(self) -> int:

@@ -37,6 +37,15 @@ def _kron(A, B):
     return out
 
 
+def _w_defect(k, x, y):
+    """The largest relative defect of the addition identity over the permutations (a, b, c) at one point."""
+    def one(a, b, c):
+        lhs = _w(a, x, k) * _w(b, y, k)
+        return abs(lhs - (_w(a, x - y, k) * _w(c, y, k) - _w(b, x - y, k) * _w(c, x, k))) / (1 + abs(lhs))
+
+    return max(one(*p) for p in itertools.permutations(range(3)))
+
+
 @register(
     "XYZ-w",
     "Conclusions",
@@ -46,15 +55,10 @@ def _kron(A, B):
 )
 def _w_identity(ctx):
     rng = ctx.rng()
-    worst = mp.mpf(0)
     with mp.workdps(ctx.dps):
-        for _ in range(2 * _NPTS if ctx.full else _NPTS):
-            k = mp.mpf(rng.uniform(0.05, 0.95))
-            x, y = _rnd(rng), _rnd(rng)
-            for a, b, c in itertools.permutations(range(3)):
-                lhs = _w(a, x, k) * _w(b, y, k)
-                rhs = _w(a, x - y, k) * _w(c, y, k) - _w(b, x - y, k) * _w(c, x, k)
-                worst = max(worst, abs(lhs - rhs) / (1 + abs(lhs)))
+        points = [(mp.mpf(rng.uniform(0.05, 0.95)), _rnd(rng), _rnd(rng))
+                  for _ in range(2 * _NPTS if ctx.full else _NPTS)]
+        worst = max(_w_defect(k, x, y) for k, x, y in points)
     return Outcome(Verdict.from_residual(worst))
 
 
