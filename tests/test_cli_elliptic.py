@@ -3,8 +3,6 @@ in-process; references are the library's model and map called directly (bit for 
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
@@ -19,52 +17,6 @@ ETA = 1.5 + 0.2j
 X0 = np.round(np.random.default_rng(7).normal(size=9), 3)
 INIT = ",".join(repr(float(v)) for v in X0)
 COMMON = ("--sites", SITES, "--family", "elliptic", "--modulus", "0.6", "--b", "0", "--eta", "1.5+0.2i")
-
-
-def test_orbit_and_init_from(tmp_path, capsys):
-    code, _, err = run_cli(capsys, "orbit", *COMMON, "--init", INIT, "--steps", "6", "--kernel", "numpy",
-                           "--out", tmp_path / "o")
-    assert code == 0, err
-    ref = MODEL.two_point_backlund(ETA).iterate(X0, 6, kernel="numpy")
-    assert np.array_equal(rl.load(tmp_path / "o").X, ref)
-    run = json.loads((tmp_path / "o" / "run.json").read_text())
-    assert run["map"]["family"] == "elliptic" and run["map"]["modulus"] == 0.6
-    assert run["integral_names"][-1] == "c0"
-    code, _, err = run_cli(capsys, "orbit", "--init-from", tmp_path / "o", "--steps", "2", "--kernel", "numpy",
-                           "--out", tmp_path / "o2")
-    assert code == 0, err
-    assert np.array_equal(rl.load(tmp_path / "o2").X, MODEL.two_point_backlund(ETA).iterate(ref[-1], 2))
-
-
-def test_ensemble(tmp_path, capsys):
-    X = np.random.default_rng(8).normal(size=(2, 9))
-    np.savetxt(tmp_path / "in.csv", X, delimiter=",")
-    code, _, err = run_cli(capsys, "ensemble", *COMMON, "--input", tmp_path / "in.csv", "--steps", "3",
-                           "--out", tmp_path / "e")
-    assert code == 0, err
-    d = rl.load(tmp_path / "e")
-    B = MODEL.two_point_backlund(ETA)
-    for k in range(2):
-        assert np.array_equal(d.X[:, k], B.iterate(X[k], 3))
-
-
-def test_flow_compare(tmp_path, capsys):
-    """The flow of G_eta against the map: the CLI's compare.csv distance below 1e-9 (DOP853 at the default rtol)."""
-    code, out, err = run_cli(capsys, "flow", *COMMON, "--init", INIT, "--steps", "2", "--compare",
-                             "--out", tmp_path / "f")
-    assert code == 0, err
-    d = np.loadtxt(tmp_path / "f" / "compare.csv", delimiter=",", skiprows=1)
-    assert np.abs(d[:, 1]).max() < 1e-9
-
-
-def test_info_json(capsys):
-    code, out, err = run_cli(capsys, "info", *COMMON, "--init", INIT, "--json")
-    assert code == 0, err
-    d = json.loads(out)
-    assert d["family"] == "elliptic" and d["modulus"] == 0.6
-    assert [r["name"] for r in d["integrals"]] == MODEL.integral_labels()
-    assert np.allclose([r["value"] for r in d["integrals"]], MODEL.integrals(X0), rtol=1e-15, atol=0)
-    assert np.isclose(complex(*d["nu_default"]), MODEL.nu(X0, ETA), rtol=1e-15, atol=0)
 
 
 @pytest.mark.parametrize("args, words", [
