@@ -22,7 +22,10 @@ rational chains (state ``(..., 3M)``, per site the Lie–Poisson bracket of ``g^
    ``w_a``);
 4. **the gauge rule**: :meth:`Family.real_dressing` returns the coefficients ``c`` of the real two-point map
    from the eigenvectors at ``ξ, ξ̄`` (spectrality ``D(ξ_i) k_i = 0`` leaves a null space; the rule picks the
-   member that makes the map real, Poisson and equal to the time-1 flow of ``G_ξ``).
+   member that makes the map real, Poisson and equal to the time-1 flow of ``G_ξ``);
+5. optionally **the one-point dressing** (:attr:`Family.one_point_refusal` ``None``,
+   :meth:`Family.one_point_normalisation`, :meth:`Family.one_point_dressing`): a dressing whose determinant vanishes
+   at one point ``η`` modulo the periods (trigonometric; the rational family keeps its closed-form route).
 
 Everything else — ``ℓ(λ)``, the integrals as quadratic forms, ``ν`` and its branch rule, ``G_ξ`` and its weights,
 the dressing of the principal parts site by site, the maps, flows, compiled kernels, run layer and CLI — is
@@ -176,6 +179,24 @@ class Family(abc.ABC):
     @abc.abstractmethod
     def dressing_taylor(self, lam0: float, order: int) -> np.ndarray:
         """Taylor coefficients of each ``B_p`` at the real point ``lam0``, shape ``(order, P, 2, 2)``."""
+
+    # ---- the one-point dressing (optional) -----------------------------------------------------------------------
+
+    #: ``None`` when the family has one-point Bäcklund maps (:meth:`one_point_normalisation`,
+    #: :meth:`one_point_dressing`); otherwise the reason it has none, the refusal's message
+    one_point_refusal: str | None = "this family defines no one-point dressing (no one-point map); use the real two-point map"
+
+    def one_point_normalisation(self, b: float, sites: tuple, X: np.ndarray, eta: complex,
+                                inverse: bool) -> np.ndarray:
+        """The entry of the one-point dressing fixed by keeping ``ℓ̃`` of the family's form (rational
+        ``p = S^-/(2b)``; ``q = S^+/(2b)`` for the inverse map), for the states ``X`` ``(B, 3M)``, shape ``(B,)``."""
+        raise NotImplementedError(self.one_point_refusal)
+
+    def one_point_dressing(self, eta: complex, norm: np.ndarray, spec: np.ndarray, inverse: bool) -> np.ndarray:
+        """The coefficients ``c`` ``(B, P)`` of the one-point dressing from :meth:`one_point_normalisation`'s entry
+        ``norm`` and spectrality's ``spec`` (``q = (u(η) − ν)/v(η)``, or ``p = (u(η) − ν)/w(η)`` for the inverse
+        map), as the rational ``K = [[λ − η + pq, p], [q, 1]]`` (``adj K`` for the inverse map)."""
+        raise NotImplementedError(self.one_point_refusal)
 
     @abc.abstractmethod
     def real_dressing(self, xi: complex, k1: np.ndarray, k2: np.ndarray) -> np.ndarray:

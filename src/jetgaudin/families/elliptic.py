@@ -84,6 +84,10 @@ class EllipticFamily(Family):
     constant_integral = "c0"
     dressing_needs_xi = True
     kernel_rule = 2  # jetgaudin.gaudin._family_kernel: the null vector of spectrality
+    one_point_refusal = (
+        "the elliptic (XYZ) family has no one-point map: the determinant of its dressing (Sklyanin's L-operator) is "
+        "an elliptic function of order 2, so its zeros come in pairs (lambda_0 +- x*), and no elliptic function has a "
+        "single zero; use the real two-point map two_point_backlund(eta)")
 
     def __init__(self, modulus: float = 0.5, half_period: str = "0"):
         self.modulus = _jacobi.check_modulus(modulus)

@@ -29,6 +29,11 @@ satisfies ``D(λ + π/γ) = −σ_3 D(λ) σ_3`` like ``ℓ(λ + π/γ) = σ_3 �
 same form.  Spectrality fixes each row up to a factor (a 3-vector cross product per row); the two factors are
 the overall scale (irrelevant) and the rotation gauge ``diag(ρ, 1)``, fixed by the gauge rule of
 :func:`gauge_rule`.
+
+**One-point dressing** (``docs/families.md`` §3.1): ``D = [[s(λ−η)/γ + pq e^{−iγ(λ−η)}, p], [q, e^{−iγ(λ−η)}]]``,
+``s(x) = sin γx``, whose determinant vanishes at ``η`` only (modulo ``π/γ``); ``q`` by spectrality, ``p`` by the
+normalisation at ``Im λ → −∞`` (needs ``b + iγJ ≠ 0``): :meth:`TrigonometricFamily.one_point_normalisation`,
+:meth:`TrigonometricFamily.one_point_dressing`.
 """
 
 from __future__ import annotations
@@ -148,6 +153,51 @@ class TrigonometricFamily(Family):
 
     def real_dressing(self, xi, k1, k2):
         return gauge_rule(self.gamma, xi, k1, k2)
+
+    # ---- one-point dressing (docs/families.md §3.1) ------------------------------------------------------------
+
+    one_point_refusal = None
+
+    def one_point_normalisation(self, b, sites, X, eta, inverse):
+        r"""``p = S_γ^-(η)/(2(b + iγJ))`` (``q = S_γ^+(η)/(2(b + iγJ))`` for the inverse map) with
+        ``S_γ^∓(η) = Σ_j Σ_k e^{iγ(λ_j − η)} (iγ)^k/k! y^{(j)∓}_k``: ``2iγ e^{iγη} S_γ^∓`` is the coefficient of
+        ``e^{−iγλ}`` of ``v`` (``w``) as ``Im λ → −∞``, where ``u → b + iγJ`` (``φ_k(x) → (iγ)^k/k!·2iγ e^{−iγx}``
+        for ``w = γ/sin γx``); ``S_γ → S = Σ_j y^{(j)}_0`` as ``γ → 0``.  Refuses ``b + iγJ = 0``."""
+        from .._errors import InvalidStateError
+
+        g = self.gamma
+        y = X.reshape(X.shape[:-1] + (-1, 3))
+        ys = y[..., 0] + (1j if inverse else -1j) * y[..., 1]  # y^+ or y^-
+        weights = [np.exp(1j * g * (lam_j - eta)) * (1j * g) ** k / factorial(k) for lam_j, N in sites
+                   for k in range(N)]
+        S = ys @ np.array(weights)
+        y0 = y[..., [sum(N for _, N in sites[:j]) for j in range(len(sites))], 2]
+        uinf = b + 1j * g * np.sum(y0, axis=-1)
+        if np.any(np.abs(uinf) <= 1e-12 * (abs(b) + g * np.sum(np.abs(y0), axis=-1))):
+            raise InvalidStateError(
+                "the one-point map of the trigonometric family needs b + i gamma J != 0 (J = sum of the sites' "
+                "y_0^3): its dressing is normalised at Im(lambda) -> -infinity, where L tends to (b + i gamma J) "
+                "sigma_3; give b != 0 (a real state then always qualifies) or a state with J != -i b / gamma")
+        return S / (2.0 * uinf)
+
+    def one_point_dressing(self, eta, norm, spec, inverse):
+        r"""``D = [[s(λ−η)/γ + pq e^{−iγ(λ−η)}, p], [q, e^{−iγ(λ−η)}]]`` (``s = sin γx``; ``adj D`` with the
+        inverse map's ``p``, ``q``): the rational ``K`` with ``λ − η → sin(γ(λ−η))/γ`` and ``1 → e^{−iγ(λ−η)}``;
+        ``det D = e^{−iγ(λ−η)} sin(γ(λ−η)) (1 − 2iγpq)/γ`` (a :class:`SingularStepError` where ``1 − 2iγpq``
+        vanishes: ``det D ≡ 0``)."""
+        from .._errors import SingularStepError
+
+        g = self.gamma
+        p, q = (spec, norm) if inverse else (norm, spec)
+        pq = p * q
+        if np.any(np.abs(1 - 2j * g * pq) <= 1e-12 * (1 + np.abs(2 * g * pq))):
+            raise SingularStepError("one-point step of the trigonometric chain: 1 - 2i gamma p q = 0, the dressing "
+                                    "is degenerate (det D = 0 for every lambda); change eta")
+        e, z = np.exp(1j * g * eta), np.zeros_like(pq)
+        lead, sub = np.full_like(pq, 1 / (2j * g * e)), e * (pq - 1 / (2j * g))  # e^{iγλ}, e^{−iγλ} of s/γ + pq e
+        if inverse:
+            return np.stack([z, np.full_like(pq, e), -p, -q, lead, sub], axis=-1)
+        return np.stack([lead, sub, p, q, z, np.full_like(pq, e)], axis=-1)
 
     def kernel_constants(self, xi):
         g, xb = self.gamma, np.conj(xi)

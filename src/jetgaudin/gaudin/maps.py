@@ -19,7 +19,8 @@ the two-point map, ``p = S^-/(2b)`` with ``S = Σ_i y^{(i)}_0`` for the one-poin
   (:func:`jetgaudin.backlund._dressing.real_two_point_M0`).  ``branch="opposite"`` (``−ν_1``) is the inverse.
 * **One-point map** (eqs. (rr), (ansatz), (hh), (hhh)): ``K = [[λ − η + pq, p], [q, 1]]``,
   ``p = S^-/(2b)``, ``q = (u(η) − ν)/v(η)``; the inverse map uses ``adj K`` with ``q = S̃^+/(2b)``,
-  ``p = (ũ(η) − ν)/w̃(η)``.  Needs ``b ≠ 0``.
+  ``p = (ũ(η) − ν)/w̃(η)``.  Needs ``b ≠ 0``.  Trigonometric family: ``λ − η → sin(γ(λ−η))/γ``,
+  ``1 → e^{−iγ(λ−η)}`` (:mod:`jetgaudin.gaudin._one_point`, where the class lives; re-exported here).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
-from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0, spectral_s
+from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0
 from ..lax import ell_coefficients, state_from_ell
 from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
@@ -47,8 +48,6 @@ __all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
 #: relative size of the would-be residue at eta above which a step is refused (as backlund.maps: round-off
 #: level in exact arithmetic zero; larger means eta is numerically at a branch point)
 _RESIDUAL_TOL = 1e-8
-_E11 = np.array([[1.0, 0.0], [0.0, 0.0]], dtype=complex)
-_E22 = np.array([[0.0, 0.0], [0.0, 1.0]], dtype=complex)
 _ID = np.eye(2, dtype=complex)
 
 
@@ -481,104 +480,6 @@ class ChainTwoPointBacklund(_ChainMap):
         return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
 
-@dataclass(frozen=True)
-class ChainOnePointBacklund(_ChainMap):
-    r"""The complex one-point map ``B_(η, ν)`` of a chain (or its inverse, ``inverse_map=True``); needs ``b ≠ 0``.
-
-    Raises
-    ------
-    InvalidParameterError
-        ``b = 0`` (``p = S^-/(2b)``: the normalisation ``ℓ̃(∞) = ℓ(∞)`` has no solution), ``Re η`` at a site.
-    """
-
-    model: GaudinModel
-    eta: complex
-    branch: Branch = Branch.DEFAULT
-    inverse_map: bool = False
-    backend: Backend = field(default=Backend.AUTO, compare=False)
-    kernel: Backend | str | None = field(default=None, compare=False, repr=False)
-    kind = "chain_one_point"
-    properties: MapProperties = field(
-        default=MapProperties(
-            preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
-        ),
-        init=False,
-        repr=False,
-        compare=False,
-    )
-
-    def __post_init__(self) -> None:
-        _check_model(self.model)
-        if not self.model.family.uniform:
-            raise InvalidParameterError(
-                f"the one-point map is implemented for the rational family only (not {self.model.family.name}); "
-                "use the real two-point map two_point_backlund(eta)")
-        if self.model.b == 0.0:
-            raise InvalidParameterError(
-                "the one-point map needs a nonzero field b (p = S^-/(2b) keeps L(infinity) = b sigma^3); the magnet "
-                "without field (b = 0) has only the real two-point map; give b != 0"
-            )
-        self._init_common()
-        object.__setattr__(self, "inverse_map", bool(self.inverse_map))
-
-    def inverse(self) -> ChainOnePointBacklund:
-        return ChainOnePointBacklund(self.model, self.eta, self.branch, not self.inverse_map)
-
-    def describe(self) -> dict:
-        return {**super().describe(), "inverse_map": self.inverse_map}
-
-    def _setup(self, X, carry):
-        """``(ell, L(η), ν, K0, E, A0, Ea)`` for a 2-D batch ``X`` (``K = λE + K0``, ``adj K = λEa + A0``)."""
-        b = self.model.b
-        ell = ell_coefficients(X, b)
-        parts = ell[..., 1:, :, :]
-        L = _ell_at(self.model, parts, self.eta)
-        u, v, w = L[..., 0, 0], L[..., 0, 1], L[..., 1, 0]
-        nu = _continue(u * u + v * w, self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1))
-        # ℓ's 1/λ coefficient at infinity, [[S3, S^-], [S^+, −S3]]: the y_0 of every site
-        S = np.sum(parts[..., list(self.model.offsets), :, :], axis=-3)
-        if self.inverse_map:
-            q = S[..., 1, 0] / (2.0 * b)
-            p = spectral_s(u, w, v, nu)  # (ũ − ν)/w̃ = −ṽ/(ũ + ν)
-        else:
-            p = S[..., 0, 1] / (2.0 * b)
-            q = spectral_s(u, v, w, nu)
-        M0 = np.empty(p.shape + (2, 2), dtype=complex)
-        M0[..., 0, 0] = -self.eta + p * q
-        M0[..., 0, 1] = p
-        M0[..., 1, 0] = q
-        M0[..., 1, 1] = 1.0
-        if self.inverse_map:
-            return ell, L, nu, adj(M0), _E22, M0, _E11
-        return ell, L, nu, M0, _E11, adj(M0), _E22
-
-    def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
-        """``K(λ)`` at ``X``: ``M = [[λ − η + pq, p], [q, 1]]`` of (ansatz), or ``adj M`` for the inverse map (whose
-        image ``X̃`` has ``ℓ(X̃) = M^{-1} ℓ(X) M``), shape ``(..., 2, 2)``; ``K ℓ(X) = ℓ(X̃) K``."""
-        X = self.model.check_state(X, allow_complex=True)
-        _, _, _, K0, E, _, _ = self._setup(X.reshape(-1, X.shape[-1]), carry)
-        return K0.reshape(X.shape[:-1] + (2, 2)) + np.asarray(lam, dtype=complex)[..., None, None] * E
-
-    def step(self, X, carry=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One step: ``(X̃, ν, zeros)`` with ``X̃`` complex."""
-        X = self.model.check_state(X, allow_complex=True)
-        shape = X.shape
-        X = X.reshape(-1, shape[-1])
-        ell, L, nu, K0, E, A0, Ea = self._setup(X, carry)
-        scale = 1.0 + np.max(np.abs(ell), axis=(-3, -2, -1))
-        res = _residual(K0 + self.eta * E, L, A0 + self.eta * Ea, scale)
-        if np.any(res > _RESIDUAL_TOL):
-            raise SingularStepError(
-                f"one-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
-                f"{np.max(res):.2e}); change eta"
-            )
-        new = dress_parts(self.model, ell[..., 1:, :, :], K0, E, A0, Ea, (self.eta,))
-        out = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
-        if not np.all(np.isfinite(out)):
-            raise SingularStepError("one-point Bäcklund step of the chain produced non-finite values; change eta")
-        return out.reshape(shape), nu.reshape(shape[:-1]), np.zeros(shape[:-1])
-
-
 def _sites(d: dict) -> GaudinModel:
     return GaudinModel.from_description(d)
 
@@ -588,10 +489,7 @@ def _two_point_from(d: dict) -> ChainTwoPointBacklund:
                                  Backend.parse(d.get("backend", "numpy")))
 
 
-def _one_point_from(d: dict) -> ChainOnePointBacklund:
-    return ChainOnePointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
-                                 bool(d.get("inverse_map", False)))
-
-
 register_map("chain_two_point", _two_point_from)
-register_map("chain_one_point", _one_point_from)
+
+# the one-point map lives in its own module (every family's one-point dressing); re-exported here
+from ._one_point import ChainOnePointBacklund  # noqa: E402

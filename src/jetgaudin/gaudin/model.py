@@ -443,8 +443,8 @@ class GaudinModel:
         self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
         kernel: Backend | str | None = None,
     ) -> ChainOnePointBacklund:
-        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`), needs ``b ≠ 0`` and
-        the rational family."""
+        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`): rational family with
+        ``b ≠ 0``, trigonometric with ``b + iγJ ≠ 0`` (``docs/families.md`` §3.1); the elliptic family has none."""
         from .maps import ChainOnePointBacklund
 
         return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
