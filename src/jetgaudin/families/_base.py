@@ -184,7 +184,8 @@ class Family(abc.ABC):
 
     #: ``None`` when the family has one-point Bäcklund maps (:meth:`one_point_normalisation`,
     #: :meth:`one_point_dressing`); otherwise the reason it has none, the refusal's message
-    one_point_refusal: str | None = "this family defines no one-point dressing (no one-point map); use the real two-point map"
+    one_point_refusal: str | None = ("this family defines no one-point dressing (no one-point map); use the real "
+                                     "two-point map")
 
     def one_point_normalisation(self, b: float, sites: tuple, X: np.ndarray, eta: complex,
                                 inverse: bool) -> np.ndarray:

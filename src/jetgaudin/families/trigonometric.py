@@ -170,7 +170,7 @@ class TrigonometricFamily(Family):
         ys = y[..., 0] + (1j if inverse else -1j) * y[..., 1]  # y^+ or y^-
         weights = [np.exp(1j * g * (lam_j - eta)) * (1j * g) ** k / factorial(k) for lam_j, N in sites
                    for k in range(N)]
-        S = ys @ np.array(weights)
+        S = sum(wc * ys[..., c] for c, wc in enumerate(weights))  # term by term: a batch member = its single run
         y0 = y[..., [sum(N for _, N in sites[:j]) for j in range(len(sites))], 2]
         uinf = b + 1j * g * np.sum(y0, axis=-1)
         if np.any(np.abs(uinf) <= 1e-12 * (abs(b) + g * np.sum(np.abs(y0), axis=-1))):
