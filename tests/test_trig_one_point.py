@@ -87,7 +87,7 @@ def test_factorisation_of_the_two_point_map(rng, case):
     """B^inv_(conj xi) o B_xi = R_xi o B_xi^(2): the one-point map at xi, then the inverse one-point map at conj xi (nu
     by the branch rule at the intermediate complex state, which gives conj nu(xi)), is the real two-point map followed
     by the constant rotation R_xi: y^- -> rho y^-, y^+ -> y^+/rho, rho = e^{2 gamma Im xi} (docs/families.md §3.1:
-    derived from q' = e^{i gamma (xi - conj xi)} q and the symmetric gauge).  1e-10 relative: two complex steps whose
+    derived from q' = e^{i gamma (xi - conj xi)} q and the symmetric gauge).  1e-12 relative: two complex steps whose
     dressings have entries ~1/(2 gamma) (measured <= 3e-14).  Without R_xi, or with rho^-1, the states differ by
     O(1): the rotation is not a tolerance artefact."""
     g, b, sites, xi = CASES[case]
@@ -101,7 +101,7 @@ def test_factorisation_of_the_two_point_map(rng, case):
     W = m.two_point_backlund(xi, backend="numpy")(X)
     rho = np.exp(2 * g * xi.imag)
     scale = 1 + np.abs(W).max()
-    assert np.abs(Z - rotate(W, rho)).max() <= 1e-10 * scale
+    assert np.abs(Z - rotate(W, rho)).max() <= 1e-12 * scale
     assert np.abs(Z - W).max() > 1e-2 * scale
     assert np.abs(Z - rotate(W, 1 / rho)).max() > 1e-2 * scale
 
