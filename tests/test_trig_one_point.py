@@ -233,3 +233,23 @@ def test_iterate_batch_and_description(rng):
     assert d["family"] == "trigonometric" and d["gamma"] == m.gamma and d["inverse_map"] is True
     C = jg.map_from_description(d)
     assert C == B and np.array_equal(C(X), B(X))
+
+
+def test_verify_check_can_fail(monkeypatch):
+    """`jetgaudin verify --only Trig-one-point` (50 digits, rebuilt from the definitions) holds, and fails when the
+    two-point gauge has the other sign (rho = -1: the factorisation statement is then false) or when the second map
+    is the forward one-point map instead of the inverse one (the wrong kind of dressing at conj xi)."""
+    import jetgaudin.verify.trigonometric as vt
+    from jetgaudin.verify import run_checks
+
+    (r,) = run_checks(only=["Trig-one-point"])
+    assert r.status == "holds"
+    d = vt._dressing
+    monkeypatch.setattr(vt, "_dressing", lambda k, xi, lam: vt.mp.matrix([[-1, 0], [0, 1]]) * d(k, xi, lam))
+    (r,) = run_checks(only=["Trig-one-point"])
+    assert r.status != "holds"
+    monkeypatch.setattr(vt, "_dressing", d)
+    one = vt._one_point
+    monkeypatch.setattr(vt, "_one_point", lambda res, pos, b, eta, nu, inverse: one(res, pos, b, eta, nu, False))
+    (r,) = run_checks(only=["Trig-one-point"])
+    assert r.status != "holds"

@@ -259,10 +259,11 @@ _MAP = r"""
 - C Sec3-cocycle | Conclusions: a rigid body on an extension of the two-field top's Lie-Poisson structure
 - C Prop1, Prop-Lax, Prop-canonical, mp, 2p | Conclusions: r-matrix formulation, Lax formulation, canonical
   realisation, explicit BTs
-- P Trig-r, Trig-integrals, Trig-gauge | Conclusions: n-body chains from each N-th jet extension with
+- P Trig-r, Trig-integrals, Trig-gauge, Trig-one-point | Conclusions: n-body chains from each N-th jet extension with
   trigonometric and elliptic dependences on the spectral parameter
   reason: announced, not done in the paper; the trigonometric family (XXZ) with jet sites is built and checked by
-  jetgaudin (issue 23: r-matrix, integrals, the gauge rule of its real two-point map); the elliptic one is not yet
+  jetgaudin (issue 23: r-matrix, integrals, the gauge rule of its real two-point map, its one-point maps and their
+  factorisation of it); the elliptic one is not yet
 - P Chain-r, Chain-integrals | Conclusions: n-body chains for each N (done for N = 2 in [MPRS])
   reason: the rational chains of any sites and orders are built and checked (jetgaudin.GaudinModel); the content of
   [MPRS] is cited
