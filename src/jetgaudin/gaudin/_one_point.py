@@ -41,8 +41,17 @@ from ..backlund._dressing import adj, spectral_s
 from ..lax import ell_coefficients, ell_from_xi, state_from_ell
 from ..maps import Backend, Branch, MapProperties, register_map
 from ._dressing import dressing_at, site_series
-from .maps import _RESIDUAL_TOL, _ChainMap, _check_model, _continue, _ell_at, _residual, _sites, dress_parts, \
-    dress_sites
+from .maps import (
+    _RESIDUAL_TOL,
+    _ChainMap,
+    _check_model,
+    _continue,
+    _ell_at,
+    _residual,
+    _sites,
+    dress_parts,
+    dress_sites,
+)
 from .model import GaudinModel
 
 __all__ = ["ChainOnePointBacklund"]

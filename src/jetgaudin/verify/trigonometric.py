@@ -1,6 +1,7 @@
 """Checks for the trigonometric (XXZ) family (issue 23): its r-matrix, its integrals, the gauge rule of its real
-two-point map and its one-point maps with their factorisation of the two-point map.  Not in the paper (its conclusion announces the construction for the trigonometric r-matrix): these
-checks stand beside the paper's, in a section of their own ("XXZ").
+two-point map and its one-point maps with their factorisation of the two-point map.  Not in the paper (its conclusion
+announces the construction for the trigonometric r-matrix): these checks stand beside the paper's, in a section of
+their own ("XXZ").
 
 Everything is rebuilt from the definitions with SymPy and mpmath (the numpy implementation is not imported).
 ``γ = 1`` (``ℓ_γ(λ) = γ ℓ_1(γλ; γλ_j, b/γ)`` is an exact rescaling).  Trigonometric functions are written in
@@ -133,7 +134,8 @@ def _residues(state):
 
 
 def _dressed(D, res, pos):
-    """The residues ``D(λ_j) R_j D(λ_j)^{-1}`` of ``ℓ̃ = D ℓ D^{-1}`` (``D`` a function of ``λ``, regular at the sites)."""
+    """The residues ``D(λ_j) R_j D(λ_j)^{-1}`` of ``ℓ̃ = D ℓ D^{-1}`` (``D`` a function of ``λ``, regular at the
+    sites)."""
     return [D(p) * R * D(p) ** -1 for R, p in zip(res, pos, strict=True)]
 
 
@@ -254,7 +256,8 @@ def _trig_one_point(ctx):
         k = [L[0, 1], nu - L[0, 0]]
         DA, (_, q) = _one_point(R0, pos, b, xi, nu, False)
         R1 = _dressed(DA, R0, pos)
-        res = [mp.norm(DA(xi) * mp.matrix(k)) / mp.norm(DA(xi)), abs(sum(R[0, 0] for R in R1) - sum(R[0, 0] for R in R0))]
+        res = [mp.norm(DA(xi) * mp.matrix(k)) / mp.norm(DA(xi)),
+               abs(sum(R[0, 0] for R in R1) - sum(R[0, 0] for R in R0))]
         for _ in range(2):
             lam = mp.mpc(rand_mpf(rng), rand_mpf(rng, -1, 1))
             Lt = DA(lam) * _rebuild(R0, pos, b, lam) * DA(lam) ** -1
