@@ -18,7 +18,7 @@ import mpmath as mp
 import sympy as sp
 
 from ._registry import Outcome, Verdict, register
-from ._tools import SIGMA, hat, is_zero, linear_identity, lp_bracket, sym_state
+from ._tools import SIGMA, hat, is_zero, linear_identity, lp_bracket, rand_mpf, sym_state
 
 I = sp.I
 E, F = sp.symbols("E F")
@@ -149,6 +149,14 @@ def _rebuild(res, pos, b, lam):
     return out
 
 
+def _random_case(rng):
+    """Three order-1 sites near ``−1, 0, 1``, their spins, ``b`` in ``[0.5, 1.5]`` and ``ξ`` (mpmath, the caller's
+    precision)."""
+    pos = [mp.mpf(-1) + rand_mpf(rng, 0, 0.3), rand_mpf(rng, -0.2, 0.2), 1 + rand_mpf(rng, 0, 0.3)]
+    state = [[rand_mpf(rng) for _ in range(3)] for _ in pos]
+    return pos, state, rand_mpf(rng, 0.5, 1.5), mp.mpc(rand_mpf(rng, 0.3, 0.6), rand_mpf(rng, 0.2, 0.5))
+
+
 def _dressing(k, xi, lam):
     """The gauge rule's closed form ``D(λ)`` (docs/families.md), ``p = |k_1|²``, ``q = |k_2|²``."""
     p, q = abs(k[0]) ** 2, abs(k[1]) ** 2
@@ -171,12 +179,7 @@ def _dressing(k, xi, lam):
 def _trig_gauge(ctx):
     rng = ctx.rng()
     with mp.workdps(ctx.dps):
-        from ._tools import rand_mpf
-
-        pos = [mp.mpf(-1) + rand_mpf(rng, 0, 0.3), rand_mpf(rng, -0.2, 0.2), 1 + rand_mpf(rng, 0, 0.3)]
-        state = [[rand_mpf(rng) for _ in range(3)] for _ in pos]
-        b = rand_mpf(rng, 0.5, 1.5)
-        xi = mp.mpc(rand_mpf(rng, 0.3, 0.6), rand_mpf(rng, 0.2, 0.5))
+        pos, state, b, xi = _random_case(rng)
         L = _lax(state, pos, b, xi)
         nu = mp.sqrt(L[0, 0] ** 2 + L[0, 1] * L[1, 0])
         k = [L[0, 1], nu - L[0, 0]]
@@ -230,26 +233,22 @@ def _one_point(res, pos, b, eta, nu, inverse):
     return D, (p, q)
 
 
-@register(
-    "Trig-one-point",
-    "XXZ",
+#: the statement of Trig-one-point (docs/families.md §3.1)
+_ONE_POINT = (
     "The one-point map of order-1 sites, D(l) = [[sin(l - xi) + pq e^(-i(l - xi)), p], [q, e^(-i(l - xi))]] with "
     "q = (u(xi) - nu)/v(xi), p = sum_j e^(i(l_j - xi)) s_j^- / (2(b + iJ)): D(xi) k = 0, and l~ = D l D^-1 is again a "
     "trigonometric Lax matrix with the same b and J (residues at the sites reproduce it at random l); then the "
     "inverse one-point map (adj D with p' = (u~ - conj nu)/w~, q' = sum_j e^(i(l_j - conj xi)) s~_j^+ / (2(b + iJ))) "
     "at conj xi has q' = e^(i(xi - conj xi)) q, and the composition is the real two-point map (Trig-gauge's D) "
-    "followed by l -> diag(rho, 1) l diag(rho, 1)^-1, rho = e^(2 Im xi)",
-    "50-digit evaluation at random points (3 sites)",
+    "followed by l -> diag(rho, 1) l diag(rho, 1)^-1, rho = e^(2 Im xi)"
 )
+
+
+@register("Trig-one-point", "XXZ", _ONE_POINT, "50-digit evaluation at random points (3 sites)")
 def _trig_one_point(ctx):
     rng = ctx.rng()
     with mp.workdps(ctx.dps):
-        from ._tools import rand_mpf
-
-        pos = [mp.mpf(-1) + rand_mpf(rng, 0, 0.3), rand_mpf(rng, -0.2, 0.2), 1 + rand_mpf(rng, 0, 0.3)]
-        state = [[rand_mpf(rng) for _ in range(3)] for _ in pos]
-        b = rand_mpf(rng, 0.5, 1.5)
-        xi = mp.mpc(rand_mpf(rng, 0.3, 0.6), rand_mpf(rng, 0.2, 0.5))
+        pos, state, b, xi = _random_case(rng)
         R0 = _residues(state)
         L = _lax(state, pos, b, xi)
         nu = mp.sqrt(L[0, 0] ** 2 + L[0, 1] * L[1, 0])
