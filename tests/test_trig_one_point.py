@@ -127,7 +127,7 @@ def _rational_nu_start(b, sites, xi, X, inverse):
 @pytest.mark.parametrize("inverse", [False, True])
 def test_rational_limit_order_one(rng, inverse):
     """gamma -> 0: the trigonometric one-point map tends to the rational one (same sites, b, spins, xi, nu) with
-    error O(gamma): measured log2 ratios 1.01-1.05 for gamma = 0.04 ... 0.005 (within 0.1 of 1).  Unlike the
+    error O(gamma): measured log2 ratios 1.01-1.04 for gamma = 0.04 ... 0.005 (within 0.1 of 1).  Unlike the
     two-point map (order 2) the normalisation point, Im lam -> -infinity, is not on the rational model's finite
     plane: see test_rational_limit_first_order_term."""
     b, sites, xi = 0.9, [(-0.5, 2), (0.8, 1)], 0.3 + 0.45j
@@ -148,7 +148,7 @@ def test_rational_limit_first_order_term(rng, case, inverse):
     """T_gamma = Phi_(gamma F) o T_0 + O(gamma^2), Phi the flow of F = xi J - nu_2 (the inverse map: -F) at the
     rational image, nu(lam) = b + J/lam + nu_2/lam^2 + ... at infinity, nu_2 = (H - J^2/2)/b, H the physical
     Hamiltonian 1/2 sum_i (lam_i h_(i,1) + h_(i,2)): the first-order term is (T_gamma - T_0)/gamma = Pi grad F.  At
-    gamma = 1e-4 the remainder is O(gamma) relative: measured 5e-5 to 1e-4 of |Pi grad F|; asserted 2e-3."""
+    gamma = 1e-4 the remainder is O(gamma) relative: measured 1e-4 to 7.5e-4 of |Pi grad F|; asserted 2e-3."""
     b, sites, xi = [(0.9, [(-0.5, 2), (0.8, 1)], 0.3 + 0.45j), (-1.3, [(-1.0, 1), (0.2, 3), (1.1, 1)], -0.4 - 0.3j),
                     (0.6, [(0.0, 1), (0.7, 1), (1.5, 2)], 1.0 + 0.8j)][case]
     X = rng.normal(size=3 * sum(N for _, N in sites))
@@ -170,7 +170,7 @@ def test_rational_limit_first_order_term(rng, case, inverse):
 @pytest.mark.parametrize("N", [2, 3])
 def test_pole_coalescence_gives_the_jet_site(rng, N):
     """N order-1 sites at lam0 + eps t_i with the moment-matched spins -> one site of order N: the one-point images
-    agree to O(eps) (moments of the image, as for the two-point map; measured ratios 1.9-2.1 per halving of eps)."""
+    agree to O(eps) (moments of the image, as for the two-point map; measured ratios 2.00-2.03 per halving of eps)."""
     g, b, lam0, xi = 0.9, 0.8, 0.2, 1.0 + 0.4j
     y = rng.normal(size=(N, 3))
     jet = GaudinModel(b, [(lam0, N), (-1.1, 1)], family="trigonometric", gamma=g)
