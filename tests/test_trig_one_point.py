@@ -252,3 +252,21 @@ def test_verify_check_can_fail(monkeypatch):
     monkeypatch.setattr(vt, "_one_point", lambda res, pos, b, eta, nu, inverse: one(res, pos, b, eta, nu, False))
     (r,) = run_checks(only=["Trig-one-point"])
     assert r.status != "holds"
+
+
+def test_determinant_formula_and_degenerate_dressing(rng):
+    """The family's one-point dressing has det D = e^{-i gamma x} sin(gamma x)(1 - 2i gamma pq)/gamma, x = lam - eta
+    (forward and inverse forms, random p, q, lam; 1e-13 relative: a few products), and where 1 - 2i gamma pq = 0
+    (det D = 0 identically) a step is refused with a SingularStepError naming it."""
+    g, eta = 0.7, 0.2 + 0.3j
+    fam = GaudinModel(1.0, [(0.0, 1)], family="trigonometric", gamma=g).family
+    p, q = rng.normal(size=(2, 4)) + 1j * rng.normal(size=(2, 4))
+    for inverse in (False, True):
+        c = fam.one_point_dressing(eta, q if inverse else p, p if inverse else q, inverse)
+        for lam in rng.normal(size=3) + 1j * rng.normal(size=3):
+            D = np.einsum("bp,pij->bij", c, fam.dressing_basis(lam))
+            x = lam - eta
+            expected = np.exp(-1j * g * x) * np.sin(g * x) * (1 - 2j * g * p * q) / g
+            assert np.abs(np.linalg.det(D) - expected).max() <= 1e-13 * np.abs(D).max() ** 2
+    with pytest.raises(jg.SingularStepError, match="1 - 2i gamma p q = 0"):
+        fam.one_point_dressing(eta, p, 1 / (2j * g * p), False)
