@@ -152,7 +152,8 @@ class ChainOnePointBacklund(_ChainMap):
 
     def dressing_matrix(self, X, lam, carry=None) -> np.ndarray:
         """``K(λ)`` at ``X``: ``M = [[λ − η + pq, p], [q, 1]]`` of (ansatz), or ``adj M`` for the inverse map (whose
-        image ``X̃`` has ``ℓ(X̃) = M^{-1} ℓ(X) M``), shape ``(..., 2, 2)``; ``K ℓ(X) = ℓ(X̃) K``."""
+        image ``X̃`` has ``ℓ(X̃) = M^{-1} ℓ(X) M``), shape ``(..., 2, 2)``; ``K ℓ(X) = ℓ(X̃) K``.  Other families: the
+        family's ``D(λ)`` (trigonometric: module docstring, ``adj`` of it for the inverse map), scalar ``λ``."""
         X = self.model.check_state(X, allow_complex=True)
         if not self.model.family.uniform:  # D(λ) = Σ_p c_p B_p(λ), scalar λ
             c = self._setup(X.reshape(-1, X.shape[-1]), carry)[3]
