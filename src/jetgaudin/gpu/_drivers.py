@@ -164,16 +164,11 @@ def _record(kernel_s: float, total_s: float, orbits: int, steps: int) -> None:
 
 def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
     """:func:`run_batch` raising :class:`jetgaudin.SingularStepError` (or :class:`jetgaudin.BranchPointError`) for
-    the first failing orbit, as the CPU route's ``iterate_batch``: ``(out (B, S, 3N), final, drift or None,
-    nu_last)``."""
-    from ..backlund.kernels._status import status_error
+    the first failing orbit: the CPU route's ``iterate_batch`` with this driver."""
+    from ..backlund.kernels._drivers import iterate_batch as cpu_iterate_batch
 
-    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise,
-                                                         want_drift)
-    if status.any():
-        i = int(np.flatnonzero(status)[0])
-        raise status_error(status[i], fail[i], i)
-    return out, final, drift, nu_last
+    return cpu_iterate_batch(X, b, eta, nu0, cont, steps, save_every, specialise=specialise, want_drift=want_drift,
+                             runner=run_batch)
 
 
 def run_chain(model, eta, X, nu0, steps: int, save_every: int):
