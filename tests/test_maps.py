@@ -88,7 +88,7 @@ def test_backend_and_kernel_must_agree():
         backend_option("numpy", "compiled")
     with pytest.raises(jg.InvalidParameterError, match="disagree"):
         jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="numpy", kernel="compiled")
-    with pytest.raises(jg.InvalidParameterError, match="must be 'auto', 'numpy' or 'compiled'"):
+    with pytest.raises(jg.InvalidParameterError, match="must be 'auto', 'numpy', 'compiled' or 'gpu'"):
         jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="fast")
 
 

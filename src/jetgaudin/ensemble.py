@@ -138,9 +138,10 @@ class BatchBacklund(Map):
     (arrays ``(B,)``; the carry is ``ν1`` ``(B,)``).  ``backend`` (alias ``kernel``; the rule of
     :mod:`jetgaudin.maps`): ``"auto"`` (the default) and ``"compiled"`` run the compiled kernels
     (:func:`iterate_ensemble`), orbit ``i`` equal to ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ...,
-    backend="compiled")`` bit for bit; ``"numpy"`` the NumPy reference step orbit by orbit (for checks, not
+    backend="compiled")`` bit for bit; ``"gpu"`` the same loop per orbit on the GPU (:mod:`jetgaudin.gpu`; equal to
+    the compiled route to round-off); ``"numpy"`` the NumPy reference step orbit by orbit (for checks, not
     speed), orbit ``i`` equal to ``TwoPointBacklund(b_i, η_i, branch).iterate(X0_i, ..., backend="numpy")``.
-    ``scheduler`` / ``chunk_size``: run each compiled call on a Dask cluster (same bits)."""
+    ``scheduler`` / ``chunk_size``: run each compiled call on a Dask cluster (same bits; not with the GPU)."""
 
     b: np.ndarray
     eta: np.ndarray
@@ -167,6 +168,13 @@ class BatchBacklund(Map):
         object.__setattr__(self, "eta", ee)
         object.__setattr__(self, "branch", Branch.parse(self.branch))
         self._init_backend()
+        if self.scheduler is not None and self.backend is Backend.GPU:
+            raise InvalidParameterError("backend 'gpu' runs on this machine's GPU; it takes no Dask scheduler")
+
+    @property
+    def has_gpu(self) -> bool:
+        """The GPU route (:mod:`jetgaudin.gpu`); not with a Dask scheduler (``AUTO`` then stays on the CPUs)."""
+        return self.scheduler is None
 
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return per_orbit_integrals(X, self.b)
@@ -198,14 +206,15 @@ class BatchBacklund(Map):
         with the carry as given (``None``: each orbit's first step applies the branch rule, as the single-orbit
         map does, so that orbit ``i`` equals it bit for bit)."""
         X = np.asarray(X)
-        if X.size and self.resolved_backend(X, steps) is Backend.COMPILED:
+        if X.size and self.resolved_backend(X, steps) in (Backend.COMPILED, Backend.GPU):
             steps, save_every = check_count(steps, "steps"), check_count(save_every, "save_every", 1)
             return self._compiled_advance(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
 
     def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
         res = iterate_ensemble(X, self.b, self.eta, steps, save_every=save_every, branch=self.branch, nu1=carry,
-                               scheduler=self.scheduler, chunk_size=self.chunk_size)
+                               scheduler=self.scheduler, chunk_size=self.chunk_size,
+                               gpu=self.resolved_backend(X, steps) is Backend.GPU)
         return Advance(rows=res.states[1:], X=res.final, carry=res.nu, imag_max=np.zeros(len(res.final)))
 
     def inverse(self) -> BatchBacklund:
@@ -223,6 +232,11 @@ class BatchBacklund(Map):
 
         if self.backend is Backend.NUMPY:
             return None
+        if self.backend is Backend.GPU or (X is not None and steps is not None
+                                           and self.resolved_backend(X, steps) is Backend.GPU):
+            from .gpu import prepare
+
+            return prepare(9 if X is None else X.shape[-1], notify)
         K = kernels()
         if X is None:
             return K.warmup(notify)
@@ -237,16 +251,20 @@ class BatchBacklund(Map):
                 "branch": self.branch.value, "backend": self.backend.value}
 
 
-def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise):
-    """Run one chunk with the compiled kernels; returns arrays and status (no exception: for Dask)."""
-    from .backlund._compiled import kernels
+def _run_chunk(X, b, eta, nu0, cont, steps, save_every, specialise, gpu=False):
+    """One chunk by the compiled kernels (the GPU's for ``gpu``): arrays and status, no exception (for Dask)."""
+    if gpu:
+        from .gpu import run_batch
+    else:
+        from .backlund._compiled import kernels
 
-    return kernels().run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
+        run_batch = kernels().run_batch
+    return run_batch(X, b, eta, nu0, cont, steps, save_every, specialise)
 
 
 def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="default", nu1=None,
                      scheduler=None, chunk_size: int | None = None, specialise: bool = True,
-                     connect_timeout: float = 30.0) -> EnsembleResult:
+                     connect_timeout: float = 30.0, gpu: bool = False) -> EnsembleResult:
     r"""Iterate the real two-point map ``B_η`` (field ``b e_3``) on every orbit of a batch.
 
     ``X0``: ``(B, 3N)``; ``b``, ``eta``: scalars or arrays ``(B,)``; ``steps``: number of steps;
@@ -256,7 +274,8 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     (``"tcp://host:8786"``) or a ``distributed.Client``; the batch is then split in chunks of
     ``chunk_size`` orbits (default: ``B`` over twice the number of worker threads).
     ``connect_timeout``: seconds to wait for the scheduler.  ``specialise``: use the N = 3 kernel for
-    N = 3 (``False`` forces the generic route; the two agree to round-off).
+    N = 3 (``False`` forces the generic route; the two agree to round-off).  ``gpu``: run the steps on the GPU
+    (:mod:`jetgaudin.gpu`, the same loop per orbit; not with a scheduler).
 
     Raises :class:`jetgaudin.SingularStepError` (or :class:`jetgaudin.BranchPointError`) naming the first
     orbit and step that fail.
@@ -293,8 +312,11 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     else:
         cont = True
         nu0 = _per_orbit(nu1, B, "nu1", complex)
+    if gpu and scheduler is not None:
+        raise InvalidParameterError("gpu=True runs on this machine's GPU; it takes no Dask scheduler")
     if scheduler is None:
-        out, final, drift, nu_last, status, fail = _run_chunk(X, bb, ee, nu0, cont, steps, save_every, specialise)
+        out, final, drift, nu_last, status, fail = _run_chunk(X, bb, ee, nu0, cont, steps, save_every, specialise,
+                                                              gpu)
     else:
         out, final, drift, nu_last, status, fail = _run_dask(
             scheduler, chunk_size, X, bb, ee, nu0, cont, steps, save_every, specialise, connect_timeout

@@ -115,7 +115,8 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
                  max_chunk_bytes: int = 64 << 20, max_chunk_steps: int | None = None, scheduler: Any = None,
                  chunk_size: int | None = None, expect: dict | None = None,
                  progress: Callable[[int, int], None] | None = None, handle_signals: bool = True,
-                 overwrite: bool = False, notify: Callable[[str], None] | None = None) -> _api.RunResult:
+                 overwrite: bool = False, notify: Callable[[str], None] | None = None,
+                 backend: str | None = None) -> _api.RunResult:
     """Iterate an ensemble and stream it into ``out_dir`` (see the module doc).
 
     ``resume=True`` continues the run recorded in ``out_dir`` (``expect``: names of ``run.json["inputs"]`` mapped
@@ -123,6 +124,8 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
     ``distributed.Client`` (each kernel call is split over the cluster by orbits; same bits).  A kernel call holds
     at most ``max_chunk_bytes`` of saved states and at most ``max_chunk_steps`` steps; how the run is cut never
     changes the result.  ``notify(message)``: where the compile messages go (:func:`jetgaudin.run.start`).
+    ``backend``: the map's route for a new run (:class:`jetgaudin.maps.Backend`; ``"gpu"``: :mod:`jetgaudin.gpu`);
+    ``run.json`` records the route taken, which a resume keeps (give ``expect={"backend": ...}`` to check it).
 
     >>> import tempfile, numpy as np
     >>> from jetgaudin.ensemble import sample_on_leaf
@@ -160,7 +163,7 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
         import dataclasses
 
         batch: Any = rs.map
-        m = dataclasses.replace(batch, scheduler=client, chunk_size=chunk_size)
+        m = dataclasses.replace(batch, scheduler=client, chunk_size=chunk_size, backend=backend or "auto")
         return _api.start(dataclasses.replace(rs, map=m), out_dir, overwrite=overwrite, **opts)
     finally:
         if own:

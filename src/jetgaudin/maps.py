@@ -16,7 +16,7 @@ The run layer (:mod:`jetgaudin.run`) drives any map through this surface only:
 **The backend rule** (one for every map, written here once):
 
 * every map takes ``backend=`` (alias ``kernel=``; a :class:`Backend` or its value ``"auto"``, ``"numpy"``,
-  ``"compiled"``) in its constructor and in :meth:`Map.iterate`; the default is ``Backend.AUTO`` everywhere
+  ``"compiled"``, ``"gpu"``) in its constructor and in :meth:`Map.iterate`; the default is ``Backend.AUTO`` everywhere
   (:func:`backend_option`: ``"auto"`` yields to the other name, two different concrete choices are refused);
 * a map *declares* a compiled route by overriding :meth:`Map._compiled_advance` (then :attr:`Map.has_compiled` is
   true) and, optionally, its cost rule :meth:`Map._auto_backend` for ``AUTO`` (default: compiled) and
@@ -25,6 +25,10 @@ The run layer (:mod:`jetgaudin.run`) drives any map through this surface only:
   :meth:`Map.step`), :meth:`Map.with_backend`, :meth:`Map.iterate`;
 * ``backend="compiled"`` for a map without a compiled route is an :class:`InvalidParameterError` at construction
   (:meth:`Map._init_backend`, called by the maps' ``__post_init__``) and in :meth:`Map.iterate`;
+* a map *declares* a GPU route by :attr:`Map.has_gpu` (the top's two-point maps and the chains' two-point map);
+  ``backend="gpu"`` on another map is an :class:`InvalidParameterError`, and where no GPU can run (no
+  ``numba-cuda``, no driver, no GPU) a :class:`jetgaudin.gpu.GPUUnavailableError` naming what is missing;
+  ``AUTO`` takes the GPU only where :func:`jetgaudin.gpu.auto_uses_gpu` says so (:func:`auto_gpu`);
 * the argument order is ``(X, steps)`` everywhere: ``resolved_backend(X, steps)``, ``prepare_kernels(X, steps,
   notify)``; ``prepare_kernels()`` without arguments compiles every kernel the map could need.
 
@@ -55,8 +59,10 @@ __all__ = [
     "Branch",
     "Map",
     "MapProperties",
+    "auto_gpu",
     "backend_option",
     "check_count",
+    "check_gpu",
     "map_from_description",
     "with_resolved_backend",
     "register_map",
@@ -65,21 +71,24 @@ __all__ = [
 
 
 class Backend(StrEnum):
-    """How a map is evaluated: the NumPy reference route, the compiled (Numba) route, or ``AUTO`` (compiled where
-    it pays off; see :func:`jetgaudin.backlund.auto_kernel`)."""
+    """How a map is evaluated: the NumPy reference route, the compiled (Numba) route on the CPU's cores, the GPU
+    route (:mod:`jetgaudin.gpu`: Numba's CUDA target, one thread per orbit), or ``AUTO`` (compiled where it pays
+    off, :func:`jetgaudin.backlund.auto_kernel`; the GPU only where one is present and the work is large,
+    :func:`jetgaudin.gpu.auto_uses_gpu`)."""
 
     NUMPY = "numpy"
     COMPILED = "compiled"
     AUTO = "auto"
+    GPU = "gpu"
 
     @classmethod
     def parse(cls, value: Backend | str) -> Backend:
-        """``Backend`` from an enum member or its value (``"numpy"``, ``"compiled"``, ``"auto"``)."""
+        """``Backend`` from an enum member or its value (``"numpy"``, ``"compiled"``, ``"gpu"``, ``"auto"``)."""
         try:
             return cls(value)
         except ValueError:
             raise InvalidParameterError(
-                f"backend (kernel) must be 'auto', 'numpy' or 'compiled', got {value!r}"
+                f"backend (kernel) must be 'auto', 'numpy', 'compiled' or 'gpu', got {value!r}"
             ) from None
 
 
@@ -163,6 +172,29 @@ def check_count(value: object, name: str, minimum: int = 0) -> int:
     return int(value)
 
 
+def check_gpu(backend: Backend, has_gpu: bool, name: str) -> None:
+    """Refuse ``backend="gpu"`` for a map without a GPU route (:class:`InvalidParameterError`) or where no GPU can
+    run (:class:`jetgaudin.gpu.GPUUnavailableError`, naming what is missing)."""
+    if backend is not Backend.GPU:
+        return
+    if not has_gpu:
+        raise InvalidParameterError(f"{name} has no GPU route: backend (kernel) must be 'auto', 'numpy' or "
+                                    "'compiled', got 'gpu'")
+    from .gpu import require
+
+    require("backend 'gpu'")
+
+
+def auto_gpu(has_gpu: bool, X: Any, steps: Any) -> bool:
+    """Whether ``AUTO`` runs ``steps`` steps of the states ``X`` ``(..., n)`` on the GPU: the map has a GPU route and
+    :func:`jetgaudin.gpu.auto_uses_gpu` says the work pays for it here (never without a GPU)."""
+    if not has_gpu or steps is None:
+        return False
+    from .gpu import auto_uses_gpu
+
+    return auto_uses_gpu(int(np.prod(np.shape(X)[:-1])), int(steps))
+
+
 class Map(abc.ABC):
     """Abstract base of every map ``X ↦ X_new`` on states ``(..., n)`` (see the module doc).
 
@@ -188,6 +220,11 @@ class Map(abc.ABC):
         """Whether the map has a compiled route: it overrides :meth:`_compiled_advance`."""
         return type(self)._compiled_advance is not Map._compiled_advance
 
+    @property
+    def has_gpu(self) -> bool:
+        """Whether the map has a GPU route (``backend="gpu"``; :mod:`jetgaudin.gpu`); none here."""
+        return False
+
     def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
         """The compiled route of :meth:`advance` (maps with one override it; ``X`` non-empty, counts checked)."""
         raise NotImplementedError(f"{type(self).__name__} has no compiled route")
@@ -203,6 +240,8 @@ class Map(abc.ABC):
         b = self.backend
         if b is not Backend.AUTO:
             return b
+        if auto_gpu(self.has_gpu, X, steps):
+            return Backend.GPU
         return self._auto_backend(np.asarray(X), steps) if self.has_compiled else Backend.NUMPY
 
     def _init_backend(self) -> None:
@@ -219,6 +258,7 @@ class Map(abc.ABC):
                 f"{type(self).__name__} has no compiled route: backend (kernel) must be 'auto' or 'numpy', "
                 "got 'compiled'"
             )
+        check_gpu(self.backend, self.has_gpu, type(self).__name__)
 
     def with_backend(self, backend: Backend | str) -> Self:
         """This map with another ``backend`` (the same map when it is unchanged; :class:`InvalidParameterError` for
@@ -226,6 +266,7 @@ class Map(abc.ABC):
         backend = Backend.parse(backend)
         if backend is self.backend:
             return self
+        check_gpu(backend, self.has_gpu, type(self).__name__)
         if not self.has_compiled:  # one route: "auto" and "numpy" are the same map
             if backend is Backend.COMPILED:
                 raise InvalidParameterError(f"{type(self).__name__} has no compiled route: backend (kernel) must be "

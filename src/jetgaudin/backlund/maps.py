@@ -273,6 +273,11 @@ class TwoPointBacklund(Map):
             raise SingularStepError("two-point Bäcklund step produced non-finite values; change eta")
         return Xr.reshape(shape), nu1.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
+    @property
+    def has_gpu(self) -> bool:
+        """The GPU route (:mod:`jetgaudin.gpu`): one thread per orbit, the compiled route's orbit loop."""
+        return True
+
     def _auto_backend(self, X: np.ndarray, steps: int) -> Backend:
         """``AUTO``: :func:`auto_kernel` (compiled when its kernels are loaded, or from 2000 orbit-steps on when
         Numba's cache holds them, or from 20000 on when they must first be compiled; NumPy otherwise)."""
@@ -290,9 +295,13 @@ class TwoPointBacklund(Map):
         if self.backend is Backend.NUMPY:
             return None
         K = _compiled.kernels()
-        if X is None:
+        if X is None and self.backend is not Backend.GPU:
             return K.warmup(notify)
-        X, _ = as_state(X)
+        X, _ = as_state(np.zeros(9) if X is None else X)
+        if X.size and self.resolved_backend(X, 1 if steps is None else steps) is Backend.GPU:
+            from ..gpu import prepare
+
+            return prepare(X.shape[-1], notify)
         if X.size == 0 or (steps is not None and self.resolved_backend(X, steps) is not Backend.COMPILED):
             return None
         return K.prepare(X.shape[-1], None if X.ndim == 1 else int(np.prod(X.shape[:-1])), notify=notify,
@@ -310,7 +319,7 @@ class TwoPointBacklund(Map):
             carry = _check_nu(carry, X.shape[:-1], "nu1")
         if X.size == 0:
             return _empty_advance(X, steps, save_every, carry)
-        if self.resolved_backend(X, steps) is Backend.COMPILED:
+        if self.resolved_backend(X, steps) in (Backend.COMPILED, Backend.GPU):
             return self._compiled_advance(X, carry, steps, save_every)
         return step_loop(self, X, carry, steps, save_every)
 
@@ -319,7 +328,8 @@ class TwoPointBacklund(Map):
         return Advance(rows=orbit[1:], X=final, carry=nu, imag_max=np.zeros(X.shape[:-1]))
 
     def _orbit_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> tuple[Any, Any, Any]:
-        """``(orbit (steps//save_every + 1, ..., 3N) including X, final state, ν1)`` by the compiled kernels."""
+        """``(orbit (steps//save_every + 1, ..., 3N) including X, final state, ν1)`` by the compiled kernels (on the
+        GPU for ``backend="gpu"``, or ``AUTO`` resolved to it: :mod:`jetgaudin.gpu`, the same loop per orbit)."""
         K = _compiled.kernels()
         cont = carry is not None
         lead = X.shape[:-1]
@@ -328,11 +338,16 @@ class TwoPointBacklund(Map):
         bb = np.array([self.b]) if B == 1 else np.full(B, self.b)
         ee = np.array([self.eta], dtype=complex) if B == 1 else np.full(B, self.eta, dtype=complex)
         nu0 = np.reshape(carry, -1) if cont else K.nu_default(Xb, bb, ee, self.sheet)
-        if X.ndim == 1:
+        gpu = self.resolved_backend(X, steps) is Backend.GPU
+        if X.ndim == 1 and not gpu:
             out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
                                                  want_drift=False)
             return out, final, np.complex128(nu)
-        out, final, _, nu = K.iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every, want_drift=False)
+        if gpu:
+            from ..gpu import iterate_batch
+        else:
+            iterate_batch = K.iterate_batch
+        out, final, _, nu = iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every, want_drift=False)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
         return orbit, final.reshape(X.shape), nu.reshape(lead)
 
@@ -350,10 +365,13 @@ class TwoPointBacklund(Map):
         ``backend`` (alias ``kernel``; a :class:`~jetgaudin.maps.Backend` or its value; default: the map's
         ``backend``): ``"numpy"`` (the reference route), ``"compiled"`` (Numba kernels, N = 3 with a specialised
         kernel; the same orbits to round-off, ``ν1`` at ``X_0`` by the compiled branch rule; the imaginary residue
-        of the steps is not computed) or ``"auto"`` (:func:`auto_kernel`: compiled when its kernels are already
-        loaded in the process, or from 2000 orbit-steps on when Numba's on-disk cache holds them (loading costs
-        about 1000 NumPy steps), or from 20000 on when they must first be compiled (about 6 s); NumPy
-        otherwise).  Both routes keep the integrals at round-off (``docs/reliability.md``).  A batch
+        of the steps is not computed), ``"gpu"`` (:mod:`jetgaudin.gpu`: the compiled route's loop, one orbit per GPU
+        thread; equal to it to round-off, ~1e-16 relative per step) or ``"auto"`` (:func:`auto_kernel`: compiled when
+        its kernels are already loaded in the process, or from 2000 orbit-steps on when Numba's on-disk cache
+        holds them (loading costs about 1000 NumPy steps), or from 20000 on when they must first be compiled (about
+        6 s); NumPy otherwise; the GPU only where one is present and the call is large,
+        :func:`jetgaudin.gpu.auto_uses_gpu`).  Both routes keep the integrals at round-off (``docs/reliability.md``).
+        A batch
         ``(..., 3N)`` gives, orbit by orbit, the bits of the single-orbit runs (both routes).  The compiled route
         compiles its kernels silently at first use (a library call prints nothing); call :meth:`prepare_kernels`
         first to see it and time it apart (the run layer and the CLI do).
@@ -366,7 +384,7 @@ class TwoPointBacklund(Map):
         c = nu1 if carry is None else carry
         if c is not None:
             c = _check_nu(c, X.shape[:-1], "nu1")
-        if X.size and m.resolved_backend(X, steps) is Backend.COMPILED:  # the kernels write the orbit, X_0 included
+        if X.size and m.resolved_backend(X, steps) in (Backend.COMPILED, Backend.GPU):  # the kernels write X_0 too
             orbit, _, c = m._orbit_compiled(X, c, steps, save_every)
         else:
             adv = m.with_backend(Backend.NUMPY).advance(X, c, steps, save_every)

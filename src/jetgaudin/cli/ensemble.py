@@ -76,6 +76,13 @@ def _read_input(path: Path):
     return read_input(path, MAX_INPUT_BYTES)
 
 
+class EnsembleBackend(StrEnum):
+    auto = "auto"
+    compiled = "compiled"
+    numpy = "numpy"
+    gpu = "gpu"
+
+
 @app.command("ensemble")
 def ensemble_command(
     input: Annotated[
@@ -133,6 +140,10 @@ def ensemble_command(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    backend: Annotated[EnsembleBackend | None, typer.Option(
+        "--backend", help="'compiled' (Numba kernels on all CPU cores), 'gpu' (one thread per orbit on an NVIDIA GPU; "
+        "needs jetgaudin[gpu]), 'numpy' (the reference route, slow) or 'auto' (compiled; the GPU where one is "
+        "present and the run is large) [default: auto]")] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens
@@ -155,8 +166,17 @@ def ensemble_command(
             expect["branch"] = branch.value
         if max_drift is not None:
             expect["max_drift"] = max_drift
+        if backend not in (None, EnsembleBackend.auto):
+            expect["backend"] = backend.value
+        if backend is EnsembleBackend.gpu:
+            if scheduler is not None:
+                raise CliInputError("--backend gpu runs on this machine's GPU; do not give --scheduler")
+            import jetgaudin.gpu as jgpu
+
+            jgpu.require("--backend gpu")  # one line naming what is missing (numba-cuda, a driver, a GPU)
         common: dict[str, Any] = dict(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
-                      checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk)
+                      checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk,
+                      backend=None if backend is None else backend.value)
         source = None  # a chain continues as that chain: its sites and family
         if resume is None and sites is None and init_from_dir is not None and str(init_from_dir).strip():
             source = runlayer.read_run(init_from_dir)
@@ -170,6 +190,7 @@ def ensemble_command(
             out_dir = resume_dir(resume)
             if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
+            common.pop("backend")  # a resume keeps the recorded route (checked against --backend: expect)
             res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
                 None, out_dir, resume=True, expect=expect, progress=bar, notify=compile_message, **common))
         elif sites is not None:
@@ -260,7 +281,7 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
             X0 = ens.sample_chain_on_leaf(model, c, n_orbits, seed=s_seed, scale=d.get("scale", 1.0))
     where = "--input" if input is not None else "--init-from" if init_from_dir is not None else "--casimirs"
     X0 = _chains.check_chain_state(model, X0, where)
-    m = _chains.chain_map(model, ee, expect.get("branch", "default"), None)
+    m = _chains.chain_map(model, ee, expect.get("branch", "default"), common.pop("backend", None))
     with blame(where):
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,

@@ -25,6 +25,8 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 
 from __future__ import annotations
 
+import cmath
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -35,57 +37,50 @@ from ._kernels import _abs2  # first: it applies the Bäcklund kernels' Numba ta
 
 @njit(cache=True)
 def _det3(A, r0, r1, r2, c0, c1, c2):
-    return (A[r0, c0] * (A[r1, c1] * A[r2, c2] - A[r1, c2] * A[r2, c1])
-            - A[r0, c1] * (A[r1, c0] * A[r2, c2] - A[r1, c2] * A[r2, c0])
-            + A[r0, c2] * (A[r1, c0] * A[r2, c1] - A[r1, c1] * A[r2, c0]))
+    return (A[r0][c0] * (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1])
+            - A[r0][c1] * (A[r1][c0] * A[r2][c2] - A[r1][c2] * A[r2][c0])
+            + A[r0][c2] * (A[r1][c0] * A[r2][c1] - A[r1][c1] * A[r2][c0]))
+
+
+@njit(cache=True)
+def _elliptic_rows(k1, k2, w1, w2, w3):
+    """The two rows of the spectrality system for one point: ``B_0 k = k``, ``B_1 k = w1 (k2, k1)``,
+    ``B_2 k = w2 (−i k2, i k1)``, ``B_3 k = w3 (k1, −k2)``."""
+    return (k1, w1 * k2, -1j * w2 * k2, w3 * k1), (k2, w1 * k1, 1j * w2 * k1, -w3 * k2)
 
 
 @njit(cache=True)
 def _elliptic_coefficients(gk, a1, a2, c):
     """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
     ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
-    whose cofactors are largest."""
-    A = np.empty((4, 4), dtype=np.complex128)
-    for h in range(2):
-        if h == 0:
-            k1 = a1
-            k2 = a2
-        else:
-            k1 = -a2.conjugate()
-            k2 = a1.conjugate()
-        w1 = gk[3 * h]
-        w2 = gk[3 * h + 1]
-        w3 = gk[3 * h + 2]
-        A[2 * h, 0] = k1  # B_0 k = k, B_1 k = w1 (k2, k1), B_2 k = w2 (−i k2, i k1), B_3 k = w3 (k1, −k2)
-        A[2 * h + 1, 0] = k2
-        A[2 * h, 1] = w1 * k2
-        A[2 * h + 1, 1] = w1 * k1
-        A[2 * h, 2] = -1j * w2 * k2
-        A[2 * h + 1, 2] = 1j * w2 * k1
-        A[2 * h, 3] = w3 * k1
-        A[2 * h + 1, 3] = -w3 * k2
+    whose cofactors are largest.  Tuples, no arrays: the GPU kernel (:mod:`jetgaudin.gpu`) compiles it too."""
+    A0, A1 = _elliptic_rows(a1, a2, gk[0], gk[1], gk[2])
+    A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk[3], gk[4], gk[5])
+    A = (A0, A1, A2, A3)
+    rn = (_abs2(A0[0]) + _abs2(A0[1]) + _abs2(A0[2]) + _abs2(A0[3]),
+          _abs2(A1[0]) + _abs2(A1[1]) + _abs2(A1[2]) + _abs2(A1[3]),
+          _abs2(A2[0]) + _abs2(A2[1]) + _abs2(A2[2]) + _abs2(A2[3]),
+          _abs2(A3[0]) + _abs2(A3[1]) + _abs2(A3[2]) + _abs2(A3[3]))
     best = -1.0
-    n = np.empty(4, dtype=np.complex128)
-    rn = np.empty(4)
-    for q in range(4):
-        rn[q] = _abs2(A[q, 0]) + _abs2(A[q, 1]) + _abs2(A[q, 2]) + _abs2(A[q, 3])
     for i in range(4):
         skip = 3 - i  # rows 0, 1, 2 first; the others only when their cofactors are small (Hadamard-relative)
         r0 = (skip + 1) % 4  # any order of the three rows: the null vector is defined up to a factor
         r1 = (skip + 2) % 4
         r2 = (skip + 3) % 4
-        n[0] = _det3(A, r0, r1, r2, 1, 2, 3)
-        n[1] = -_det3(A, r0, r1, r2, 0, 2, 3)
-        n[2] = _det3(A, r0, r1, r2, 0, 1, 3)
-        n[3] = -_det3(A, r0, r1, r2, 0, 1, 2)
-        s = _abs2(n[0]) + _abs2(n[1]) + _abs2(n[2]) + _abs2(n[3])
+        n0 = _det3(A, r0, r1, r2, 1, 2, 3)
+        n1 = -_det3(A, r0, r1, r2, 0, 2, 3)
+        n2 = _det3(A, r0, r1, r2, 0, 1, 3)
+        n3 = -_det3(A, r0, r1, r2, 0, 1, 2)
+        s = _abs2(n0) + _abs2(n1) + _abs2(n2) + _abs2(n3)
         if s > best:
             best = s
-            for q in range(4):
-                c[q] = n[q]
+            c[0] = n0
+            c[1] = n1
+            c[2] = n2
+            c[3] = n3
         if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
             break
-    scale = 1.0 / np.sqrt(best)
+    scale = 1.0 / math.sqrt(best)
     for q in range(4):
         c[q] *= scale
 
@@ -138,7 +133,7 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
     u = x3
     v = x1 - 1j * x2
     w = x1 + 1j * x2
-    r = np.sqrt(u * u + v * w)
+    r = cmath.sqrt(u * u + v * w)
     if (r.conjugate() * nu_prev).real < 0:
         r = -r
     # eigenvector of ℓ(ξ) for ν: (v, ν − u) or (u + ν, w), whichever is larger (backlund._dressing.eigenvector)
@@ -202,27 +197,41 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
 
 
 @njit(cache=True)
-def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
-    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
-    n = x0.shape[0]
-    rows = np.empty((steps // save_every + 1, n))
-    rows[0] = x0
-    x = x0.copy()
-    y = np.empty(n)
-    Nmax = T.shape[1]
-    c = np.zeros(n_basis, dtype=np.complex128)
-    Dt = np.empty((Nmax, 4), dtype=np.complex128)
-    At = np.empty((Nmax, 4), dtype=np.complex128)
-    det = np.empty(Nmax, dtype=np.complex128)
-    g = np.empty(Nmax, dtype=np.complex128)
-    P = np.empty((Nmax, 4), dtype=np.complex128)
-    nu = nu0
+def orbit_loop(x, y, rows, final, b, nu, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P, steps,
+               save_every):
+    """The stepping loop of :func:`run_orbit` on caller-given scratch, without allocations (the GPU kernel of
+    :mod:`jetgaudin.gpu` calls it for one orbit per thread, compiled for the device, with thread-local scratch):
+    ``x`` (3M,) holds the start state and ``y`` (3M,) is scratch (both overwritten), ``rows[j] = x_{j·save_every}``,
+    ``final`` the last state; ``c`` (P,) zeroed, ``Dt, At, P`` (Nmax, 4), ``det, g`` (Nmax,).  Returns the last
+    ``ν1``."""
+    n = x.shape[0]
+    for i in range(n):
+        rows[0, i] = x[i]
     for s in range(steps):
         nu = _step(x, y, b, nu, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P)
         x, y = y, x
         if (s + 1) % save_every == 0:
-            rows[(s + 1) // save_every] = x
-    return rows, x, nu
+            j = (s + 1) // save_every
+            for i in range(n):
+                rows[j, i] = x[i]
+    for i in range(n):
+        final[i] = x[i]
+    return nu
+
+
+@njit(cache=True)
+def run_orbit(x0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps, save_every):
+    """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``
+    (:func:`orbit_loop`)."""
+    n = x0.shape[0]
+    rows = np.empty((steps // save_every + 1, n))
+    final = np.empty(n)
+    Nmax = T.shape[1]
+    nu = orbit_loop(x0.copy(), np.empty(n), rows, final, b, nu0, f, rule, gk, T, pidx, site_off, site_n,
+                    np.zeros(n_basis, dtype=np.complex128), np.empty((Nmax, 4), dtype=np.complex128),
+                    np.empty((Nmax, 4), dtype=np.complex128), np.empty(Nmax, dtype=np.complex128),
+                    np.empty(Nmax, dtype=np.complex128), np.empty((Nmax, 4), dtype=np.complex128), steps, save_every)
+    return rows, final, nu
 
 
 @njit(cache=True, parallel=True)

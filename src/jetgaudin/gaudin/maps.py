@@ -38,7 +38,8 @@ from .._validate import spectral_parameter
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0
 from ..lax import ell_coefficients, state_from_ell
 from ..lax import ell_from_xi as _matrix
-from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, register_map, step_loop
+from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, check_gpu, register_map, step_loop
+from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
 from ._curve import _component_poles, nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
@@ -49,26 +50,6 @@ __all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
 #: level in exact arithmetic zero; larger means eta is numerically at a branch point)
 _RESIDUAL_TOL = 1e-8
 _ID = np.eye(2, dtype=complex)
-
-
-#: ``Backend.AUTO`` runs the compiled kernel from this many orbit-steps on (compiling it costs a few seconds
-#: the first time, ~10^4 NumPy steps of a small chain; Numba caches it on disk afterwards)
-_AUTO_MIN_WORK = 20000
-#: expected first-use compile time of the chain kernel (seconds, idle core of docs/performance.md's machine)
-_CHAIN_COMPILE_S = 10.0
-
-
-def resolve_backend(backend: Backend, has_compiled: bool, X, steps: int, kind: str = "map") -> Backend:
-    """The one rule of the chain maps (every family): ``NUMPY`` as given; ``COMPILED`` needs a compiled route
-    (:class:`InvalidParameterError` otherwise); ``AUTO`` is the compiled route from ``_AUTO_MIN_WORK`` orbit-steps
-    on where the map has one, NumPy otherwise."""
-    if backend is Backend.COMPILED and not has_compiled:
-        raise InvalidParameterError(f"the {kind} map of this family has no compiled route; use backend='numpy' or "
-                                    "'auto'")
-    if backend is not Backend.AUTO:
-        return backend
-    work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
-    return Backend.COMPILED if has_compiled and work >= _AUTO_MIN_WORK else Backend.NUMPY
 
 
 @lru_cache(maxsize=64)
@@ -184,6 +165,7 @@ class _ChainMap(Map):
         object.__setattr__(self, "branch", Branch.parse(self.branch))
         backend = Backend.parse(self.backend if self.kernel is None else self.kernel)  # kernel=: an alias
         object.__setattr__(self, "backend", backend)
+        check_gpu(backend, self.has_gpu, f"the {self.kind} map of this family")  # 'gpu': a route and a GPU
         # the alias is consumed: ``dataclasses.replace(m, backend=...)`` (the run layer's resolution of AUTO) must
         # not be overridden by the constructor's old alias (it was: every chunk resolved AUTO again on its steps)
         object.__setattr__(self, "kernel", None)
@@ -196,7 +178,7 @@ class _ChainMap(Map):
     def resolved_backend(self, X: Any, steps: Any) -> Backend:
         """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
         (:func:`resolve_backend`; the argument order of :meth:`jetgaudin.maps.Map.resolved_backend`)."""
-        return resolve_backend(self.backend, self.has_compiled, X, steps, self.kind)
+        return resolve_backend(self.backend, self.has_compiled, X, steps, self.kind, self.has_gpu)
 
     def with_backend(self, backend=None, kernel=None):
         """This map on another route (``kernel`` an alias of ``backend``; both ``None``: itself)."""
@@ -335,6 +317,11 @@ class ChainTwoPointBacklund(_ChainMap):
         of :mod:`jetgaudin.gaudin._family_kernel` (where the family declares its ``kernel_rule``)."""
         return self.model.family.uniform or self.model.family.kernel_rule is not None
 
+    @property
+    def has_gpu(self) -> bool:
+        """The GPU route (:mod:`jetgaudin.gpu`): the one family kernel's loop, one thread per orbit, every family."""
+        return self.has_compiled
+
     def _kernel(self):
         """``(module name, dispatcher, run(x, ν, steps, save_every))`` of the compiled route."""
         b = float(self.model.b)
@@ -353,9 +340,13 @@ class ChainTwoPointBacklund(_ChainMap):
         nothing when it is loaded already, in Numba's cache (loaded quietly, timed) or the NumPy route is used).
         Returns a ``CompileReport`` or ``None``."""
         if X is None:  # everything it could need: the kernel on one state of the model
-            X, steps = np.ones(self.model.n_state), _AUTO_MIN_WORK
-        if self.resolved_backend(X, _AUTO_MIN_WORK if steps is None else steps) is not Backend.COMPILED \
-                or np.size(X) == 0:
+            X, steps = np.ones(self.model.n_state), AUTO_MIN_WORK
+        route = self.resolved_backend(X, AUTO_MIN_WORK if steps is None else steps)
+        if route is Backend.GPU and np.size(X):
+            from ..gpu import prepare
+
+            return prepare(self.model.n_state, notify, self)
+        if route is not Backend.COMPILED or np.size(X) == 0:
             return None
         from ..backlund._compiled import kernels
 
@@ -365,7 +356,7 @@ class ChainTwoPointBacklund(_ChainMap):
         where = getattr(getattr(disp, "_cache", None), "_cache_path", None)  # Numba's cache directory
         cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, f"{name}.run_orbit-*.nbi")))
         compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
-        return kernels().prepare_call((f"gaudin.{name}.run_orbit",), loaded, _CHAIN_COMPILE_S,
+        return kernels().prepare_call((f"gaudin.{name}.run_orbit",), loaded, CHAIN_COMPILE_S,
                                       lambda: compiled.advance(x0, None, 0), notify, cached)
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1, *,
@@ -379,11 +370,17 @@ class ChainTwoPointBacklund(_ChainMap):
         if backend is not None or kernel is not None:
             return self.with_backend(backend, kernel).advance(X, carry, steps, save_every)
         X, carry, steps, save_every = self._checked(X, carry, steps, save_every)
-        if self.resolved_backend(X, steps) is not Backend.COMPILED or X.size == 0:
+        route = self.resolved_backend(X, steps)
+        if route not in (Backend.COMPILED, Backend.GPU) or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = self._compiled_start(Xb) if carry is None else np.reshape(carry, -1)
+        if route is Backend.GPU:  # the family kernel's loop, one thread per orbit (jetgaudin.gpu)
+            from ..gpu import run_chain
+
+            rows, final, last = run_chain(self.model, self.eta, Xb, nu, steps, save_every)
+            return self._finish(rows, final, last, shape)
         name, _, run_orbit = self._kernel()
         if name == "_family_kernel" and Xb.shape[0] > 1:  # a batch on all cores, each orbit its single run's bits
             from . import _family_kernel

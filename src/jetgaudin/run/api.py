@@ -133,7 +133,14 @@ def inputs_digest(X0: np.ndarray, b: np.ndarray, eta: np.ndarray) -> str:
 def _ensemble_inputs(spec: RunSpec) -> dict:
     b, eta, branch = _batch_params(spec.map, spec.B)
     return {"B": spec.B, "N": spec.n_state // 3, "steps": spec.steps, "save_every": spec.save_every, "branch": branch,
-            "inputs_sha256": inputs_digest(spec.X0, b, eta), "max_drift": spec.limits.max_drift}
+            "inputs_sha256": inputs_digest(spec.X0, b, eta), "max_drift": spec.limits.max_drift,
+            "backend": _route(spec.map).value}
+
+
+def _route(m: Any) -> Backend:
+    """The map's backend (a wrapper's inner map's: :class:`jetgaudin.ensemble.DaskBatch`)."""
+    inner = getattr(m, "inner", None)
+    return (inner if isinstance(inner, Map) else m).backend
 
 
 def _summary(spec: RunSpec) -> Callable[[Health, float], dict]:
@@ -425,7 +432,8 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
             X0, b, eta = np.array(f["X0"]), np.array(f["b"]), np.array(f["eta"])
         if inputs_digest(X0, b, eta) != rec["inputs_sha256"]:
             raise ValueError("the stored X0, b, eta do not match their digest in run.json")
-        m = map_from_description(run["map"]) if "map" in run else BatchBacklund(b, eta, rec["branch"], **map_options)
+        m = map_from_description(run["map"]) if "map" in run else BatchBacklund(
+            b, eta, rec["branch"], backend=rec.get("backend", "auto"), **map_options)  # the recorded route
         if "map" in run and map_options.get("scheduler") is not None:  # a chain ensemble resumed on a cluster
             from ..ensemble import DaskBatch
 

@@ -173,15 +173,16 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_dri
     return out.transpose(1, 0, 2), final, drift if want_drift else None, nu_last, status, fail
 
 
-def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
+def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True, runner=None):
     r"""Run the compiled map on a batch ``X`` (B, 3N) with per-orbit ``b``, ``eta``, ``nu0`` (B,)
-    (``want_drift=False``: no drift pass, ``drift`` is ``None``).
+    (``want_drift=False``: no drift pass, ``drift`` is ``None``; ``runner``: another driver with the arguments and
+    returns of :func:`run_batch`, the GPU's :func:`jetgaudin.gpu.run_batch`).
 
     Returns ``(out (B, S, 3N), final (B, 3N), drift (B, 2N) or None, nu_last (B,))``; raises
     :class:`jetgaudin.SingularStepError` naming the first failing orbit and step.
     """
-    out, final, drift, nu_last, status, fail = run_batch(X, b, eta, nu0, cont, steps, save_every, specialise,
-                                                         want_drift)
+    out, final, drift, nu_last, status, fail = (runner or run_batch)(X, b, eta, nu0, cont, steps, save_every,
+                                                                     specialise, want_drift)
     if status.any():
         i = int(np.flatnonzero(status)[0])
         raise status_error(status[i], fail[i], i)

@@ -173,37 +173,16 @@ def _step_generic(x, N, b, eta, z, d1, d2, inv_d2, bottom_up, nu, cont, eu, ev, 
 
 
 @njit(cache=True, error_model="numpy")
-def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_drift):
-    r"""Iterate the map ``steps`` times from ``x0`` (shape ``(3N,)``), generic route.
-
-    ``nu0``: ``ν1`` for the first step (``cont = False``) or the value to continue from
-    (``cont = True``).  Saves ``x_{j·save_every}`` in ``out[j]`` (``j = 0..steps//save_every``),
-    the last state in ``final``, and ``max_n |I_k(x_n) − I_k(x_0)| / max(1, |I_k(x_0)|)`` over
-    the saved states and the last one in ``drift`` (shape ``(2N,)``; zeros if ``want_drift`` is false).
-    Returns ``(status, step, nu)``: the status code, the failing step (or ``steps``) and the
-    last ``ν1`` used (``nu0`` if ``steps == 0``).
-    """
+def orbit_generic(x0, b, eta, nu0, cont, steps, save_every, out, final, eu, ev, ew, Ru, Rv, Rw, Qu, Qv, Qw, x, xn):
+    """The stepping loop of :func:`run_orbit` on caller-given scratch (``eu`` (N+1,) real; ``ev, ew, Qu, Qv, Qw``
+    (N+1,) and ``Ru, Rv, Rw`` (N+3,) complex, the ``Q`` zeroed; ``x, xn`` (3N,)), without allocations: the GPU kernels
+    of :mod:`jetgaudin.gpu` call it for one orbit per thread, compiled for the device, with thread-local scratch.
+    Writes ``out[j]`` (rows ``0..`` as far as the orbit got) and ``final``; returns ``(status, step, ν1)``."""
     n3 = x0.shape[0]
     N = n3 // 3
-    eu = np.empty(N + 1)
-    ev = np.empty(N + 1, np.complex128)
-    ew = np.empty(N + 1, np.complex128)
-    Ru = np.empty(N + 3, np.complex128)
-    Rv = np.empty(N + 3, np.complex128)
-    Rw = np.empty(N + 3, np.complex128)
-    Qu = np.zeros(N + 1, np.complex128)
-    Qv = np.zeros(N + 1, np.complex128)
-    Qw = np.zeros(N + 1, np.complex128)
-    x = np.empty(n3)
-    xn = np.empty(n3)
-    I0 = np.empty(2 * N)
-    Ib = np.empty(2 * N)
     for i in range(n3):
         x[i] = x0[i]
         out[0, i] = x0[i]
-    _integrals(x, b, N, I0)
-    for k in range(2 * N):
-        drift[k] = 0.0
     z = _cdiv(complex(1.0, 0.0), eta)
     d1, d2, inv_d2, bottom_up = _division_constants(eta)
     nu = nu0
@@ -224,6 +203,32 @@ def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_
         n = steps
     for i in range(n3):
         final[i] = x[i]
+    return status, n, nu
+
+
+@njit(cache=True, error_model="numpy")
+def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_drift):
+    r"""Iterate the map ``steps`` times from ``x0`` (shape ``(3N,)``), generic route.
+
+    ``nu0``: ``ν1`` for the first step (``cont = False``) or the value to continue from
+    (``cont = True``).  Saves ``x_{j·save_every}`` in ``out[j]`` (``j = 0..steps//save_every``),
+    the last state in ``final``, and ``max_n |I_k(x_n) − I_k(x_0)| / max(1, |I_k(x_0)|)`` over
+    the saved states and the last one in ``drift`` (shape ``(2N,)``; zeros if ``want_drift`` is false).
+    Returns ``(status, step, nu)``: the status code, the failing step (or ``steps``) and the
+    last ``ν1`` used (``nu0`` if ``steps == 0``).  The loop is :func:`orbit_generic`.
+    """
+    n3 = x0.shape[0]
+    N = n3 // 3
+    I0 = np.empty(2 * N)
+    Ib = np.empty(2 * N)
+    _integrals(x0, b, N, I0)
+    for k in range(2 * N):
+        drift[k] = 0.0
+    status, n, nu = orbit_generic(
+        x0, b, eta, nu0, cont, steps, save_every, out, final, np.empty(N + 1), np.empty(N + 1, np.complex128),
+        np.empty(N + 1, np.complex128), np.empty(N + 3, np.complex128), np.empty(N + 3, np.complex128),
+        np.empty(N + 3, np.complex128), np.zeros(N + 1, np.complex128), np.zeros(N + 1, np.complex128),
+        np.zeros(N + 1, np.complex128), np.empty(n3), np.empty(n3))
     if want_drift:
         _drift_pass(out, final, n // save_every, b, N, I0, Ib, drift)
     return status, n, nu

@@ -313,17 +313,13 @@ def _step3(x, b, cst, q, nu, nu_sq, inv_2nu, newton):
 
 
 @njit(cache=True, error_model="numpy")
-def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_drift):
-    """:func:`._generic.run_orbit` for ``N = 3`` (``x0`` of shape ``(9,)``) by the real form of :func:`_step3`
-    (equal to the generic route to round-off)."""
-    I0 = np.empty(6)
-    Ib = np.empty(6)
+def orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final):
+    """The stepping loop of :func:`run_orbit3` without allocations (the GPU kernels of :mod:`jetgaudin.gpu` call it
+    for one orbit per thread, compiled for the device): ``out[j] = x_{j·save_every}`` (rows ``0..steps//save_every``
+    as far as the orbit got), ``final`` the last state; returns ``(status, step, ν1)`` as :func:`run_orbit3`."""
     x = (x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8])
     for i in range(9):
         out[0, i] = x0[i]
-    S._integrals(x0, b, 3, I0)
-    for k in range(6):
-        drift[k] = 0.0
     cst = _constants3(eta)
     q = _scale3(x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8], b)
     nu = nu0
@@ -348,6 +344,19 @@ def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want
         n = steps
     for i in range(9):
         final[i] = x[i]
+    return status, n, nu
+
+
+@njit(cache=True, error_model="numpy")
+def run_orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_drift):
+    """:func:`._generic.run_orbit` for ``N = 3`` (``x0`` of shape ``(9,)``) by the real form of :func:`_step3`
+    (equal to the generic route to round-off): :func:`orbit3`, then the drift pass."""
+    I0 = np.empty(6)
+    Ib = np.empty(6)
+    S._integrals(x0, b, 3, I0)
+    for k in range(6):
+        drift[k] = 0.0
+    status, n, nu = orbit3(x0, b, eta, nu0, cont, steps, save_every, out, final)
     if want_drift:
         # out[:, :] has Numba's layout 'A', as the lanes' strided rows: one compiled drift pass serves both
         S._drift_pass(out[:, :], final, n // save_every, b, 3, I0, Ib, drift)
