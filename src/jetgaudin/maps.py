@@ -76,9 +76,13 @@ class Backend(StrEnum):
     off, :func:`jetgaudin.backlund.auto_kernel`; the GPU only where one is present and the work is large,
     :func:`jetgaudin.gpu.auto_uses_gpu`)."""
 
+    #: the NumPy reference route (every map)
     NUMPY = "numpy"
+    #: the Numba kernels on the CPU's cores (maps with :attr:`Map.has_compiled`)
     COMPILED = "compiled"
+    #: the cheapest route for the work at hand (:meth:`Map.resolved_backend`)
     AUTO = "auto"
+    #: one orbit per thread of an NVIDIA GPU (maps with :attr:`Map.has_gpu`; :mod:`jetgaudin.gpu`)
     GPU = "gpu"
 
     @classmethod

@@ -32,7 +32,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
-from ._kernels import _abs2  # first: it applies the Bäcklund kernels' Numba target (``_target.configure``)
+from ._kernels import _abs2, _put_site  # first: it applies the Bäcklund kernels' Numba target (``_target.configure``)
 
 
 @njit(cache=True)
@@ -189,10 +189,7 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
                         s00 += ge * (k00 * At[cc, 0] + k01 * At[cc, 2])
                         s01 += ge * (k00 * At[cc, 1] + k01 * At[cc, 3])
                         s10 += ge * (k10 * At[cc, 0] + k11 * At[cc, 2])
-            ck = o + k
-            out[3 * ck] = 0.5 * (s01.real + s10.real)
-            out[3 * ck + 1] = 0.5 * (s10.imag - s01.imag)
-            out[3 * ck + 2] = s00.real
+            _put_site(out, o + k, s00, s01, s10)
     return r
 
 
@@ -300,7 +297,7 @@ def segment_constants(model, eta, n: int = SEGMENT_STEPS) -> np.ndarray:
     return F
 
 
-@njit(cache=True)
+@njit(cache=True, parallel=True)
 def branch_rule(X, b, F, sheet):
     r"""The branch rule of ``ν(η)`` compiled, for every family: for each state ``X[i]`` (real, (B, 3M)) the root
     ``√ν²(t_0) > 0`` at ``t_0 = Re η`` continued over the points ``t_k`` of :func:`segment_constants`, each time
@@ -314,7 +311,7 @@ def branch_rule(X, b, F, sheet):
     K = F.shape[0]
     nu = np.empty(B, dtype=np.complex128)
     ok = np.ones(B, dtype=np.bool_)
-    for i in range(B):
+    for i in prange(B):  # the orbits on all cores (each its own arithmetic: the same bits on any number of threads)
         v = 0j
         for k in range(K):
             x1 = 0j

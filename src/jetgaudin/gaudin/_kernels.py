@@ -44,6 +44,15 @@ def _add_scaled(s00, s01, s10, s11, gd, w, j):
     return s00 + gd * w[j, 0], s01 + gd * w[j, 1], s10 + gd * w[j, 2], s11 + gd * w[j, 3]
 
 
+@njit(cache=True, inline="always")
+def _put_site(out, c, s00, s01, s10):
+    """Coordinate ``c`` of the new state from ``ℓ̃_c = [[s00, s01], [s10, −s00]]`` (``state_from_ell``, real part):
+    ``y¹ = Re(s01 + s10)/2``, ``y² = Im(s10 − s01)/2``, ``y³ = Re s00``; every chain kernel stores its steps so."""
+    out[3 * c] = 0.5 * (s01.real + s10.real)
+    out[3 * c + 1] = 0.5 * (s10.imag - s01.imag)
+    out[3 * c + 2] = s00.real
+
+
 @njit(cache=True)
 def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
@@ -123,10 +132,7 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
                     s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 1], w1, j)
                 if d >= 2:
                     s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 2], wp, j)
-            c = o + k
-            out[3 * c] = 0.5 * (s01.real + s10.real)
-            out[3 * c + 1] = 0.5 * (s10.imag - s01.imag)
-            out[3 * c + 2] = s00.real
+            _put_site(out, o + k, s00, s01, s10)
     return nu
 
 

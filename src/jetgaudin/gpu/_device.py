@@ -24,14 +24,30 @@ class GPUUnavailableError(KernelSetupError):
     """``backend="gpu"`` was asked for where no GPU route can run (no ``numba-cuda``, no CUDA driver, no GPU)."""
 
 
-def simulator() -> bool:
-    """Whether Numba's CUDA simulator is asked for (``NUMBA_ENABLE_CUDASIM`` set and not ``0``)."""
+def _asked() -> bool:
     return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
+
+
+def simulator() -> bool:
+    """Whether Numba's CUDA simulator is on: ``NUMBA_ENABLE_CUDASIM`` set (and not ``0``) as Numba's configuration
+    read it (numba-cuda's configuration is :mod:`numba.core.config`, read when ``numba`` is imported;
+    :func:`cuda` re-reads it when the variable was set later, before ``numba.cuda`` is imported)."""
+    import sys
+
+    config = getattr(sys.modules.get("numba.core.config"), "ENABLE_CUDASIM", None)
+    return _asked() if config is None else bool(config)
 
 
 def cuda() -> ModuleType:
     """``numba.cuda``, imported on first use.  :class:`ImportError` when ``numba-cuda`` (or its CUDA bindings) is
     missing."""
+    import sys
+
+    if _asked() and "numba.cuda" not in sys.modules:
+        from numba.core import config
+
+        if not getattr(config, "ENABLE_CUDASIM", 0):  # set after ``import numba``: Numba re-reads its NUMBA_* variables
+            config.reload_config()
     # numba-cuda (0.2x, on the lent H100/H200 image) still refers to ``np.row_stack``, which NumPy 2.5 removed: alias
     # it to ``np.vstack`` (the same function) before the import, until numba-cuda stops using it
     if not hasattr(np, "row_stack"):

@@ -208,7 +208,8 @@ class Driver:
         steps, every, m = spec.steps, spec.save_every, spec.map
         per_step = m.backend is Backend.NUMPY and getattr(m, "chunk_invariant", True)
         invariant = getattr(m, "chunk_invariant", True)
-        sample_imag = m.backend is Backend.COMPILED and m.properties.real and np.isfinite(spec.limits.max_imag)
+        sample_imag = m.backend in (Backend.COMPILED, Backend.GPU) and m.properties.real and np.isfinite(
+            spec.limits.max_imag)  # the compiled and GPU routes do not compute the residue: sampled per chunk
         L = 1 if per_step else (every * max(1, 256 // every) if not invariant else max(1, (1 << 12) // spec.B))
         failure: str | None = None
         t_ck = time.monotonic()

@@ -9,13 +9,14 @@ records; ``docs/errata.md`` is generated from the checks that declare an :class:
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import inspect
 import random
 import re
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
@@ -126,6 +127,15 @@ class Context:
     def rng(self) -> random.Random:
         """A generator seeded by ``(seed, label)``: every check is reproducible on its own."""
         return random.Random(f"{self.seed}:{self.label}")
+
+    @contextlib.contextmanager
+    def precise(self) -> Iterator[random.Random]:
+        """``with ctx.precise() as rng:`` the check's seeded generator (:meth:`rng`) with mpmath at the run's
+        ``dps`` digits inside the block (the preamble of every high-precision check)."""
+        import mpmath
+
+        with mpmath.workdps(self.dps):
+            yield self.rng()
 
 
 @dataclass(frozen=True)

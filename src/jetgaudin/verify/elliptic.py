@@ -54,8 +54,7 @@ def _w_defect(k, x, y):
     "mpmath (ctx digits), 4 (8 with --full) seeded random complex x, y and moduli k in (0, 1)",
 )
 def _w_identity(ctx):
-    rng = ctx.rng()
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         points = [(mp.mpf(rng.uniform(0.05, 0.95)), _rnd(rng), _rnd(rng))
                   for _ in range(2 * _NPTS if ctx.full else _NPTS)]
         worst = max(_w_defect(k, x, y) for k, x, y in points)
@@ -71,9 +70,8 @@ def _w_identity(ctx):
     "mpmath (ctx digits), seeded random complex spins, lam, mu, k",
 )
 def _r_matrix(ctx):
-    rng = ctx.rng()
     worst = mp.mpf(0)
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         for _ in range(2 if ctx.full else 1):
             k = mp.mpf(rng.uniform(0.1, 0.9))
             pos = [mp.mpf(0), mp.mpf("0.7"), mp.mpf("-1.3")]
@@ -109,8 +107,7 @@ def _zeta(u, k):
     "seeded points (Z by quadrature)",
 )
 def _nu2(ctx):
-    rng = ctx.rng()
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         k = mp.mpf(rng.uniform(0.2, 0.8))
         EK = mp.ellipe(k * k) / mp.ellipk(k * k)
         pos = [mp.mpf(0), mp.mpf("0.8"), mp.mpf("-0.9")]
@@ -152,9 +149,8 @@ def _nu2(ctx):
     "F' = 1 - E/K - ns^2",
 )
 def _clebsch(ctx):
-    rng = ctx.rng()
     worst = mp.mpf(0)
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         k = mp.mpf(rng.uniform(0.2, 0.8))
         EK = mp.ellipe(k * k) / mp.ellipk(k * k)
         co = [mp.taylor(lambda x, a=a: x * _w(a, x, k) if x != 0 else mp.mpf(1), 0, 4) for a in range(3)]

@@ -145,9 +145,8 @@ def _bt_poisson_two(ctx):
     "seeded random points per map and N (120 in all)",
 )
 def _bt_integrals(ctx):
-    rng = ctx.rng()
     worst = mp.mpf(0)
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         for N in NS:
             for _ in range(20 if ctx.full else 8):
                 Xc = _flat(rand_state(rng, N, complex_=True))
@@ -165,8 +164,7 @@ def _bt_integrals(ctx):
 def _bounded_below(ctx, n, value, bound, what):
     """Holds when ``value(rng, k) > bound`` for every ``k < n`` (at ``ctx.dps`` digits, ``rng`` the check's seeded
     source); the note gives the smallest value, called ``what``."""
-    rng = ctx.rng()
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         smallest = min(value(rng, k) for k in range(n))
     return Outcome(Verdict.exact(smallest > bound, f"{what}: {mp.nstr(smallest, 3)}"))
 

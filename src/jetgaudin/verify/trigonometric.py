@@ -177,8 +177,7 @@ def _dressing(k, xi, lam):
     "50-digit evaluation at random points (3 sites)",
 )
 def _trig_gauge(ctx):
-    rng = ctx.rng()
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         pos, state, b, xi = _random_case(rng)
         L = _lax(state, pos, b, xi)
         nu = mp.sqrt(L[0, 0] ** 2 + L[0, 1] * L[1, 0])
@@ -246,8 +245,7 @@ _ONE_POINT = (
 
 @register("Trig-one-point", "XXZ", _ONE_POINT, "50-digit evaluation at random points (3 sites)")
 def _trig_one_point(ctx):
-    rng = ctx.rng()
-    with mp.workdps(ctx.dps):
+    with ctx.precise() as rng:
         pos, state, b, xi = _random_case(rng)
         R0 = _residues(state)
         L = _lax(state, pos, b, xi)
