@@ -449,3 +449,24 @@ def test_slow_health_checks_take_a_bounded_share_of_the_run(tmp_path, monkeypatc
     assert res.state is rl.RunStatus.COMPLETED
     assert sum(spent) <= 0.35 * total, (sum(spent), total, len(spent))
     assert np.array_equal(rl.load(tmp_path / "slow").X[-1], reference(3000)[-1])
+
+
+def test_call_length_grows_when_the_pieces_never_reach_it(tmp_path, monkeypatch):
+    """The driver's call length (about CALL_SECONDS of steps) grows past save_every even when every call is a short
+    piece (up to the save grid, or whole save intervals below the length): it stalled at 14 steps per call for
+    save_every = 7 (the pieces 14 < L = 16 never updated L).  The compiled route does ~10^7 steps/s here, so 0.1 s of
+    steps is far above 1000; the orbit is unchanged (the map is chunk-invariant)."""
+    calls = []
+    advance = jg.TwoPointBacklund.advance
+
+    def spy(self, X, carry, steps, save_every=1):
+        calls.append(steps)
+        return advance(self, X, carry, steps, save_every)
+
+    monkeypatch.setattr(jg.TwoPointBacklund, "advance", spy)
+    res = rl.start(spec(60000, "compiled", every=7), tmp_path / "o")
+    assert res.state is rl.RunStatus.COMPLETED
+    assert max(calls) > 1000, calls[:20]
+    ref = reference(60000, "compiled")
+    d = rl.load(tmp_path / "o")  # the rows every 7 steps and the last state (step 60000 is off the grid)
+    np.testing.assert_array_equal(d.X, np.concatenate([ref[::7], ref[-1:]]))

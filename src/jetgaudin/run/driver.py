@@ -345,8 +345,11 @@ class Driver:
         return failure
 
     def _adapt(self, L: int, k: int, dt: float) -> int:
-        """The next call length: about :data:`CALL_SECONDS` at the measured rate, at most 4x the last one."""
-        if k < L:  # a short piece (grid alignment, end of run): no information on the rate at length L
-            return L
+        """The next call length: about :data:`CALL_SECONDS` at the measured rate, at most 4x the last one.  A short
+        piece (``k < L``: up to the save grid, or whole save intervals below ``L``) may only make ``L`` grow: its
+        rate, with the call's fixed cost spread over fewer steps, underestimates the rate at length ``L``.  (Ignoring
+        short pieces, as before, stalled ``L`` at its first value above ``save_every`` whenever the pieces never
+        reached it: calls of 14 steps for ``save_every = 7`` all run long.)"""
         rate = k / max(dt, 1e-6)
-        return int(max(1, min(4 * L, rate * CALL_SECONDS)))
+        new = int(max(1, min(4 * L, rate * CALL_SECONDS)))
+        return max(L, new) if k < L else new
