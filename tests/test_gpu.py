@@ -204,26 +204,12 @@ def test_cli_ensemble_backend_gpu(tmp_path, monkeypatch):
     assert not (tmp_path / "f").exists()
 
 
-def _interrupt_once(at: int):
-    """A progress callback sending SIGINT to this process once the run passed step ``at`` (the run layer then writes
-    a checkpoint and raises RunInterrupted)."""
-    import signal
-
-    sent = []
-
-    def progress(n, steps):
-        if n >= at and not sent:
-            sent.append(n)
-            os.kill(os.getpid(), signal.SIGINT)
-
-    return progress, sent
-
-
 @pytest.mark.parametrize("kind", ["top", "trigonometric chain"])
 def test_run_layer_interrupt_and_resume_on_the_gpu_bit_for_bit(tmp_path, kind):
     """A run on the GPU route interrupted by SIGINT resumes (replaying its anchor on the GPU route, as ``run.json``
     records it) to the uninterrupted GPU orbit bit for bit."""
     from jetgaudin import run as rl
+    from test_gaudin_run import _interrupt_once
 
     if kind == "top":
         X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], 3, seed=7)
