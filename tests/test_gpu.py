@@ -231,3 +231,19 @@ def test_run_layer_interrupt_and_resume_on_the_gpu_bit_for_bit(tmp_path, kind):
     assert rl.resume(tmp_path / "i").state is rl.RunStatus.COMPLETED
     ref = m.iterate(X0, 40, save_every=4)
     np.testing.assert_array_equal(rl.load(tmp_path / "i").X, ref)
+
+
+def test_a_call_that_does_not_fit_the_gpu_is_refused_before_allocating(monkeypatch):
+    """The device arrays of a call are checked against the GPU's free memory first: one typed line naming the size,
+    not CUDA's out-of-memory error (the simulator reports infinite memory: a GPU with 1 MiB free is faked)."""
+    import jetgaudin.gpu._drivers as drv
+
+    monkeypatch.setattr(drv, "_free_bytes", lambda c: float(2**20))
+    X, b, eta, nu0 = batch(B=200)
+    with pytest.raises(jg.InvalidParameterError, match=r"needs .* GiB on the GPU, which has 0.000977 GiB free"):
+        gpu.run_batch(X, b, eta, nu0, False, 100, 1)
+    gpu.run_batch(X[:2], b[:2], eta[:2], nu0[:2], False, 3, 3)  # a small call fits
+    m = jg.GaudinModel(0.8, [(0.0, 1), (0.9, 2)], family="trigonometric")
+    T = m.two_point_backlund(0.4 + 0.05j, backend="gpu")
+    with pytest.raises(jg.InvalidParameterError, match="on the GPU"):
+        T.advance(np.random.default_rng(0).normal(size=(500, m.n_state)), None, 100)

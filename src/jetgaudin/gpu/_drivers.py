@@ -56,6 +56,21 @@ def _launch(kernel, B: int, args: tuple) -> float:
     return start.elapsed_time(stop) / 1000.0
 
 
+def _free_bytes(c) -> float:
+    """Free memory on the current GPU (bytes; the simulator reports infinity)."""
+    return float(c.current_context().get_memory_info()[0])
+
+
+def _check_fits(c, nbytes: int, what: str) -> None:
+    """:class:`InvalidParameterError` (one line, before anything is allocated) when ``nbytes`` of device arrays
+    would not fit in 90 % of the GPU's free memory."""
+    free = _free_bytes(c)
+    if nbytes > 0.9 * free:
+        raise InvalidParameterError(
+            f"{what} needs {nbytes / 2**30:.3g} GiB on the GPU, which has {free / 2**30:.3g} GiB free: give fewer "
+            "orbits, or save fewer rows per call (a larger save_every, fewer steps)")
+
+
 def _kappa(X: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``κ_1..κ_2N`` (``H_1..H_N, C_1..C_N``) of states ``X`` (..., 3N) with per-orbit ``b`` (...,): the sums of the
     CPU kernels' ``_integrals`` (``κ_m = Σ_{i+j=m} ⟨ξ_i, ξ_j⟩``, ``ξ_0 = b e_3``), in NumPy and without the range
@@ -107,6 +122,7 @@ def run_batch(X, b, eta, nu0, cont, steps, save_every, specialise=True, want_dri
     b = np.ascontiguousarray(np.broadcast_to(b, (B,)), dtype=np.float64)
     eta = np.ascontiguousarray(np.broadcast_to(eta, (B,)), dtype=np.complex128)
     nu0 = np.ascontiguousarray(np.broadcast_to(nu0, (B,)), dtype=np.complex128)
+    _check_fits(c, 8 * B * (n3 * (S + 2) + 7), f"a call of {B} orbits with {S} saved rows")
     t0 = time.perf_counter()
     dX, db, de, dn = (c.to_device(a) for a in (X, b, eta, nu0))
     d_out = c.device_array((S, B, n3))
@@ -142,6 +158,7 @@ def run_chain_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n,
             f"{MAX_BASIS} dressing coefficients; this model has {n // 3}, {T.shape[1]} and {n_basis}: use backend "
             "'compiled'")
     S = int(steps) // int(save_every) + 1
+    _check_fits(c, 8 * B * (n * (S + 2) + 4) + T.nbytes + f.nbytes, f"a call of {B} orbits with {S} saved rows")
     t0 = time.perf_counter()
     args = [c.to_device(np.ascontiguousarray(a)) for a in (X0, np.asarray(nu0, dtype=np.complex128), f, gk, T, pidx,
                                                             site_off, site_n)]
