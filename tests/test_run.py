@@ -470,3 +470,22 @@ def test_call_length_grows_when_the_pieces_never_reach_it(tmp_path, monkeypatch)
     ref = reference(60000, "compiled")
     d = rl.load(tmp_path / "o")  # the rows every 7 steps and the last state (step 60000 is off the grid)
     np.testing.assert_array_equal(d.X, np.concatenate([ref[::7], ref[-1:]]))
+
+
+def test_call_length_grows_past_a_large_fixed_cost_per_call(tmp_path, monkeypatch):
+    """A route whose calls each cost a fixed 0.15 s (above CALL_SECONDS = 0.1 s: copies of 10^6 states to and from a
+    GPU) still gets long calls: the rate k/dt made the next call shorter than the last, one step per call for good
+    (100 calls here, 15 s); the marginal rate, the shortest call taken as the fixed cost, makes it grow."""
+    calls = []
+    advance = jg.TwoPointBacklund.advance
+
+    def slow(self, X, carry, steps, save_every=1):
+        calls.append(steps)
+        time.sleep(0.15)
+        return advance(self, X, carry, steps, save_every)
+
+    monkeypatch.setattr(jg.TwoPointBacklund, "advance", slow)
+    res = rl.start(spec(100, "compiled"), tmp_path / "o")
+    assert res.state is rl.RunStatus.COMPLETED
+    assert len(calls) <= 8, calls
+    np.testing.assert_array_equal(rl.load(tmp_path / "o").X, reference(100, "compiled"))

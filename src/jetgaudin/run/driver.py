@@ -247,6 +247,7 @@ class Driver:
                        else 0)
 
     _L = 1
+    _fixed = float("inf")  # the shortest call's seconds (:meth:`_adapt`)
     _overhead = 0.0  # seconds of the last chunk outside the kernel calls (health checks, append, reference step)
 
     def _chunk(self, sig: SignalFlag, fixed: int | None, sample_imag: bool, per_step: bool) -> str | None:
@@ -345,11 +346,15 @@ class Driver:
         return failure
 
     def _adapt(self, L: int, k: int, dt: float) -> int:
-        """The next call length: about :data:`CALL_SECONDS` at the measured rate, at most 4x the last one.  A short
-        piece (``k < L``: up to the save grid, or whole save intervals below ``L``) may only make ``L`` grow: its
-        rate, with the call's fixed cost spread over fewer steps, underestimates the rate at length ``L``.  (Ignoring
-        short pieces, as before, stalled ``L`` at its first value above ``save_every`` whenever the pieces never
-        reached it: calls of 14 steps for ``save_every = 7`` all run long.)"""
-        rate = k / max(dt, 1e-6)
-        new = int(max(1, min(4 * L, rate * CALL_SECONDS)))
+        """The next call length: about :data:`CALL_SECONDS` of steps at the measured marginal rate (the shortest call's
+        time taken as the fixed cost of a call, so a call lasts that cost plus about CALL_SECONDS), at most 4x the last
+        one.  A short piece (``k < L``: up to the save grid, or whole save intervals below ``L``) may only make ``L``
+        grow: its rate, with the call's fixed cost spread over fewer steps, underestimates the rate at length ``L``.
+        (Ignoring short pieces, as before, stalled ``L`` at its first value above ``save_every`` whenever the pieces
+        never reached it: calls of 14 steps for ``save_every = 7`` all run long.)"""
+        # the marginal rate, the cheapest call so far taken as a call's fixed cost (copies to a GPU, allocations):
+        # the rate k/dt shrank L to one step per call wherever that cost exceeded CALL_SECONDS (10^6 orbits on a GPU)
+        self._fixed = min(self._fixed, dt)
+        work = max(dt - self._fixed, 1e-6)
+        new = int(max(1, min(4 * L, k / work * CALL_SECONDS)))
         return max(L, new) if k < L else new
