@@ -9,6 +9,7 @@ host too (NumPy, over the rows copied back).
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 
@@ -188,13 +189,19 @@ def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, w
                              runner=run_batch)
 
 
+@functools.lru_cache(maxsize=64)
+def _family_constants(model, eta: complex) -> tuple:
+    """The one family kernel's per-``(model, ξ)`` constants, computed once (a run calls chunk by chunk)."""
+    from ..gaudin._family_kernel import orbit_constants
+
+    return orbit_constants(model, eta)
+
+
 def run_chain(model, eta, X, nu0, steps: int, save_every: int):
     """A chain's map (``model``, ``η``) on the batch ``X`` (B, 3M) from ``ν1 = nu0`` on the GPU, with the constants
     of the one family kernel (every family, the rational one included): ``(rows, final, last ν1)`` as
     :func:`run_chain_batch`."""
-    from ..gaudin._family_kernel import orbit_constants
-
-    f, rule, gk, T, pidx, P, site_off, site_n = orbit_constants(model, complex(eta))
+    f, rule, gk, T, pidx, P, site_off, site_n = _family_constants(model, complex(eta))
     return run_chain_batch(X, float(model.b), np.asarray(nu0, dtype=complex), f, rule, gk, T, pidx, P, site_off,
                            site_n, steps, save_every)
 
