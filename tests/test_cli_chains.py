@@ -29,6 +29,18 @@ def one_line_error(code, err, *words):
     return code == 2 and len(lines) == 1 and "Traceback" not in err and all(w in err for w in words)
 
 
+def with_options(base, args):
+    """The command line ``base`` with the option/value pairs of ``args`` set: a later value overrides an option
+    already there, a new option is appended."""
+    base = list(base)
+    for i in range(0, len(args), 2):
+        if args[i] in base:
+            base[base.index(args[i]) + 1] = args[i + 1]
+        else:
+            base += [args[i], args[i + 1]]
+    return base
+
+
 @pytest.fixture(scope="module")
 def orbit_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("chain") / "o"

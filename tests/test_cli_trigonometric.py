@@ -9,7 +9,7 @@ import pytest
 
 from jetgaudin import run as rl
 from jetgaudin.gaudin import GaudinModel
-from test_cli_chains import one_line_error
+from test_cli_chains import one_line_error, with_options
 from test_run import run_cli
 
 SITES = "-0.5:1,0.4:2"
@@ -30,13 +30,7 @@ COMMON = ("--sites", SITES, "--family", "trigonometric", "--gamma", "0.7", "--b"
 def test_bad_input_one_line_exit_2(tmp_path, capsys, args, words):
     base = ["orbit", "--sites", "0:1,1:1", "--family", "trigonometric", "--b", "0.8", "--eta", "0.5+0.3i",
             "--init", "1,0,0.3,0.2,0.1,-0.5", "--steps", "3", "--out", tmp_path / "x"]
-    for i in range(0, len(args), 2):  # later options override
-        j = base.index(args[i]) if args[i] in base else None
-        if j is None:
-            base += [args[i], args[i + 1]]
-        else:
-            base[j + 1] = args[i + 1]
-    code, _, err = run_cli(capsys, *base)
+    code, _, err = run_cli(capsys, *with_options(base, args))
     assert one_line_error(code, err, *words), err
 
 
@@ -55,14 +49,10 @@ def test_run_layer_interrupt_and_resume_bit_for_bit(tmp_path, backend):
     """The run layer drives the trigonometric map like any map: an interrupted run (SIGINT after step 9, chunks of 3)
     resumed from its run.json (the map rebuilt from its description, family and gamma included) equals the
     uninterrupted orbit bit for bit."""
-    from test_gaudin_run import _interrupt_once
+    from test_gaudin_run import interrupt
 
     B = MODEL.two_point_backlund(ETA, kernel=backend)
-    progress, sent = _interrupt_once(9)
-    with pytest.raises(rl.RunInterrupted):
-        rl.start(rl.RunSpec(B, X0, 60, 4, checkpoint_seconds=0.0, program="jetgaudin orbit"), tmp_path / "i",
-                 progress=progress, max_chunk_steps=3)
-    assert sent
+    interrupt(rl.RunSpec(B, X0, 60, 4, checkpoint_seconds=0.0, program="jetgaudin orbit"), tmp_path / "i", 9)
     res = rl.resume(tmp_path / "i")
     assert res.state is rl.RunStatus.COMPLETED
     assert np.array_equal(rl.load(tmp_path / "i").X, B.iterate(X0, 60, save_every=4))

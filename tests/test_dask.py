@@ -130,16 +130,14 @@ def test_interrupted_chain_ensemble_resumes_on_dask_bit_for_bit(cluster, tmp_pat
     from jetgaudin import ensemble_recording as er
     from jetgaudin import run as rl
     from jetgaudin.ensemble import DaskBatch, sample_chain_on_leaf
-    from test_gaudin_run import _interrupt_once
+    from test_gaudin_run import interrupt
 
     model = jg.GaudinModel(0.8, [(-1.0, 1), (0.3, 2)], family="trigonometric", gamma=0.7)
     X0 = sample_chain_on_leaf(model, None, 5, seed=1)
     m = model.two_point_backlund(0.5 + 0.05j, backend="numpy")
     spec = rl.RunSpec(DaskBatch(m, cluster.scheduler_address, 2), X0, 24, 4, program="jetgaudin ensemble")
-    progress, sent = _interrupt_once(9)
-    with pytest.raises(rl.RunInterrupted):
-        rl.start(spec, tmp_path / "r", progress=progress, max_chunk_steps=3)
-    assert sent and rl.read_run(tmp_path / "r")["status"] == "interrupted"
+    interrupt(spec, tmp_path / "r", 9)
+    assert rl.read_run(tmp_path / "r")["status"] == "interrupted"
     calls = _count_dask_calls(monkeypatch)
     res = er.run_ensemble(None, tmp_path / "r", resume=True, scheduler=cluster.scheduler_address, chunk_size=2)
     assert res.status == "completed" and calls

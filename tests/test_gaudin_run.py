@@ -75,15 +75,22 @@ def _interrupt_once(at: int):
     return progress, sent
 
 
+def interrupt(spec, out, at: int, **options):
+    """Start ``spec`` into ``out`` in chunks of 3 steps with a SIGINT once step ``at`` is passed; checks that the
+    signal was sent and the run stopped on it, and returns the :class:`jetgaudin.run.RunInterrupted` raised."""
+    progress, sent = _interrupt_once(at)
+    with pytest.raises(rl.RunInterrupted) as exc:
+        rl.start(spec, out, progress=progress, max_chunk_steps=3, **options)
+    assert sent
+    return exc.value
+
+
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("B", [None, 2])
 def test_interrupted_chain_run_resumes_bit_for_bit(tmp_path, backend, B):
     X0 = states(1)[0] if B is None else states(B)
     out = tmp_path / "i"
-    progress, sent = _interrupt_once(9)
-    with pytest.raises(rl.RunInterrupted) as exc:
-        rl.start(spec(X0, 60, backend, every=4), out, progress=progress, max_chunk_steps=3)
-    assert sent and 0 < exc.value.last_safe_step < 60
+    assert 0 < interrupt(spec(X0, 60, backend, every=4), out, 9).last_safe_step < 60
     assert rl.read_run(out)["status"] == "interrupted"
     res = rl.resume(out)
     assert res.state is rl.RunStatus.COMPLETED

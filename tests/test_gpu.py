@@ -209,7 +209,7 @@ def test_run_layer_interrupt_and_resume_on_the_gpu_bit_for_bit(tmp_path, kind):
     """A run on the GPU route interrupted by SIGINT resumes (replaying its anchor on the GPU route, as ``run.json``
     records it) to the uninterrupted GPU orbit bit for bit."""
     from jetgaudin import run as rl
-    from test_gaudin_run import _interrupt_once
+    from test_gaudin_run import interrupt
 
     if kind == "top":
         X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], 3, seed=7)
@@ -219,10 +219,7 @@ def test_run_layer_interrupt_and_resume_on_the_gpu_bit_for_bit(tmp_path, kind):
         X0 = np.random.default_rng(3).normal(size=(3, model.n_state))
         m = model.two_point_backlund(0.4 + 0.05j, backend="gpu")
     spec = rl.RunSpec(m, X0, 40, 4, rl.HealthLimits(max_drift=1e-6), csv=False, program="jetgaudin ensemble")
-    progress, sent = _interrupt_once(9)
-    with pytest.raises(rl.RunInterrupted) as exc:
-        rl.start(spec, tmp_path / "i", progress=progress, max_chunk_steps=3)
-    assert sent and 0 < exc.value.last_safe_step < 40
+    assert 0 < interrupt(spec, tmp_path / "i", 9).last_safe_step < 40
     run = rl.read_run(tmp_path / "i")
     assert run["status"] == "interrupted"
     # the route is recorded, and a resume rebuilds the map on it (under the simulator the CPU route would give the
