@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import functools
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -31,7 +31,7 @@ class Timing:
     total: float = 0.0
     orbits: int = 0
     steps: int = 0
-    device: str = field(default="")
+    device: str = ""
 
 
 _last = Timing()
@@ -175,9 +175,8 @@ def run_chain_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n,
 
 
 def _record(kernel_s: float, total_s: float, orbits: int, steps: int) -> None:
-    from ._device import probe
-
-    _last.kernel, _last.total, _last.orbits, _last.steps, _last.device = kernel_s, total_s, orbits, steps, probe()[1]
+    _last.kernel, _last.total, _last.orbits, _last.steps = kernel_s, total_s, orbits, steps
+    _last.device = require_name()
 
 
 def iterate_batch(X, b, eta, nu0, cont, steps, save_every, *, specialise=True, want_drift=True):
