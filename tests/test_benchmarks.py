@@ -23,7 +23,8 @@ def _load(name: str):
     return mod
 
 
-@pytest.mark.parametrize("script", ["bench_backlund", "memory_long_run", "before_after", "integrators"])
+@pytest.mark.parametrize("script", ["bench_backlund", "memory_long_run", "before_after", "integrators", "auto_route",
+                                    "chain_drift"])
 def test_every_example_in_the_help_is_accepted(script):
     # issue 11, item 10: the --help text suggested --steps 1e8, which was refused
     mod = _load(script)

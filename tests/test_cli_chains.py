@@ -58,7 +58,7 @@ def main_quiet(*args):
 
 
 def test_orbit_sites_writes_the_chain_orbit(orbit_dir):
-    ref = jg.ChainTwoPointBacklund(MODEL, ETA).iterate(X0, 60)
+    ref = jg.ChainTwoPointBacklund(MODEL, ETA, backend="numpy").iterate(X0, 60)
     d = rl.load(orbit_dir)
     assert np.array_equal(d.X, ref)
     header = (orbit_dir / "orbit.csv").read_text().splitlines()[0].split(",")
@@ -103,9 +103,9 @@ def test_orbit_init_from_a_chain_run(tmp_path, capsys, orbit_dir):
     code, _, err = run_cli(capsys, "orbit", "--init-from", orbit_dir, "--steps", "20", "--kernel", "numpy",
                            "--no-plots", "--out", out)
     assert code == 0, err
-    ref = jg.ChainTwoPointBacklund(MODEL, ETA).iterate(X0, 60)
+    ref = jg.ChainTwoPointBacklund(MODEL, ETA, backend="numpy").iterate(X0, 60)
     # a new run starts the branch rule again at its first state: equal to the map from that state
-    assert np.array_equal(rl.load(out).X, jg.ChainTwoPointBacklund(MODEL, ETA).iterate(ref[-1], 20))
+    assert np.array_equal(rl.load(out).X, jg.ChainTwoPointBacklund(MODEL, ETA, backend="numpy").iterate(ref[-1], 20))
 
 
 def test_single_site_of_order_3_keeps_the_papers_figures(tmp_path, capsys):

@@ -353,7 +353,7 @@ def test_advance_continues_bit_for_bit_and_checks_counts(rng):
     """advance(X, carry, k) pieces chained by their carry equal one call (NumPy route); counts use the run layer's
     rule (check_count)."""
     m = GaudinModel(-0.7, [(-1.0, 2), (0.5, 1)])
-    B = m.two_point_backlund(0.2 + 0.3j)
+    B = m.two_point_backlund(0.2 + 0.3j, kernel="numpy")  # pinned: AUTO may take another route for each piece's size
     X = rng.normal(size=(2, 9))
     full = B.advance(X, None, 7, 2)
     a = B.advance(X, None, 4, 2)

@@ -69,11 +69,14 @@ def test_rational_family_through_the_family_kernel(rng, seed):
     assert np.abs(rows - ref).max() <= 1e-10 * (1 + np.abs(ref).max())
 
 
-def test_backend_rule():
+def test_backend_rule(monkeypatch):
+    from jetgaudin.gaudin import _backend
+
     m = GaudinModel(0.8, [(-0.4, 1), (0.9, 1)], family="trigonometric", gamma=0.7)
     B = m.two_point_backlund(0.5 + 0.2j)
     X = np.array([0.3, -0.2, 0.5, 0.1, 0.4, -0.3])
     assert B.backend is jg.Backend.AUTO and B.has_compiled
+    monkeypatch.setattr(_backend, "kernel_state", lambda family, batch=1: "cold")  # AUTO's cost rule: test_auto_route
     assert B.resolved_backend(X, 10) is jg.Backend.NUMPY
     assert B.resolved_backend(X, 10**6) is jg.Backend.COMPILED
     assert m.two_point_backlund(0.5 + 0.2j, kernel="numpy").resolved_backend(X, 10**6) is jg.Backend.NUMPY

@@ -393,6 +393,15 @@ def compile_message(msg: str) -> None:
     typer.echo(msg, err=True)
 
 
+def route_notice(m, X0, steps) -> None:
+    """One line on stderr naming the route ``--backend auto`` takes where it matters (the map's ``route_notice``:
+    the slow NumPy route of a map that has a compiled one; a compile is announced by the run itself)."""
+    notice = getattr(m, "route_notice", None)
+    text = notice(X0, steps) if notice is not None else None
+    if text:
+        typer.echo(f"{prog()}: {text}", err=True)
+
+
 def timing_text(res) -> str:
     """``<s> s stepping (<rate> steps/s)[; kernels compiled or loaded in <s> s, not in the rate]`` of a
     :class:`jetgaudin.run.RunResult`: the time and rate of this session's stepping (compile/load time excluded).

@@ -42,6 +42,7 @@ from ._common import (
     parse_steps,
     reported_errors,
     resume_dir,
+    route_notice,
     run_with_progress,
     timing_text,
 )
@@ -284,6 +285,7 @@ def orbit(
                 spec = runlayer.RunSpec(m, np.array(X0, dtype=float), expect.get("steps", APPENDIX2_STEPS),
                                         expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
                                         **opts)
+            route_notice(spec.map, spec.X0, spec.steps)
             res = run_with_progress("orbit", progress, lambda bar: runlayer.start(
                 spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar,
                 notify=compile_message))

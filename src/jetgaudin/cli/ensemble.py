@@ -44,6 +44,7 @@ from ._common import (
     parse_steps,
     reported_errors,
     resume_dir,
+    route_notice,
     run_with_progress,
     timing_text,
     to_float,
@@ -286,6 +287,7 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
+    route_notice(m, spec.X0, spec.steps)
     client = None if scheduler is None else ens.dask_client(scheduler)  # one client for the run (the one-body way)
     try:
         if client is not None:  # the orbits split over the cluster (jetgaudin.ensemble.DaskBatch; same bits)

@@ -1,27 +1,135 @@
-"""The backend rule of the chain maps (every family), on top of :mod:`jetgaudin.maps`' one rule (private)."""
+r"""The backend rule of the chain maps (every family), on top of :mod:`jetgaudin.maps`' one rule (private).
+
+``AUTO`` is a choice of cost (both routes keep the integrals at round-off): the route whose *estimated* time is
+smaller, with
+
+* NumPy: ``steps · (F + B·G) · s(M)`` — a fixed cost per step (one vectorised step of the batch) and a cost per
+  orbit, per family (:data:`NUMPY_STEP_S`), ``s(M) = (M + 1)/4`` for a chain of ``M`` components;
+* compiled: the kernels' set-up (nothing when loaded in this process, :data:`LOAD_S` when Numba's cache holds them,
+  :data:`COMPILE_S` when they must be compiled; importing Numba first, :data:`NUMBA_IMPORT_S`, when it is not
+  imported yet) plus :data:`CALL_S` per call and ``B · steps · C · s(M)`` (:data:`COMPILED_STEP_S`).
+
+The constants were measured by ``benchmarks/auto_route.py`` (which also prints, per family, orbit and ensemble, the
+time of the route ``AUTO`` picks against the fastest one); a route is chosen only when its estimate is the smaller,
+so that estimates within a factor √3 of the true times never pick a route 3× slower than the other
+(``tests/test_auto_route.py`` checks the rule, family by family).
+"""
 
 from __future__ import annotations
+
+import glob
+import os
+import sys
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._errors import InvalidParameterError
 from ..maps import Backend, auto_gpu, check_gpu
 
-__all__ = ["AUTO_MIN_WORK", "CHAIN_COMPILE_S", "resolve_backend"]
+__all__ = ["AUTO_MIN_WORK", "CHAIN_COMPILE_S", "RouteCost", "auto_notice", "kernel_state", "resolve_backend",
+           "route_costs"]
 
-#: ``Backend.AUTO`` runs the compiled kernel from this many orbit-steps on (compiling it costs a few seconds
-#: the first time, ~10^4 NumPy steps of a small chain; Numba caches it on disk afterwards)
+#: the work (orbit-steps) :meth:`ChainTwoPointBacklund.prepare_kernels` compiles for when called without arguments
 AUTO_MIN_WORK = 20000
 #: expected first-use compile time of the chain kernel (seconds, idle core of docs/performance.md's machine)
 CHAIN_COMPILE_S = 10.0
 
+#: NumPy route: seconds per step, ``(fixed per step, per orbit)`` at ``M = 3`` (×``(M + 1)/4`` for ``M``
+#: components), measured by ``benchmarks/auto_route.py`` on the project's 2-vCPU machine (AMD EPYC 7B13)
+NUMPY_STEP_S = {"rational": (5e-4, 2e-6), "trigonometric": (7e-4, 3e-6), "elliptic": (2.7e-3, 2e-5)}
+#: a family without an entry here (a new one) is costed as the elliptic one, the slowest
+_DEFAULT_NUMPY = NUMPY_STEP_S["elliptic"]
+#: compiled route: seconds per orbit-step at ``M = 3`` (×``(M + 1)/4``), and per call (the branch rule at the first
+#: state, the constants, the copies)
+COMPILED_STEP_S = 1e-6
+CALL_S = 2e-3
+#: compile time of the kernels a call needs in a fresh cache (seconds): the rational chain kernel (one orbit or a loop
+#: over the batch's orbits), the family kernel for one orbit, and its batch kernel (``prange``: slower to compile);
+#: each includes the compiled branch rule
+COMPILE_S = {"rational": 5.5, "orbit": 7.0, "batch": 27.0}
+#: time to load the same kernels from Numba's cache (seconds), and to import Numba when it is not imported yet
+LOAD_S = {"rational": 0.3, "orbit": 0.3, "batch": 0.6}
+NUMBA_IMPORT_S = 0.5
+
+#: the compiled functions each group of kernels consists of, as ``(module stem, function)``
+_KERNELS = {
+    "rational": (("_kernels", "run_orbit"), ("_family_kernel", "branch_rule")),
+    "orbit": (("_family_kernel", "run_orbit"), ("_family_kernel", "branch_rule")),
+    "batch": (("_family_kernel", "run_batch"), ("_family_kernel", "branch_rule")),
+}
+
+
+def _group(family, batch: int) -> str:
+    if getattr(family, "uniform", False):
+        return "rational"
+    return "batch" if batch > 1 else "orbit"
+
+
+def _loaded(stem: str, func: str) -> bool:
+    mod = sys.modules.get(f"{__package__}.{stem}")
+    return bool(getattr(getattr(mod, func, None), "signatures", None))
+
+
+def _cached(stem: str, func: str) -> bool:
+    """Numba's cache holds an index file of ``stem.func`` (next to the sources, under ``NUMBA_CACHE_DIR`` when set,
+    or the user-wide cache); a wrong guess costs time, never correctness."""
+    user = os.environ.get("NUMBA_CACHE_DIR")
+    dirs = [user] if user else [os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__"),
+                                os.path.expanduser("~/.cache/numba")]
+    pattern = f"{stem}.{func}-*.nbi"
+    return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
+               for d in dirs)
+
+
+def kernel_state(family, batch: int = 1) -> str:
+    """``"loaded"`` (compiled or loaded in this process), ``"cached"`` (in Numba's cache) or ``"cold"`` (to be
+    compiled): the chain kernels a compiled call of ``batch`` orbits of ``family`` needs.  Looks at modules and files
+    only (imports nothing)."""
+    need = _KERNELS[_group(family, batch)]
+    if all(_loaded(*k) for k in need):
+        return "loaded"
+    return "cached" if all(_loaded(*k) or _cached(*k) for k in need) else "cold"
+
+
+@dataclass(frozen=True)
+class RouteCost:
+    """The estimated seconds of ``steps`` steps of ``batch`` orbits on each route (module docstring): ``numpy``;
+    ``compiled`` (set-up included); ``setup`` (the compiled route's compile or load, part of ``compiled``) and the
+    kernels' ``state``."""
+
+    numpy: float
+    compiled: float
+    setup: float
+    state: str
+
+
+def route_costs(family, M: int, batch: int, steps: int, state: str | None = None) -> RouteCost:
+    """:class:`RouteCost` of ``steps`` steps of ``batch`` orbits of a chain of ``M`` components of ``family`` (a
+    :class:`jetgaudin.families.Family`; ``None`` or a family without measured constants: costed as the slowest);
+    ``state``: the kernels' state (default: :func:`kernel_state`, as found now)."""
+    batch = max(1, int(batch))
+    steps = max(0, int(steps))
+    state = kernel_state(family, batch) if state is None else state
+    scale = (int(M) + 1) / 4
+    fixed, per_orbit = NUMPY_STEP_S.get(getattr(family, "name", ""), _DEFAULT_NUMPY)
+    numpy_s = steps * (fixed + batch * per_orbit) * scale
+    group = _group(family, batch)
+    setup = 0.0 if state == "loaded" else (LOAD_S if state == "cached" else COMPILE_S)[group]
+    if state != "loaded" and "numba" not in sys.modules:
+        setup += NUMBA_IMPORT_S
+    compiled_s = setup + (CALL_S if steps else 0.0) + batch * steps * COMPILED_STEP_S * scale
+    return RouteCost(numpy_s, compiled_s, setup, state)
+
 
 def resolve_backend(backend: Backend, has_compiled: bool, X, steps: int, kind: str = "map",
-                    has_gpu: bool = False) -> Backend:
+                    has_gpu: bool = False, family=None, state: str | None = None) -> Backend:
     """The one rule of the chain maps (every family): ``NUMPY`` as given; ``COMPILED`` needs a compiled route
     (:class:`InvalidParameterError` otherwise); ``GPU`` a GPU route and a usable GPU (:func:`jetgaudin.maps.check_gpu`);
-    ``AUTO`` is the GPU where :func:`jetgaudin.maps.auto_gpu` says so, else the compiled route from
-    :data:`AUTO_MIN_WORK` orbit-steps on where the map has one, NumPy otherwise."""
+    ``AUTO`` is the GPU where :func:`jetgaudin.maps.auto_gpu` says so, else, where the map has a compiled route, the
+    route of the smaller estimated time (:func:`route_costs`: the compiled one once its kernels are loaded), NumPy
+    otherwise.  ``family``: the chain's family (``None``: costed as the slowest); ``state``: the kernels' state
+    (default: as found now, :func:`kernel_state`)."""
     if backend is Backend.COMPILED and not has_compiled:
         raise InvalidParameterError(f"the {kind} map of this family has no compiled route; use backend='numpy' or "
                                     "'auto'")
@@ -30,5 +138,29 @@ def resolve_backend(backend: Backend, has_compiled: bool, X, steps: int, kind: s
         return backend
     if auto_gpu(has_gpu, X, steps):
         return Backend.GPU
-    work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
-    return Backend.COMPILED if has_compiled and work >= AUTO_MIN_WORK else Backend.NUMPY
+    if not has_compiled:
+        return Backend.NUMPY
+    cost = _costs(X, steps, family, state)
+    return Backend.COMPILED if cost.compiled <= cost.numpy else Backend.NUMPY
+
+
+def _costs(X, steps, family, state) -> RouteCost:
+    shape = np.shape(X)
+    return route_costs(family, max(1, shape[-1] // 3) if shape else 1, int(np.prod(shape[:-1])) if shape else 1,
+                       0 if steps is None else int(steps), state)
+
+
+def auto_notice(m, X, steps) -> str | None:
+    """One line naming the route ``AUTO`` takes for ``steps`` steps of ``X`` where it matters: the NumPy route of a
+    map that has a compiled one (with both estimates, and the option that forces the other route); ``None`` when the
+    map's backend is not ``AUTO``, has one route only, or takes the compiled route (a compile is announced by
+    :meth:`prepare_kernels` itself)."""
+    if getattr(m, "backend", None) is not Backend.AUTO or not getattr(m, "has_compiled", False):
+        return None
+    if m.resolved_backend(X, steps) is not Backend.NUMPY:
+        return None
+    fam = getattr(getattr(m, "model", None), "family", None)
+    cost = _costs(np.asarray(X), steps, fam, None)
+    why = {"cold": "compiling its kernel", "cached": "loading its kernel"}.get(cost.state, "its set-up")
+    return (f"backend auto: the NumPy route (about {cost.numpy:.2g} s; the compiled route would take about "
+            f"{cost.compiled:.2g} s, {why} included); give --backend compiled to take it")

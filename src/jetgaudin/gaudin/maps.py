@@ -178,7 +178,15 @@ class _ChainMap(Map):
     def resolved_backend(self, X: Any, steps: Any) -> Backend:
         """The backend :meth:`advance` uses for ``steps`` steps of the states ``X`` ``(..., 3M)``
         (:func:`resolve_backend`; the argument order of :meth:`jetgaudin.maps.Map.resolved_backend`)."""
-        return resolve_backend(self.backend, self.has_compiled, X, steps, self.kind, self.has_gpu)
+        return resolve_backend(self.backend, self.has_compiled, X, steps, self.kind, self.has_gpu, self.model.family)
+
+    def route_notice(self, X: Any, steps: Any) -> str | None:
+        """One line naming the route ``AUTO`` takes for ``steps`` steps of ``X`` where it matters (the NumPy route
+        of a map that has a compiled one, with both estimated times; :func:`jetgaudin.gaudin._backend.auto_notice`);
+        ``None`` otherwise (a compile is announced by :meth:`prepare_kernels`)."""
+        from ._backend import auto_notice
+
+        return auto_notice(self, X, steps)
 
     def with_backend(self, backend=None, kernel=None):
         """This map on another route (``kernel`` an alias of ``backend``; both ``None``: itself)."""
