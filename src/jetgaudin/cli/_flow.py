@@ -214,11 +214,13 @@ def parse_hamiltonian(text: str, X0, b: float, model=None) -> tuple[str, np.ndar
         return name, None if name == "interpolating" else np.asarray(
             jg.physical_hamiltonian(len(X0) // 3, b).weights, dtype=float)
     n = 2 * (len(X0) // 3) if model is None else int(model.n_integrals)  # a family's extras (J, c0) last
-    try:
-        w = np.array(cm.parse_init(text, "--hamiltonian"), dtype=float)
-    except cm.CliInputError:
+    try:  # any count (not parse_init's 3N: a chain has 2M integrals plus its family's J or c0)
+        w = np.array([cm.to_float(p.strip(), "--hamiltonian") for p in str(text).split(",")], dtype=float)
+    except ValueError:
         raise cm.CliInputError(f"--hamiltonian: give 'interpolating', 'physical' or {n} comma-separated weights "
                                f"w_1,...,w_{n}, got {text!r}") from None
+    if not np.all(np.isfinite(w)):
+        raise cm.CliInputError(f"--hamiltonian: the weights must be finite, got {text!r}")
     if len(w) != n:
         raise cm.CliInputError(f"--hamiltonian: the state has {n} integrals; give {n} weights w_1,...,w_{n}, got "
                                f"{len(w)}")

@@ -1,0 +1,47 @@
+"""The smaller items of issue 33 on the command line: a chain's weights are not a state (any count, not 3N), the
+route notice of ``--backend auto``, and ``--backend`` on every command that has a route (``--kernel`` its alias)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from jetgaudin.cli._flow import parse_hamiltonian
+from jetgaudin.gaudin import GaudinModel
+from test_cli_chains import one_line_error
+from test_run import run_cli
+
+INIT = "0.72,0.24,-0.54,0.6,0,0.8"
+
+
+@pytest.mark.parametrize("sites, kw", [
+    ([(0.0, 2)], {"family": "elliptic", "modulus": 0.6}),            # the Clebsch top: 2M + 1 = 5 weights
+    ([(-0.5, 1), (0.4, 1)], {"family": "trigonometric", "gamma": 1.0}),  # 2M + J = 5
+])
+def test_a_chain_takes_as_many_weights_as_it_has_integrals(sites, kw):
+    """The weights were parsed as a state (3N numbers), so 5 weights were refused for a model with 5 integrals."""
+    model = GaudinModel(0.0 if kw["family"] == "elliptic" else 1.0, sites, **kw)
+    X0 = np.array([float(v) for v in INIT.split(",")])
+    assert model.n_integrals == 5
+    kind, w = parse_hamiltonian("0.0,0.7,0.0,0.0,1.0", X0, model.b, model)
+    assert kind == "weights" and np.array_equal(w, [0.0, 0.7, 0.0, 0.0, 1.0])
+
+
+def test_flow_with_five_weights_runs_and_records_them(tmp_path, capsys):
+    out = tmp_path / "f"
+    code, _, err = run_cli(capsys, "flow", "--sites", "-0.5:1,0.4:1", "--family", "trigonometric", "--b", "1",
+                           "--hamiltonian", "0.0,0.7,0.0,0.0,1.0", "--init", INIT, "--steps", "2", "--no-plots",
+                           "--out", out)
+    assert code == 0, err
+    assert json.loads((out / "run.json").read_text())["map"]["weights"] == [0.0, 0.7, 0.0, 0.0, 1.0]
+
+
+@pytest.mark.parametrize("text, words", [("0.1,abc,0,0,1", ["--hamiltonian", "5 comma-separated"]),
+                                         ("0.1,inf,0,0,1", ["--hamiltonian", "finite"]),
+                                         ("0.1,0.2", ["--hamiltonian", "give 5 weights"])])
+def test_bad_weights_are_one_line(tmp_path, capsys, text, words):
+    code, _, err = run_cli(capsys, "flow", "--sites", "-0.5:1,0.4:1", "--family", "trigonometric", "--b", "1",
+                           "--hamiltonian", text, "--init", INIT, "--steps", "2", "--no-plots", "--out", tmp_path / "f")
+    assert one_line_error(code, err, *words), err
