@@ -9,6 +9,7 @@ Taylor integrator (``method="heyoka"``, extra ``jetgaudin[heyoka]``).  Returns a
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
@@ -92,21 +93,25 @@ class Trajectory:
 
 
 def _heyoka_system(H: IntegralHamiltonian, n: int):
-    import heyoka as hy
-
     if np.ndim(H.weights) != 1:
         raise InvalidParameterError("the heyoka backend integrates one orbit at a time (1-D weights)")
-    xs = hy.make_vars(*[f"x{i}" for i in range(n)])
     # ∇H is affine in X: ∇H = A X + g0 (A constant), so Π(X)∇H is quadratic
     g0 = H.gradient(np.zeros(n))
     A = np.stack([H.gradient(np.eye(n)[j]) - g0 for j in range(n)], axis=1)
+    return _heyoka_equations(n, g0, A, _structure(H, n))
+
+
+def _heyoka_equations(n: int, g0: np.ndarray, A: np.ndarray, c: np.ndarray):
+    """heyoka's equations ``dx_i/dt = Σ c[i, J, K] x_K (A x + g0)_J`` (:func:`_heyoka_system`)."""
+    import heyoka as hy
+
+    xs = hy.make_vars(*[f"x{i}" for i in range(n)])
     grads = []
     for J in range(n):
         terms = [float(A[J, K]) * xs[K] for K in range(n) if A[J, K] != 0.0]
         if g0[J] != 0.0:
             terms.append(hy.expression(float(g0[J])))
         grads.append(hy.sum(terms) if terms else hy.expression(0.0))
-    c = _structure(H, n)
     rhs = []
     for i in range(n):
         terms = []
@@ -265,7 +270,9 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
             )
         grid = t_eval if t_eval[0] == 0.0 else np.concatenate([[0.0], t_eval])  # heyoka's grid starts at t = 0
         try:
-            ta = hy.taylor_adaptive(_heyoka_system(H, 3 * N), X0.copy(), tol=rtol)
+            ta = _heyoka_integrator(H, 3 * N, rtol)
+            ta.state[:] = X0
+            ta.time = 0.0
             res = ta.propagate_grid(grid)
         except (ValueError, RuntimeError) as exc:
             raise IntegrationError(f"heyoka failed: {exc}") from None
@@ -276,6 +283,32 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
         raise IntegrationError(f"{method} produced non-finite states (the orbit blew up); reduce T or the tolerances")
     recorded = record(Xs) if callable(record) else integrals(Xs, bb, cc)
     return Trajectory(t=t_eval, X=Xs, integrals=recorded, method=method.value)
+
+
+def _heyoka_integrator(H: IntegralHamiltonian, n: int, rtol: float):
+    """A fresh copy of heyoka's integrator of ``H`` on ``n`` components at tolerance ``rtol``: compiled once per
+    Hamiltonian (its equations' coefficients) and tolerance, then copied (~1 ms against 30-150 ms of JIT
+    compilation per call; issue 33)."""
+    if np.ndim(H.weights) != 1:
+        raise InvalidParameterError("the heyoka backend integrates one orbit at a time (1-D weights)")
+    g0 = np.asarray(H.gradient(np.zeros(n)), dtype=float)
+    A = np.stack([np.asarray(H.gradient(np.eye(n)[j]), dtype=float) - g0 for j in range(n)], axis=1)
+    c = np.asarray(_structure(H, n), dtype=float)
+    key = (n, float(rtol), g0.tobytes(), A.tobytes(), c.tobytes())
+    template = _HEYOKA_CACHE.get(key)
+    if template is None:
+        import heyoka as hy
+
+        template = hy.taylor_adaptive(_heyoka_equations(n, g0, A, c), np.zeros(n), tol=rtol)
+        if len(_HEYOKA_CACHE) >= _HEYOKA_CACHE_SIZE:
+            _HEYOKA_CACHE.pop(next(iter(_HEYOKA_CACHE)))  # the oldest
+        _HEYOKA_CACHE[key] = template
+    return copy.copy(template)
+
+
+#: compiled heyoka integrators by (n, rtol, the equations' coefficients) (:func:`_heyoka_integrator`)
+_HEYOKA_CACHE: dict = {}
+_HEYOKA_CACHE_SIZE = 16
 
 
 #: largest time step of a FlowMap: an adaptive integrator takes at least one step per unit of the orbit's own time
