@@ -55,7 +55,8 @@ def _put_site(out, c, s00, s01, s10):
 
 @njit(cache=True)
 def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
-    """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
+    """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used.  ``g`` (Nmax,) is scratch: the
+    Taylor coefficients of ``1/det K`` at each site from this step's ``M0`` (``gaudin.maps.monic_series``)."""
     # ℓ(η) = diag(b, −b) + Σ_c f_c P_c,  P = [[y3, y1 − i y2], [y1 + i y2, −y3]]
     u = complex(b)
     v = 0j
@@ -99,6 +100,15 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
         A11 = m00 + lam
         A01 = -m01
         A10 = -m10
+        # 1/det K(λ_i + z) from this step's M0 (det = d0 + d1 z + z²): a rounded per-orbit constant
+        # 1/((λ_i − η)(λ_i − η̄)) would repeat its rounding error at every step (a linear drift; issue 33)
+        g0 = 1.0 / (K00 * K11 - m01 * m10)
+        d1 = 2.0 * lam + m00 + m11
+        g[0] = g0
+        if N > 1:
+            g[1] = -d1 * g0 * g0
+        for d in range(2, N):
+            g[d] = -(d1 * g[d - 1] + g[d - 2]) * g0
         # per component: P, K'P + PA', K'PA' (each once), then the O(N²) combination with the g's
         for j in range(N):
             c = o + j
@@ -127,11 +137,11 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
             for j in range(k, N):
                 # the three terms g_d K'ℓ_jA' + g_{d−1}(K'ℓ_j + ℓ_jA') + g_{d−2} ℓ_j, added in this order
                 d = j - k
-                s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d], w0, j)
+                s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[d], w0, j)
                 if d >= 1:
-                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 1], w1, j)
+                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[d - 1], w1, j)
                 if d >= 2:
-                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[i, d - 2], wp, j)
+                    s00, s01, s10, s11 = _add_scaled(s00, s01, s10, s11, g[d - 2], wp, j)
             _put_site(out, o + k, s00, s01, s10)
     return nu
 
@@ -149,9 +159,10 @@ def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_eve
     w0 = np.empty((Nmax, 4), dtype=np.complex128)
     w1 = np.empty((Nmax, 4), dtype=np.complex128)
     wp = np.empty((Nmax, 4), dtype=np.complex128)
+    gs = np.empty(Nmax, dtype=np.complex128)  # per step: 1/det K at a site (g: the per-orbit tables, their shape)
     nu = nu0
     for s in range(steps):
-        nu = _step(x, y, b, eta, nu, f, g, site_pos, site_off, site_n, M, w0, w1, wp)
+        nu = _step(x, y, b, eta, nu, f, gs, site_pos, site_off, site_n, M, w0, w1, wp)
         x, y = y, x
         if (s + 1) % save_every == 0:
             rows[(s + 1) // save_every] = x

@@ -134,6 +134,30 @@ def dress_sites(model, parts, series):
     return out
 
 
+def monic_series(model, M0, A0):
+    r"""The Taylor series at every site of ``K = λ + M0``, ``adj K = λ + A0`` and ``1/det K`` for
+    :func:`dress_sites`, with ``1/det K`` from the computed ``M0`` itself: ``det K(λ_i + z) = d_0 + d_1 z + z²``,
+    ``d_0 = det(λ_i + M0)``, ``d_1 = 2λ_i + tr M0``, inverted as a series (``g_0 = 1/d_0``, ``g_1 = −d_1 g_0²``,
+    ``g_m = −(d_1 g_{m−1} + g_{m−2}) g_0``).  In exact arithmetic ``det K = (λ − η)(λ − η̄)``; the rounded constant
+    ``1/((λ_i − η)(λ_i − η̄))`` used before was off by the same relative amount at every step (~2.6e-16 at
+    ``λ_i = 0.4``, ``η = 1.5 + 0.2i``), which made each site's Casimir drift linearly with the steps (issue 33;
+    ``docs/reliability.md``, "Drift like round-off")."""
+    tr = M0[..., 0, 0] + M0[..., 1, 1]
+    series = []
+    for lam_i, N in model.sites:
+        K = M0 + lam_i * _ID
+        d0 = K[..., 0, 0] * K[..., 1, 1] - K[..., 0, 1] * K[..., 1, 0]
+        d1 = 2 * lam_i + tr
+        g = [1.0 / d0]
+        if N > 1:
+            g.append(-d1 * g[0] * g[0])
+        for _ in range(2, N):
+            g.append(-(d1 * g[-1] + g[-2]) * g[0])
+        series.append(((K, np.broadcast_to(_ID, K.shape)), (A0 + lam_i * _ID, np.broadcast_to(_ID, A0.shape)),
+                       np.array(g)))
+    return series
+
+
 def _residual(K, L, A, scale):
     """``max |K ℓ adj K|`` at a zero of ``det K``, relative to ``1 + max|ℓ coefficients|`` (zero if exact)."""
     R = mm(mm(K, L), A)
@@ -474,7 +498,7 @@ class ChainTwoPointBacklund(_ChainMap):
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
         if series is None:
-            new = dress_parts(self.model, ell[..., 1:, :, :], M0, _ID, A0, _ID, (self.eta, np.conj(self.eta)))
+            new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, M0, A0))
         else:
             new = dress_sites(self.model, ell[..., 1:, :, :], series)
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
