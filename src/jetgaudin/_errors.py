@@ -17,6 +17,8 @@ __all__ = [
     "OffLeafError",
     "IntegrationError",
     "StepTooLargeError",
+    "MapDescriptionError",
+    "OutputTooLargeError",
     "RecordingError",
     "RunDirectoryError",
     "RunLockedError",
@@ -65,6 +67,25 @@ class StepTooLargeError(InvalidParameterError):
     def __init__(self, message: str, dt_max: float | None = None):
         super().__init__(message)
         self.dt_max = dt_max
+
+
+class MapDescriptionError(InvalidParameterError):
+    """A map description (:func:`jetgaudin.map_from_description`, ``run.json``'s ``map``) lacks a key or holds a
+    value of the wrong kind; ``key`` names it (``None`` where the builder did not say which)."""
+
+    def __init__(self, message: str, key: str | None = None):
+        super().__init__(message)
+        self.key = key
+
+
+class OutputTooLargeError(InvalidParameterError):
+    """An array a call would return (``solve``, ``iterate``) is larger than the cap (:data:`jetgaudin.maps.
+    MAX_OUTPUT_BYTES`, overridable): ``nbytes`` it would take, ``cap`` the limit.  Save fewer rows (``save_every``)
+    or a shorter span, or run it through the run layer (``jetgaudin.run``), which streams rows to disk."""
+
+    def __init__(self, message: str, nbytes: int = 0, cap: int = 0):
+        super().__init__(message)
+        self.nbytes, self.cap = nbytes, cap
 
 
 class RecordingError(JetGaudinError):

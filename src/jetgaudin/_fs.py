@@ -6,7 +6,8 @@ The run layer writes and reads every file of a run directory through this module
 * **One writer per directory**: :class:`RunDirLock` holds an exclusive ``flock`` on ``<dir>/.jetgaudin.lock``
   for the run's life; the kernel releases it when the process dies (even by SIGKILL).  A second writer, of any
   kind and in any process, gets :class:`~jetgaudin.RunLockedError` naming the holder's PID.
-* **No symlink is followed** inside a run directory: files are opened relative to a descriptor of the directory
+* **No symlink is followed** inside a run directory, and no file with more than one hard link is used: files are
+  opened relative to a descriptor of the directory
   with ``O_NOFOLLOW``, temporary files are created with ``O_EXCL`` after removing a stale entry (``unlink``
   removes a link, never its target), and names must be plain file names (no ``/``, no ``..``).
 * **Nothing is read without a bound**: reads open with ``O_NONBLOCK`` (a FIFO cannot block), accept regular files
@@ -46,6 +47,7 @@ __all__ = [
     "read_text",
     "read_json",
     "read_user_file",
+    "check_library_file",
     "check_regular_or_absent",
     "remove_file",
     "fsync_file",
@@ -101,6 +103,9 @@ def _refuse_special(path: Path, st: os.stat_result) -> None:
                                 "(remove the link)")
     if not stat.S_ISREG(st.st_mode):
         raise RunDirectoryError(f"{path} is not a regular file (a FIFO, device or directory); remove it")
+    if st.st_nlink > 1:  # a hard link: writing it (an append to orbit.csv) would write another name's file too
+        raise RunDirectoryError(f"{path} has {st.st_nlink} hard links; a run directory holds files of its own only "
+                                "(copy it instead of linking it: cp, not ln)")
 
 
 def open_nofollow(dfd: int, dirpath: Path, name: str, flags: int, mode: int = 0o644) -> int:
@@ -317,6 +322,29 @@ def read_user_file(path: str | os.PathLike[str], max_bytes: int, *, option: str 
         os.close(fd)
 
 
+def check_library_file(path: str | os.PathLike[str], *, write: bool = False, overwrite: bool = False) -> Path:
+    """A file path a library call reads (``write=False``) or writes (:meth:`jetgaudin.Trajectory.from_hdf5`,
+    ``to_hdf5``), checked with ``lstat`` before anything opens it (a FIFO is never opened: opening one blocks):
+    a symbolic link, a FIFO, a device or a directory is refused (:class:`~jetgaudin.RecordingError`); reading needs
+    an existing regular file; writing refuses an existing file unless ``overwrite``."""
+    path = Path(path)
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        if write:
+            return path
+        raise RecordingError(f"{path} does not exist") from None
+    except OSError as exc:
+        raise RecordingError(f"cannot use {path}: {exc.strerror or exc}") from None
+    if stat.S_ISLNK(st.st_mode):
+        raise RecordingError(f"{path} is a symbolic link; give the file itself (links are not followed)")
+    if not stat.S_ISREG(st.st_mode):
+        raise RecordingError(f"{path} is not a regular file (a FIFO, device or directory); give a file")
+    if write and not overwrite:
+        raise RecordingError(f"{path} exists; pass overwrite=True to replace it, or choose another file")
+    return path
+
+
 # ------------------------------------------------------------------------------------ directories
 def _run_status(path: Path) -> str:
     try:
@@ -434,10 +462,13 @@ class RunDirLock:
     :class:`~jetgaudin.RunLockedError`.
     """
 
-    def __init__(self, path: str | os.PathLike[str], *, claim: bool = True):
+    def __init__(self, path: str | os.PathLike[str], *, claim: bool = True, create: bool = True):
         self.path = Path(path)
         self._fd: int | None = None
         self._claim = claim
+        #: ``create=False`` (a resume checking its run): an absent lock file is not created on entry (a refusal
+        #: must leave the directory as it was); :meth:`claim` then creates and takes it
+        self._create = create
 
     @property
     def held(self) -> bool:
@@ -450,9 +481,13 @@ class RunDirLock:
             return self
         try:
             with open_dir(self.path) as dfd:
-                fd = open_nofollow(dfd, self.path, LOCK_NAME, os.O_RDWR | os.O_CREAT)
+                fd = open_nofollow(dfd, self.path, LOCK_NAME, os.O_RDWR | (os.O_CREAT if self._create else 0))
         except RunDirectoryError:
             raise
+        except FileNotFoundError:
+            if self._create:
+                raise RunDirectoryError(f"cannot write to run directory {self.path}: it disappeared") from None
+            return self  # no lock file: taken (created) by claim()
         except OSError as exc:
             raise RunDirectoryError(f"cannot write to run directory {self.path}: {exc.strerror or exc}") from None
         try:
@@ -477,6 +512,10 @@ class RunDirLock:
         still refuse (a resume checking its run) takes the lock with ``claim=False`` and claims it once it writes:
         a refusal leaves the lock file as it was."""
         if self._fd is None:
+            if self._create:
+                return
+            self._create, self._claim = True, True
+            self.acquire()  # the lock file was absent: created and taken now
             return
         try:
             os.ftruncate(self._fd, 0)

@@ -42,12 +42,40 @@ def _interrupted(signum: int, _frame: object) -> None:
         os._exit(128 + signum)
 
 
+def address_space_limit() -> int | None:
+    """The process's address-space limit in bytes (``ulimit -v``), or ``None`` when unlimited."""
+    import resource
+
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return None if soft == resource.RLIM_INFINITY else int(soft)
+
+
+def out_of_memory(exc: BaseException) -> str | None:
+    """One line for an exception that means "out of memory" (a ``MemoryError``, ``ENOMEM``, or a shared library —
+    NumPy's, HDF5's, LLVM's (``libllvmlite.so``) — that could not be mapped under ``ulimit -v``), else ``None``."""
+    import errno
+
+    text = " ".join(str(exc).split())
+    limit = address_space_limit()
+    load = any(s in text for s in ("map segment", "shared object", "libllvmlite", "Cannot allocate memory"))
+    if not (isinstance(exc, MemoryError) or getattr(exc, "errno", None) == errno.ENOMEM
+            or (load and (limit is not None or isinstance(exc, (ImportError, OSError))))
+            or (isinstance(exc, RuntimeError) and "can't start new thread" in text)
+            or (limit is not None and isinstance(exc, SystemError))):
+        return None
+    where = (f"under the address-space limit ulimit -v {limit // 1024} kB" if limit is not None
+             else "(check ulimit -v and the free memory)")
+    return (f"out of memory {where}: {type(exc).__name__} ({text[:160]}); the command line needs about 0.5 GB of "
+            "address space (the compiled kernels' LLVM more): raise the limit")
+
+
 def _hook(exc_type: type[BaseException], exc: BaseException, tb: object) -> None:
     if issubclass(exc_type, KeyboardInterrupt):
         _interrupted(signal.SIGINT, None)
     text = " ".join(f"{exc_type.__name__}: {exc}".split())[:300]
-    hint = " (out of memory? check ulimit -v)" if issubclass(exc_type, (MemoryError, ImportError, OSError)) else ""
-    os.write(2, f"jetgaudin: error: cannot start: {text}{hint}\n".encode(errors="replace"))
+    memory = out_of_memory(exc)
+    line = f"cannot start: {memory}" if memory else f"cannot start: {text}"
+    os.write(2, f"jetgaudin: error: {line}\n".encode(errors="replace"))
     os._exit(1)
 
 

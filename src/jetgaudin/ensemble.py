@@ -22,7 +22,17 @@ import numpy as np
 from ._errors import InvalidParameterError, InvalidStateError
 from ._validate import as_state, check_N
 from .backlund.maps import _TWO_POINT_PROPERTIES, _sheet
-from .maps import Advance, Backend, Branch, Map, MapProperties, check_count, step_loop, with_resolved_backend
+from .maps import (
+    Advance,
+    Backend,
+    Branch,
+    Map,
+    MapProperties,
+    check_count,
+    check_output_size,
+    step_loop,
+    with_resolved_backend,
+)
 from .spectral import integrals as _jg_integrals
 
 __all__ = ["EnsembleResult", "BatchBacklund", "DaskBatch", "iterate_ensemble", "dask_client", "dask_chunks",
@@ -301,6 +311,7 @@ def iterate_ensemble(X0, b, eta, steps: int, *, save_every: int = 1, branch="def
     B = X.shape[0]
     steps = _check_int(steps, "steps", 0)
     save_every = _check_int(save_every, "save_every", 1)
+    check_output_size(steps // save_every + 1, X.size * 8, "iterate_ensemble")
     sheet = _sheet(branch)
     bb = _per_orbit(b, B, "b", float)
     if np.any(bb == 0):

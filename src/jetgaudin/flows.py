@@ -62,17 +62,34 @@ class Trajectory:
             {"X": (["t", *lead, "component"], self.X), "integrals": (["t", *lead, "integral"], self.integrals)},
             coords={"t": self.t}, attrs={"method": self.method, **{k: str(v) for k, v in self.info.items()}})
 
-    def to_hdf5(self, path) -> None:
-        """Write ``t``, ``X``, ``integrals`` and the attributes ``method``, ``info`` (JSON) to an HDF5 file."""
+    def to_hdf5(self, path, *, overwrite: bool = False) -> None:
+        """Write ``t``, ``X``, ``integrals`` and the attributes ``method``, ``info`` (JSON) to an HDF5 file.  An
+        existing file is refused unless ``overwrite`` (then replaced atomically); a symlink, FIFO or device always
+        (:class:`jetgaudin.RecordingError`, :func:`jetgaudin._fs.check_library_file`)."""
         import json
+        import os
 
         import h5py
 
-        with h5py.File(path, "w") as f:
-            for name in ("t", "X", "integrals"):
-                f.create_dataset(name, data=getattr(self, name))
-            f.attrs["method"] = self.method
-            f.attrs["info"] = json.dumps(self.info)
+        from . import _fs
+
+        path = _fs.check_library_file(path, write=True, overwrite=overwrite)
+        tmp = path.with_name(path.name + ".tmp") if overwrite else path
+        if overwrite:
+            _fs.check_library_file(tmp, write=True, overwrite=True)
+            tmp.unlink(missing_ok=True)
+        try:
+            with h5py.File(tmp, "x") as f:  # O_EXCL: never through a link planted meanwhile
+                for name in ("t", "X", "integrals"):
+                    f.create_dataset(name, data=getattr(self, name))
+                f.attrs["method"] = self.method
+                f.attrs["info"] = json.dumps(self.info)
+            if overwrite:
+                os.replace(tmp, path)
+        except BaseException:
+            if overwrite:
+                tmp.unlink(missing_ok=True)
+            raise
 
     @classmethod
     def from_hdf5(cls, path) -> Trajectory:
@@ -81,7 +98,9 @@ class Trajectory:
 
         import h5py
 
-        with h5py.File(path, "r") as f:
+        from . import _fs
+
+        with h5py.File(_fs.check_library_file(path), "r") as f:  # a FIFO, device or link refused before opening
             return cls(np.asarray(f["t"]), np.asarray(f["X"]), np.asarray(f["integrals"]), str(f.attrs["method"]),
                        json.loads(f.attrs["info"]))
 

@@ -51,7 +51,7 @@ from typing import Any, Self
 
 import numpy as np
 
-from ._errors import InvalidParameterError
+from ._errors import InvalidParameterError, JetGaudinError, MapDescriptionError, OutputTooLargeError
 
 __all__ = [
     "Advance",
@@ -62,6 +62,8 @@ __all__ = [
     "auto_gpu",
     "backend_option",
     "check_count",
+    "check_output_size",
+    "MAX_OUTPUT_BYTES",
     "check_gpu",
     "map_from_description",
     "with_resolved_backend",
@@ -164,6 +166,24 @@ class Advance:
 
 #: the largest count: int64, as the compiled kernels' loop counters and the HDF5 files
 _INT64_MAX = 2**63 - 1
+
+
+#: the largest array (bytes) that ``iterate``, ``iterate_ensemble`` and ``solve`` return: past it they refuse with
+#: :class:`jetgaudin.OutputTooLargeError` before allocating anything (before: ``jg.solve(H, X0, (0, 1e9),
+#: dt=0.25)`` asked NumPy for 268 GiB).  Override it (``jetgaudin.maps.MAX_OUTPUT_BYTES = ...``) to return more;
+#: a long orbit is better saved sparsely (``save_every``) or streamed to disk by the run layer (``jetgaudin.run``).
+MAX_OUTPUT_BYTES = 4 << 30
+
+
+def check_output_size(rows: int, row_bytes: int, what: str) -> None:
+    """Refuse (:class:`jetgaudin.OutputTooLargeError`, naming the size, the cap and the fix) an output of ``rows``
+    rows of ``row_bytes`` bytes larger than :data:`MAX_OUTPUT_BYTES` (read at each call: overridable)."""
+    nbytes, cap = int(rows) * int(row_bytes), int(MAX_OUTPUT_BYTES)
+    if nbytes > cap:
+        raise OutputTooLargeError(
+            f"{what} would return {rows:,} rows, {nbytes:,} bytes ({nbytes / 2**30:.3g} GiB), more than the cap of "
+            f"{cap:,} bytes (jetgaudin.maps.MAX_OUTPUT_BYTES); save fewer rows (a larger save_every), take a shorter "
+            "span, or stream the orbit to disk with the run layer (jetgaudin.run, `jetgaudin orbit`)", nbytes, cap)
 
 
 def check_count(value: object, name: str, minimum: int = 0) -> int:
@@ -319,6 +339,8 @@ class Map(abc.ABC):
         choice = backend_option(backend, kernel)
         m = self if choice is None else self.with_backend(choice)
         X0 = np.asarray(X0)
+        rows = check_count(steps, "steps") // check_count(save_every, "save_every", 1) + 1
+        check_output_size(rows, X0.size * max(8, X0.dtype.itemsize), "iterate")
         adv = m.advance(X0, carry, steps, save_every)
         orbit = np.concatenate([X0[None].astype(adv.rows.dtype, copy=False), adv.rows], axis=0)
         return (orbit, adv.carry) if return_carry else orbit
@@ -375,6 +397,19 @@ def map_from_description(d: dict) -> Map:
     from . import backlund, exact, exact_chain, flows, gaudin, midpoint  # noqa: F401  (they register the built-in kinds)
 
     kind = d["kind"]
-    if kind not in _REGISTRY:
-        raise InvalidParameterError(f"unknown map kind {kind!r} (known: {', '.join(sorted(_REGISTRY))})")
-    return _REGISTRY[kind](d)
+    if not isinstance(kind, str) or kind not in _REGISTRY:
+        raise MapDescriptionError(f"unknown map kind {kind!r} (known: {', '.join(sorted(_REGISTRY))})", "kind")
+    try:
+        return _REGISTRY[kind](d)
+    except KeyError as exc:
+        key = exc.args[0] if exc.args else None
+        raise MapDescriptionError(f"the description of a {kind!r} map has no key {key!r}; give it (as describe() "
+                                  "writes it)", None if key is None else str(key)) from None
+    except JetGaudinError:
+        raise
+    except (TypeError, ValueError, IndexError, AttributeError) as exc:
+        bad = [k for k, v in d.items() if k != "kind" and not isinstance(v, (int, float, str, list, dict, bool))
+               and v is not None]
+        key = bad[0] if bad else None
+        raise MapDescriptionError(f"the description of a {kind!r} map holds a value of the wrong kind"
+                                  f"{f' (key {key!r})' if key else ''}: {type(exc).__name__}: {exc}", key) from None

@@ -28,7 +28,7 @@ from ._validate import as_state, parse_choice, real_number
 from .exact import ExactFlow, MatchedBacklund
 from .flows import Method, Trajectory, integrate
 from .hamiltonians import IntegralHamiltonian
-from .maps import Backend, check_count
+from .maps import Backend, check_count, check_output_size
 from .midpoint import ImplicitMidpoint
 from .spectral import integrals
 
@@ -123,6 +123,10 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         X0, _ = as_state(X0)
         H._check(X0)
     every = check_count(save_every, "save_every", 1)
+    if dt is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
+        n_out = time_grid(t_span, dt)[2] // every + 2
+        check_output_size(n_out, 8 * (X0.size + 1 + 2 * (X0.shape[-1] // 3) * max(1, X0.size // X0.shape[-1])),
+                          "solve")
     if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
         t0, t1 = (real_number(v, "t_span") for v in t_span)
         if dt is None:

@@ -33,6 +33,7 @@ from ..maps import (
     MapProperties,
     backend_option,
     check_count,
+    check_output_size,
     register_map,
     step_loop,
 )
@@ -381,6 +382,7 @@ class TwoPointBacklund(Map):
         X, _ = as_state(X0)
         steps = check_count(steps, "steps")
         save_every = check_count(save_every, "save_every", 1)
+        check_output_size(steps // save_every + 1, X.size * 8, "iterate")
         c = nu1 if carry is None else carry
         if c is not None:
             c = _check_nu(c, X.shape[:-1], "nu1")

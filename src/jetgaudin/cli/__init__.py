@@ -204,7 +204,8 @@ def entry() -> None:
         code = 130
     except (MemoryError, ImportError) as exc:  # out of memory (ulimit -v) while importing or allocating
         text = " ".join(f"{type(exc).__name__}: {exc}".split())[:300]
-        print(f"jetgaudin: error: {text} (out of memory? check ulimit -v)", file=sys.stderr)
+        print(f"jetgaudin: error: {_startup.out_of_memory(exc) or text + ' (out of memory? check ulimit -v)'}",
+              file=sys.stderr)
         code = 1
     if code is None:
         code = 0

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._common import CliInputError, blame, complex_text, one_line, parse_b
+from ._common import CliInputError, blame, complex_text, one_line, parse_b, to_float
 
 SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer orders N_i >= 1), e.g. '
               '"-1:2,0.5:3,2:1"; --init then takes 3M numbers, M = N1 + N2 + ... [default: one site 0:N, '
@@ -30,9 +30,15 @@ def family_kw(sites: str | None, family: str | None, gamma: str | None, record: 
     """``{"family": …, "gamma": …, "modulus": …}`` for :func:`chain_model` from ``--family`` / ``--gamma`` /
     ``--modulus`` (or, when all are absent, from a recorded run's map description, ``record``); one line naming the
     option otherwise."""
+    m = (record or {}).get("map", {})
     if family is None and gamma is None and modulus is None:
-        m = (record or {}).get("map", {})
         return {k: m[k] for k in ("family", "gamma", "modulus") if k in m}
+    if family is None and str(m.get("kind", "")).startswith("chain_"):  # --init-from a chain: its family is kept
+        implied = "elliptic" if modulus is not None else "trigonometric"
+        if m.get("family", "rational") != implied:
+            opt = "--gamma" if gamma is not None else "--modulus"
+            raise CliInputError(f"{opt}: the run of --init-from is a {m.get('family', 'rational')} chain; {opt} would "
+                                f"make it {implied}: drop {opt}, or give --family {implied} to change the family")
     if sites is None:
         opt = "--family" if family is not None else "--gamma" if gamma is not None else "--modulus"
         raise CliInputError(f"{opt}: the Gaudin families are chains; give --sites (e.g. --sites 0:1,1:1)")
@@ -48,7 +54,7 @@ def family_kw(sites: str | None, family: str | None, gamma: str | None, record: 
     if fam != "trigonometric":
         raise CliInputError(f"--gamma: the {fam} family has no anisotropy; give --family trigonometric or drop --gamma")
     try:
-        g = float(gamma)
+        g = to_float(gamma, "--gamma")
     except (TypeError, ValueError):
         raise CliInputError(f"--gamma: the anisotropy must be a real number > 0, got {gamma!r}") from None
     return {"family": fam, "gamma": g}
@@ -63,7 +69,7 @@ def _elliptic_kw(fam: str, gamma: str | None, modulus: str | None) -> dict:
     if modulus is None:
         raise CliInputError("--modulus: --family elliptic needs its modulus k in [0, 1), e.g. --modulus 0.5")
     try:
-        k = float(modulus)
+        k = to_float(modulus, "--modulus")
     except (TypeError, ValueError):
         raise CliInputError(f"--modulus: the modulus must be a real number in [0, 1), got {modulus!r}") from None
     return {"family": fam, "modulus": k}
@@ -72,7 +78,7 @@ def _elliptic_kw(fam: str, gamma: str | None, modulus: str | None) -> dict:
 def parse_chain_b(text: Any, option: str = "--b") -> float:
     """The field of a chain: real and finite; ``b = 0`` (the magnet without field) is allowed for the two-point map."""
     try:
-        if float(text) == 0.0:
+        if to_float(text, option) == 0.0:
             return 0.0
     except (TypeError, ValueError):
         pass
@@ -86,6 +92,8 @@ def chain_model(sites: str, b: float, family: str = "rational", gamma: float | N
     import jetgaudin as jg
     from jetgaudin.gaudin import GaudinModel, parse_sites
 
+    if not str(sites).isascii() or "_" in str(sites):  # float() reads Unicode digits (١:3 was site 1.0) and 1_0
+        raise CliInputError(f"--sites: {sites!r}: write the sites with ASCII digits, e.g. --sites -1:3,0.5:3")
     try:
         return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus)
     except jg.JetGaudinError as exc:

@@ -217,18 +217,21 @@ def parse_count(text, option: str, minimum: int = 0) -> int:
     s = str(text).strip()
     if re.fullmatch(r"[+-]?\d+(?:_\d+)+", s, re.ASCII):  # 1_000_000: underscores between digits only
         s = s.replace("_", "")
-    try:
-        if not re.fullmatch(r"[+-]?\d+", s, re.ASCII):
-            raise ValueError(s)
+    if re.fullmatch(r"[+-]?\d+", s, re.ASCII):
         value = int(s)
-    except ValueError:
+    else:  # 1e6, 2.5e3: exact in decimal, never through a float (1e-99999 is not 0, 3.0000000000000001 not 3)
+        from decimal import Decimal, InvalidOperation
+
+        if not re.fullmatch(r"[+-]?(?:\d+\.?\d*|\.\d+)[eE][+-]?\d+|[+-]?\d+\.\d*|[+-]?\.\d+", s, re.ASCII):
+            raise CliInputError(f"{option}: cannot read {text!r} as an integer")
         try:
-            f = to_float(s, option)
-        except ValueError:
+            d = Decimal(s)
+            whole = d.is_zero() or (d.adjusted() >= 0 and (d.adjusted() > 30 or d == d.to_integral_value()))
+        except (InvalidOperation, OverflowError):
             raise CliInputError(f"{option}: cannot read {text!r} as an integer") from None
-        if not math.isfinite(f) or f != int(f):
-            raise CliInputError(f"{option}: {text!r} is not an integer") from None
-        value = int(f)
+        if not whole:
+            raise CliInputError(f"{option}: {text!r} is not an integer (write the count exactly, e.g. 1000 or 1e3)")
+        value = 0 if d.is_zero() else 2**64 if d.adjusted() > 30 else int(d)  # 2**64: refused, not built
     with blame(option):
         return check_count(value, option.lstrip("-").replace("-", "_"), minimum)
 
@@ -377,6 +380,12 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
             fail(exc, EXIT_INPUT)
         if issubclass(exc_type, BrokenPipeError):  # the reader of stdout left: handled by main()
             return False
+        if issubclass(exc_type, (MemoryError, OSError, SystemError)):  # e.g. LLVM's library unmappable (ulimit -v)
+            from jetgaudin._startup import out_of_memory
+
+            memory = out_of_memory(exc)
+            if memory:
+                fail(memory, EXIT_FAILED)
         if issubclass(exc_type, OSError):
             fail(f"{exc.strerror or exc}" + (f": {exc.filename}" if getattr(exc, "filename", None) else ""), EXIT_INPUT)
         if issubclass(exc_type, (FloatingPointError, OverflowError, ZeroDivisionError, ValueError)):

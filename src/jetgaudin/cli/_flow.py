@@ -39,8 +39,8 @@ def flow(
             help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
     steps: Annotated[str, typer.Option("--steps", metavar="INTEGER",
             help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
-    init: Annotated[str, typer.Option("--init", metavar="X1,...,X3N",
-            help="3N comma-separated numbers y_0, y_1, ...")] = cm.APPENDIX2_INIT,
+    init: Annotated[str | None, typer.Option("--init", metavar="X1,...,X3N",
+            help="3N comma-separated numbers y_0, y_1, ... [default: Appendix 2]")] = None,
     hamiltonian: Annotated[
         str,
         typer.Option(
@@ -92,9 +92,11 @@ def flow(
         if init_from_dir is not None:
             from ._orbit import init_from
 
+            if init is not None:
+                raise cm.CliInputError("--init and --init-from both give the starting state; give one of them")
             X0 = init_from(init_from_dir)[0]
         else:
-            X0 = np.array(cm.parse_init(init))
+            X0 = np.array(cm.parse_init(cm.APPENDIX2_INIT if init is None else init))
         N = len(X0) // 3
         fam = _chains.family_kw(sites, family, gamma, modulus=modulus)
         model = None if sites is None else _chains.chain_model(sites, bf, **fam)

@@ -250,6 +250,8 @@ def orbit(
                         "init": parse_init(APPENDIX2_INIT)}
             rec = None
             if init_from_dir is not None:
+                if init is not None:
+                    raise CliInputError("--init and --init-from both give the starting state; give one of them")
                 X_last, rec = init_from(init_from_dir)
                 defaults["init"] = X_last.tolist()
                 m = rec.get("map", {})

@@ -106,8 +106,9 @@ def ensemble_command(
             help="C_1,...,C_N of the leaf (C_N > 0)")] = None,
     energy: Annotated[float | None, typer.Option("--energy", help="energy E of the shell H_2/2 = E")] = None,
     scale: Annotated[float, typer.Option("--scale", help="spread of the sampled components")] = 1.0,
-    b: Annotated[str, typer.Option("--b", metavar="FLOAT",
-            help="field strength b (field b e_3), real, nonzero")] = "1.0",
+    b: Annotated[str | None, typer.Option("--b", metavar="FLOAT",
+            help="field strength b (field b e_3), real, nonzero [default: 1.0; with --init-from a chain: its b]")]
+    = None,
     eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX", help="Bäcklund parameter, e.g. 5+0.1i")] = "5+0.1i",
     steps: Annotated[str | None, typer.Option("--steps", metavar="INTEGER",
             help="number of steps [default: 100]")] = None,
@@ -151,8 +152,8 @@ def ensemble_command(
     from jetgaudin import ensemble_recording as er
 
     with reported_errors():
-        if show < 0:
-            raise CliInputError(f"--show: the number of orbits listed must be >= 0, got {show}")
+        if not 0 <= show <= MAX_SHOW:
+            raise CliInputError(f"--show: the number of orbits listed must be between 0 and {MAX_SHOW:,}, got {show}")
         chunk = None if chunk_size is None else parse_count(chunk_size, "--chunk-size", 1)
         with blame("--max-drift"):
             runlayer.HealthLimits(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift)
@@ -182,6 +183,9 @@ def ensemble_command(
         if resume is None and sites is None and init_from_dir is not None and str(init_from_dir).strip():
             source = runlayer.read_run(init_from_dir)
             sites = _chains.sites_of(source)
+            if sites is not None and b is None and "b" in source.get("map", {}):  # its field (0 for elliptic chains)
+                b = repr(float(source["map"]["b"]))
+        b = "1.0" if b is None else b
         if resume is not None:
             if input is not None or sample is not None or init_from_dir is not None:
                 raise CliInputError("--resume continues a recorded ensemble: do not give --input, --sample or "
@@ -244,6 +248,10 @@ def ensemble_command(
         _report(res, show)
         if res.failed:
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
+
+
+#: the most orbits ``--show`` lists (the drift table; every orbit's drift is in ensemble.h5 and run.json)
+MAX_SHOW = 10**6
 
 
 def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir, overwrite,

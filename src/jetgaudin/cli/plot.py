@@ -51,9 +51,14 @@ def plot(
 
         out_dir = _figures_dir(run_dir, out, fmt.value, overwrite)
         # a run directory (this run's, or another's with --overwrite) is written under its lock: never while a run
-        # is in progress there (one writer per run directory)
-        lock = _fs.RunDirLock(out_dir) if (out_dir / "run.json").exists() else contextlib.nullcontext()
+        # is in progress there (one writer per run directory); every refusal is decided before the lock names this
+        # process (a refusal changes nothing, not even the lock file)
+        locked = (out_dir / "run.json").exists()
+        lock = _fs.RunDirLock(out_dir, claim=False, create=False) if locked else contextlib.nullcontext()
         with lock:
+            plotting.check_run_figures(run_dir, orbit=orbit, dpi=dpi, max_points=max_points)
+            if isinstance(lock, _fs.RunDirLock):
+                lock.claim()
             paths = plotting.save_run_figures(
                 run_dir, out, orbit=orbit, dpi=dpi, fmt=plotting.FigureFormat(fmt.value), max_points=max_points
             )

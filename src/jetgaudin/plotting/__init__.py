@@ -18,6 +18,7 @@ from ._compare import figure_compare_drift, figure_map_flow_distance, save_compa
 from ._files import (
     DEFAULT_MAX_POINTS,
     FigureFormat,
+    check_run_figures,
     run_title,
     save_figure,
     save_orbit_figures,
@@ -58,6 +59,7 @@ __all__ = [
     "save_compare_figures",
     "save_figure",
     "save_orbit_figures",
+    "check_run_figures",
     "save_run_figures",
     "site_y0",
     "sphere_label",

@@ -144,6 +144,21 @@ def drift_envelope(run: RunRows, k: int) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(idx_out), np.concatenate(d_out)
 
 
+def check_run_figures(run_dir, *, orbit: int | None = None, dpi: int = 130, max_points: int = DEFAULT_MAX_POINTS):
+    """Every refusal of :func:`save_run_figures`, read-only (the run opened, nothing written): the opened run.
+    ``jetgaudin plot`` calls it before it takes the run directory's lock, so that a refusal changes nothing."""
+    if not 10 <= int(dpi) <= 2000:
+        raise InvalidParameterError(f"dpi must be between 10 and 2000, got {dpi}")
+    if int(max_points) < 2:
+        raise InvalidParameterError(f"max_points must be >= 2, got {max_points}")
+    run = open_run(run_dir, orbit=orbit)
+    if run.rows == 0:
+        from .._errors import RecordingError
+
+        raise RecordingError(f"{run_dir}: no saved row is declared safe in run.json yet; nothing to draw")
+    return run
+
+
 def save_run_figures(
     run_dir,
     out_dir=None,
@@ -184,18 +199,10 @@ def save_run_figures(
     InvalidParameterError
         ``dpi`` or ``max_points`` out of range.
     """
-    if not 10 <= int(dpi) <= 2000:
-        raise InvalidParameterError(f"dpi must be between 10 and 2000, got {dpi}")
-    if int(max_points) < 2:
-        raise InvalidParameterError(f"max_points must be >= 2, got {max_points}")
+    run = check_run_figures(run_dir, orbit=orbit, dpi=dpi, max_points=max_points)
     fmt = FigureFormat(fmt)
-    run = open_run(run_dir, orbit=orbit)
     out_dir = Path(run_dir) if out_dir is None else Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    if run.rows == 0:
-        from .._errors import RecordingError
-
-        raise RecordingError(f"{run_dir}: no saved row is declared safe in run.json yet; nothing to draw")
     k = thin_step(run.rows, max_points)
     idx, X = thinned_rows(run, max_points)
     title = run_title(run)

@@ -199,15 +199,15 @@ def _version() -> str:
     return jetgaudin.__version__
 
 
-def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool) -> Store:
+def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool, check_only: bool = False) -> Store:
     if spec.layout is Layout.ORBIT:
         labels = getattr(spec.map, "state_labels", None)  # a map may name the state's components (the chains)
         return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv, stem=_stem(spec),
                           time_step=_time_step(spec.map),
-                          columns=list(labels()) if callable(labels) else None)
+                          columns=list(labels()) if callable(labels) else None, check_only=check_only)
     b, eta, _ = _batch_params(spec.map, spec.B)
     extra = {"X0": spec.X0, "b": b, "eta": eta} if fresh else None
-    store = EnsembleStore(out_dir, run, spec.X0.shape, fresh=fresh, extra=extra)
+    store = EnsembleStore(out_dir, run, spec.X0.shape, fresh=fresh, extra=extra, check_only=check_only)
     return store
 
 
@@ -364,7 +364,7 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
     out_dir = Path(out_dir)
     if not out_dir.is_dir():
         raise RecordingError(f"{out_dir} does not exist: not a jetgaudin run directory")
-    with _fs.RunDirLock(out_dir, claim=False) as lock:
+    with _fs.RunDirLock(out_dir, claim=False, create=False) as lock:
         run = read_run(out_dir, verify=True)
         if program is not None and run.get("program") != program:
             kind = "an ensemble" if program == "jetgaudin ensemble" else f"a {program!r} run"
@@ -387,24 +387,38 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
         if diff:
             raise RecordingError(f"cannot resume {out_dir} with different inputs ({', '.join(diff)}); drop those "
                                  "options or start a new run in another --out directory")
-        compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
-                             f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
-                             f"{spec.program} --resume {out_dir}")
-        lock.claim()  # from here on the directory is written: the lock names this process
-        store = _open_store(spec, out_dir, run, fresh=False)
+        # every check reads only: the stored rows, the CSV and the replay run on a read-only view of the files,
+        # so that a refusal changes nothing (not a byte, not an mtime, not the lock's PID)
+        view = _open_store(spec, out_dir, run, fresh=False, check_only=True)
         try:
-            store.anchor = anchor
-            replay(store, spec, pos, anchor, str(out_dir / RUN_JSON))
-        except BaseException:
-            store.close()
-            raise
+            compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
+                                 f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
+                                 f"{spec.program} --resume {out_dir}")
+            replay(view, spec, pos, anchor, str(out_dir / RUN_JSON), recorded_rate=_recorded_rate(run))
+        finally:
+            view.close()
+        lock.claim()  # from here on the directory is written: the lock names this process
+        if read_run(out_dir, verify=True) != run:  # only possible without a lock file (taken just now)
+            raise RecordingError(f"{out_dir / RUN_JSON} changed while the resume checked it; try again")
+        store = _open_store(spec, out_dir, run, fresh=False)
+        store.anchor = anchor
         return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, compile_s=compile_s,
                       **options)
 
 
+def _recorded_rate(run: dict) -> float | None:
+    """The recorded run's steps per second (over all its sessions), or ``None`` when unknown: bounds the replay's
+    time (a kernel edited from compiled to NumPy is refused in seconds, not minutes)."""
+    try:
+        steps, seconds = int(run["last_safe_step"]), float(run.get("elapsed_seconds", 0.0))
+    except (KeyError, TypeError, ValueError):
+        return None
+    return steps / seconds if steps > 0 and seconds > 0 else None
+
+
 def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float, Any]:
     rec, ck = run["inputs"], run["checkpoint"]
-    limits = HealthLimits(float(rec["max_drift"]), float(rec.get("max_imag", np.inf)))
+    limits = HealthLimits(_limit(rec["max_drift"]), _limit(rec.get("max_imag")))  # null: no limit (strict JSON)
     program = str(run.get("program", "jetgaudin orbit"))
     elapsed0 = float(run.get("elapsed_seconds", 0.0))
     if "B" not in rec:  # an orbit directory
@@ -414,7 +428,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         I0 = unhex(run["integrals0_hex"])
         health = Health(spec.map, spec.X0, limits, I0=I0)
         health.drift = np.array(run["max_drift_abs"], dtype=float)
-        health.imag = float(run["max_imag_residue"])
+        health.imag = _limit(run["max_imag_residue"], np.nan)
         health.sphere = float(run["sphere"]["max_deviation"])
         X = unhex(ck["X_hex"])
         carry: Any = _unhex_carry(ck["nu1_hex"])
@@ -456,6 +470,11 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
     if not (0 <= n0 <= spec.steps) or not np.all(np.isfinite(X)):
         raise ValueError("inconsistent checkpoint")
     return spec, Position(n0, X, carry), health, elapsed0, anchor
+
+
+def _limit(value: Any, missing: float = np.inf) -> float:
+    """A number of ``run.json`` that JSON may hold as ``null`` (a non-finite value: :func:`files.run_json_text`)."""
+    return missing if value is None else float(value)
 
 
 def _unhex_carry(h: Any) -> Any:

@@ -40,10 +40,24 @@ def run_digest(run: dict) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
+def _strict(value: Any) -> Any:
+    """``value`` with every non-finite float replaced by ``None`` (JSON has no ``Infinity`` or ``NaN``)."""
+    if isinstance(value, float):
+        return value if np.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _strict(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_strict(v) for v in value]
+    return value
+
+
 def run_json_text(run: dict) -> str:
-    """``run.json`` text with its SHA-256 digest (field ``sha256``) set in ``run``."""
+    """``run.json`` text with its SHA-256 digest (field ``sha256``) set in ``run``: strict JSON (a non-finite number,
+    e.g. the infinite health limits of ``flow``, is recorded as ``null`` in ``run`` and in the file)."""
+    for k in list(run):
+        run[k] = _strict(run[k])
     run["sha256"] = run_digest(run)
-    return json.dumps(run, indent=1) + "\n"
+    return json.dumps(run, indent=1, allow_nan=False) + "\n"
 
 
 def write_run(out_dir: str | os.PathLike[str], run: dict) -> None:

@@ -25,6 +25,7 @@ SHA-256 digest, which detects accidents only).
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,11 @@ from .driver import Position, piece
 
 #: steps of one replayed kernel call, in save intervals (bounds the rows held: at most this many)
 _ROWS_PER_CALL = 4096
+#: a replay may take this many times longer than the recorded run took for the same steps (its recorded rate), and
+#: at least :data:`REPLAY_MIN_SECONDS`, before it is refused as not the recorded map (a kernel edited from compiled
+#: to NumPy: about 100 times slower; before, its replay ran for minutes before the rows told it apart)
+REPLAY_SLOWDOWN = 20.0
+REPLAY_MIN_SECONDS = 3.0
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -42,10 +48,13 @@ def _same(a: Any, b: Any) -> bool:
     return bool(np.array_equal(np.asarray(a, dtype=complex), np.asarray(b, dtype=complex)))
 
 
-def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, Any] | None, where: str) -> None:
+def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, Any] | None, where: str, *,
+           recorded_rate: float | None = None) -> None:
     """Refuse (:class:`jetgaudin.RecordingError`) a checkpoint ``pos`` that the recorded map does not reach from
     ``anchor`` through the stored rows ``store.dn``/``store.dS`` (``store.rows`` of them), bit for bit; see the
-    module doc.  ``where``: the file named in the message."""
+    module doc.  ``where``: the file named in the message.  ``recorded_rate``: the recorded run's steps per second;
+    a replay slower than :data:`REPLAY_SLOWDOWN` times it (and than :data:`REPLAY_MIN_SECONDS`) is refused: the map
+    is not the one that wrote the rows (e.g. its kernel was edited)."""
     bad = RecordingError(f"{where}: the checkpoint does not match the saved rows replayed with the recorded map "
                          "(edited or corrupted: state, step or map parameters); cannot resume")
     rows, every = store.rows, spec.save_every
@@ -70,10 +79,19 @@ def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, 
     invariant = getattr(spec.map, "chunk_invariant", True)
     # a map that is not chunk invariant (a flow) is replayed in the driver's own fixed cuts
     L, end = (_ROWS_PER_CALL * every, pos.n) if invariant else (every * max(1, 256 // every), spec.steps)
+    budget = np.inf if not recorded_rate else max(REPLAY_MIN_SECONDS, REPLAY_SLOWDOWN * (pos.n - n_a) / recorded_rate)
+    t0 = time.monotonic()
+    grow = 16  # an invariant map is replayed in growing calls: the time budget is checked early
     n = n_a
     try:
         while n < pos.n:
-            k, se = piece(n, L, end, every)
+            if time.monotonic() - t0 > budget:
+                raise RecordingError(
+                    f"{where}: replaying the last {pos.n - n_a} steps takes more than {budget:.3g} s, over "
+                    f"{REPLAY_SLOWDOWN:g} times the recorded run's rate: the map or kernel in run.json is not the one "
+                    "that wrote the rows (edited?); cannot resume")
+            k, se = piece(n, min(L, grow) if invariant else L, end, every)
+            grow *= 2
             with np.errstate(all="ignore"):
                 adv = spec.map.advance(X, carry, k, se)
             whole = se == every and k >= every
@@ -84,6 +102,8 @@ def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, 
                     if i >= rows or int(store.dn[i]) != m or not np.array_equal(np.asarray(store.dS[i]), row):
                         raise bad
             n, X, carry = n + k, adv.X, adv.carry
+    except RecordingError:
+        raise
     except JetGaudinError:
         raise bad from None
     if n != pos.n or not np.array_equal(np.asarray(X), pos.X) or not _same(carry, pos.carry):

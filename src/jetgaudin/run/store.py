@@ -57,7 +57,7 @@ class Store:
     _COPY_BLOCK_BYTES = 64 << 20
 
     def __init__(self, out_dir: Path, run: dict, shape: tuple[int, ...], *, fresh: bool,
-                 extra: dict[str, np.ndarray] | None = None):
+                 extra: dict[str, np.ndarray] | None = None, check_only: bool = False):
         self.out_dir, self.run, self.shape = Path(out_dir), run, tuple(shape)
         self.h_rows = RowDigest()
         self.rows = 0 if fresh else int(run["checkpoint"]["rows"])
@@ -65,6 +65,11 @@ class Store:
         #: checkpoint, replayed by a resume (:mod:`jetgaudin.run.replay`)
         self.anchor: tuple[int, np.ndarray, Any] | None = None
         self.f: Any = None
+        #: a read-only view of a run to resume (:meth:`checked`): every check of a resume, nothing written
+        self.check_only = check_only
+        if check_only:
+            self._check_h5()
+            return
         self._build_h5(fresh, extra or {})
         import h5py
 
@@ -74,6 +79,38 @@ class Store:
             self.f.swmr_mode = True
         except WRITE_ERRORS as exc:
             raise RunIOError(f"{_fs.io_failure(exc)} while opening {self.out_dir / self.h5_name}") from exc
+
+    @classmethod
+    def checked(cls, *args: Any, **kwargs: Any) -> Store:
+        """The stored run opened read-only (``check_only``): the rows ``run.json`` declares are verified (count,
+        shape, digest; an orbit's CSV too) and ``dn``/``dS`` read from the file as it is, for the replay.  A resume
+        makes every check through this view *before* it writes anything (a refusal changes nothing); ``close()``
+        it before opening the writing store."""
+        return cls(*args, check_only=True, **kwargs)
+
+    def _check_h5(self) -> None:
+        """:meth:`_build_h5`'s checks of the old file, read-only (no temporary file, nothing replaced)."""
+        path = self.out_dir / self.h5_name
+        try:
+            self.f = open_h5_read(path)
+            self.dn, self.dS = self.f["n"], self.f[self.data]
+            if self.dn.shape[0] < self.rows or self.dS.shape[0] < self.rows:
+                raise RecordingError(f"{path} is truncated: it holds fewer rows than run.json records; cannot resume")
+            if self.dS.shape[1:] != self.shape:
+                raise ValueError("the stored states do not match the recorded run")
+            block = max(1, self._COPY_BLOCK_BYTES // (8 * max(1, int(np.prod(self.shape)))))
+            for a in range(0, self.rows, block):
+                e = min(self.rows, a + block)
+                self.h_rows.update(self.dn[a:e], self.dS[a:e])
+        except RecordingError:
+            self.close()
+            raise
+        except (OSError, KeyError, ValueError, TypeError) as exc:
+            self.close()
+            raise RecordingError(f"{path} is unreadable or corrupted ({exc}); cannot resume") from None
+        if self.h_rows.hexdigest() != self.run["checkpoint"].get("rows_sha256"):
+            self.close()
+            raise RecordingError(f"{path} does not match the digest in run.json (corrupted); cannot resume")
 
     # ------------------------------------------------------------------------------------------- HDF5
     def _build_h5(self, fresh: bool, extra: dict[str, np.ndarray]) -> None:
@@ -252,7 +289,8 @@ class Store:
             self.run = new
 
     def close(self) -> None:
-        _space.release_reserve(self.out_dir)
+        if not self.check_only:
+            _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             if self.f is not None:
                 self.f.close()
@@ -265,7 +303,7 @@ class OrbitStore(Store):
     (``stem="orbit"``: ``jetgaudin orbit --dt``)."""
 
     def __init__(self, out_dir: Path, run: dict, n_state: int, *, fresh: bool, csv: bool, stem: str = "orbit",
-                 time_step: float | None = None, columns: list[str] | None = None):
+                 time_step: float | None = None, columns: list[str] | None = None, check_only: bool = False):
         self.csv = csv
         self.columns = columns  # names of the n_state columns (default y{i}^{a}; the chains name them by site)
         self.h5_name, self.csv_name = f"{stem}.h5", f"{stem}.csv"
@@ -273,8 +311,8 @@ class OrbitStore(Store):
         self.h_csv: Any = None
         self.csv_bytes = 0
         self.csv_fh: Any = None
-        super().__init__(out_dir, run, (n_state,), fresh=fresh)
-        self.dt_ds = None if time_step is None else self.f["t"]
+        super().__init__(out_dir, run, (n_state,), fresh=fresh, check_only=check_only)
+        self.dt_ds = None if time_step is None or check_only else self.f["t"]
         try:
             self._open_csv(fresh)
         except BaseException:
@@ -318,6 +356,8 @@ class OrbitStore(Store):
         ck = self.run["checkpoint"]
         path = self.out_dir / self.csv_name
         if fresh or (int(ck.get("csv_bytes", 0)) == 0 and self.rows == 0):  # nothing durable yet: start again
+            if self.check_only:
+                return
             head = self._header().encode()
             self.csv_fh = _fs.open_write(self.out_dir, self.csv_name)
             self.csv_fh.write(head)
@@ -349,6 +389,8 @@ class OrbitStore(Store):
             # the declared CSV must hold the header and exactly the declared rows (a resume never cuts a durable row)
             raise RecordingError(f"{path}: run.json's csv_bytes does not cover exactly the {self.rows} saved rows "
                                  "(edited or corrupted); cannot resume")
+        if self.check_only:
+            return
         self.csv_fh = _fs.open_write(self.out_dir, self.csv_name, append=True)
         os.ftruncate(self.csv_fh.fileno(), self.csv_bytes)
 
@@ -410,8 +452,8 @@ class EnsembleStore(Store):
     data = "states"
 
     def __init__(self, out_dir: Path, run: dict, shape: tuple[int, int], *, fresh: bool,
-                 extra: dict[str, np.ndarray] | None = None):
-        super().__init__(out_dir, run, shape, fresh=fresh, extra=extra)
+                 extra: dict[str, np.ndarray] | None = None, check_only: bool = False):
+        super().__init__(out_dir, run, shape, fresh=fresh, extra=extra, check_only=check_only)
         self.slot = int(run["checkpoint"].get("slot", 1)) ^ 1  # the next checkpoint goes to the other slot
         self.drift_rel: np.ndarray = np.zeros(0)
 
