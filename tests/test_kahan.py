@@ -80,3 +80,15 @@ def test_bad_input():
         KahanMap("not a Hamiltonian", 0.1)
     with pytest.raises(jg.InvalidParameterError, match="fixed-step"):
         jg.solve(jg.physical_hamiltonian(2, 1.0), X2, (0, 1), method="kahan")
+
+
+def test_parallel_batch_equals_serial_runs():
+    # a batch above the parallel threshold: every member equals its single (serial) run bit for bit
+    from jetgaudin import kahan
+
+    H = jg.physical_hamiltonian(2, 0.7)
+    Xb = X2 * (1 + 0.01 * np.arange(kahan._PARALLEL_ORBITS + 3))[:, None]
+    m = KahanMap(H, 0.05, backend="compiled")
+    b = m.iterate(Xb, 50)
+    for i in (0, len(Xb) - 1):
+        assert np.array_equal(b[:, i], m.iterate(Xb[i], 50))

@@ -21,8 +21,9 @@ one linear solve per step (no Newton iteration).  Properties (each tested in ``t
   the Casimirs oscillate at ``O(h²)`` (Petrera–Pfadler–Suris found modified integrals, deformations of the
   continuous ones by ``O(h²)``, for the Euler, Lagrange and Clebsch tops; measured in ``docs/integrators.md`` §6b).
 
-Routes: NumPy (batched ``np.linalg.solve``) and compiled (Numba, one orbit or a batch, the same arithmetic order per
-orbit).  ``H``: a top's :class:`~jetgaudin.IntegralHamiltonian` (one set of weights) or a chain's
+Routes: NumPy (batched ``np.linalg.solve``) and compiled (Numba, :mod:`jetgaudin._kahan_kernels`: Gaussian
+elimination with partial pivoting, one orbit or a batch over the cores, the same bits per orbit); they agree to
+round-off.  ``H``: a top's :class:`~jetgaudin.IntegralHamiltonian` (one set of weights) or a chain's
 :class:`~jetgaudin.ChainHamiltonian` (e.g. the Clebsch top).
 """
 
@@ -41,6 +42,9 @@ from .maps import Advance, Backend, Map, MapProperties, register_map
 from .spectral import integrals
 
 __all__ = ["KahanMap", "kahan_step"]
+
+#: from this many orbits the compiled route spreads them over the cores (same bits per orbit either way)
+_PARALLEL_ORBITS = 64
 
 _KAHAN_PROPERTIES = MapProperties(
     preserves_integrals=False, poisson=False, real=True, order=2, symmetric=True, interpolates_flow=False
@@ -133,12 +137,13 @@ class KahanMap(Map):
         return Y, zeros.astype(complex), zeros
 
     def _compiled_advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> Advance:
-        from ._kahan_kernels import kahan_advance
+        from ._kahan_kernels import kahan_parallel, kahan_serial
 
         X = self._check(X)
         c, A, g0 = self._field()
         flat = np.ascontiguousarray(X.reshape(-1, X.shape[-1]))
-        rows, last, ok = kahan_advance(flat, c, A, g0, float(self.dt), steps, save_every)
+        run = kahan_parallel if len(flat) >= _PARALLEL_ORBITS else kahan_serial
+        rows, last, ok = run(flat, c, A, g0, float(self.dt), steps, save_every)
         if not ok:
             raise IntegrationError(f"Kahan's map: a singular or non-finite step (dt = {self.dt:g}); "
                                    "give a smaller dt")
