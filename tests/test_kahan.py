@@ -92,3 +92,18 @@ def test_parallel_batch_equals_serial_runs():
     b = m.iterate(Xb, 50)
     for i in (0, len(Xb) - 1):
         assert np.array_equal(b[:, i], m.iterate(Xb[i], 50))
+
+
+def test_energy_error_is_order_two_and_does_not_drift():
+    # docstring claim: the energy oscillates at O(h²) — its largest error over T = 200 falls by 4 (within 15 %)
+    # when h halves, and the oscillation in the last tenth of the run equals that in the first (within 5 %: no
+    # drift; measured 2.49e-3 vs 2.48e-3 over T = 1000 at h = 0.05)
+    H = jg.physical_hamiltonian(3, 1.0)
+    spans = []
+    for h in (0.05, 0.025):
+        orb = KahanMap(H, h).iterate(X3, round(200 / h), save_every=round(0.5 / h))
+        e = H(orb) - H(X3)
+        spans.append((np.abs(e).max(), np.ptp(e[:40]), np.ptp(e[-40:])))
+    assert 3.4 < spans[0][0] / spans[1][0] < 4.6
+    for _, first, last in spans:
+        assert abs(first - last) < 0.05 * first
