@@ -154,3 +154,17 @@ def test_bad_parameters_are_refused():
         jg.kirchhoff_clebsch((3.0, 2.0, 0.5), theta=-1.0)
     with pytest.raises(jg.InvalidStateError):
         jg.solve(jg.heavy_top(1, 2, 1), [1, 2, 3], (0, 1), dt=0.1)
+
+
+def test_physical_t_eval_and_dense_output():
+    # physical times through the time scale: t_eval (exact for the heavy top, dop853 for the Clebsch top, whose
+    # model time is 1.25 t) and at(t) against the textbook flow, 1e-11 (DOP853 reference level)
+    top = jg.heavy_top(*HEAVY[0])
+    ref = reference(heavy_rhs(*HEAVY[0]), P_HEAVY, 5.0)
+    tr = jg.solve(top, P_HEAVY, (0.0, 5.0), dt=0.5, t_eval=[1.234, 4.5])
+    assert np.allclose(tr.t, [1.234, 4.5]) and np.abs(tr.physical - ref(tr.t).T).max() < 1e-11
+    assert np.abs(top.from_state(tr.at(3.21)) - ref(3.21)).max() < 1e-11
+    kc = jg.kirchhoff_clebsch(A_CLEBSCH, THETA, C)
+    refk = reference(kirchhoff_rhs(A_CLEBSCH, THETA, C), P_CLEBSCH, 5.0)
+    trk = jg.solve(kc, P_CLEBSCH, (0.0, 5.0), method="dop853", t_eval=[0.7, 3.3], rtol=1e-13, atol=1e-13)
+    assert np.allclose(trk.t, [0.7, 3.3]) and np.abs(trk.physical - refk(trk.t).T).max() < 1e-11
