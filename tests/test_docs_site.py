@@ -105,7 +105,8 @@ def test_cli_reference_is_generated_from_the_app(site):
 
 @pytest.mark.parametrize(
     "tutorial",
-    ["appendix2", "map-as-flow", "branch-rule", "ensembles", "long-runs", "euler-angles", "chains", "xxz", "xyz"],
+    ["appendix2", "map-as-flow", "branch-rule", "ensembles", "long-runs", "euler-angles", "chains", "xxz", "xyz",
+     "physical_tops"],
 )
 def test_tutorials_are_executed_with_figures(site, tutorial):
     html = (site / "tutorials" / f"{tutorial}.html").read_text(encoding="utf-8")

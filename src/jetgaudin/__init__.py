@@ -23,6 +23,7 @@ from .gaudin import (
 from .hamiltonians import *  # noqa: F403  (all of hamiltonians.__all__ is public)
 from .lax import lax_matrix, r_matrix, uvw
 from .maps import Advance, Backend, Branch, Map, map_from_description
+from .physical import heavy_top, kirchhoff_clebsch
 from .solve import solve
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
 from .systems import GaudinTop, generalized_lagrange_top, lagrange_top, material_point
@@ -68,6 +69,8 @@ __all__ = [
     "exact_parameters",
     "ChainExactFlow",
     "solve",
+    "heavy_top",
+    "kirchhoff_clebsch",
     "find_events",
     "poincare_section",
     "OnePointBacklund",

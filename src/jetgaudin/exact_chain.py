@@ -157,6 +157,11 @@ class ChainExactFlow(Map):
                 1e-6)
         P = model.family.period
         rho = lc + self.rho_factor * R / _node_scales(k)
+        if not bp.size and len(model.sites) == 1 and P is not None:
+            # one site of a family without computed branch points (the elliptic Clebsch top, issue 34): R would be
+            # the 1e-6 floor (real parts on the site) and ±ρ make ν²'s even basis functions coincide (a singular
+            # Jacobian); take one-sided real parts P/4, P/8, … (a quarter period off the site)
+            rho = lc + P / 4 / np.arange(1, k + 1)
         if P is not None and np.max(np.abs(rho[:, None] - model.positions[None, :])) >= P / 2:  # it would wrap
             rho = _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
 

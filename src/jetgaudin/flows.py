@@ -49,6 +49,23 @@ class Trajectory:
     integrals: np.ndarray
     method: str
     info: dict = field(default_factory=dict)
+    #: a physical top's variables ``top.from_state(X)`` beside the model states (:func:`jetgaudin.solve` of a
+    #: :mod:`jetgaudin.physical` top), else ``None``
+    physical: np.ndarray | None = None
+    #: model time per unit of ``t`` (a physical top's ``time_scale``; 1 otherwise)
+    time_scale: float = 1.0
+    #: ``dense(t) -> X(t)`` for the exact method (:meth:`at`), else ``None``
+    dense: Any = field(default=None, repr=False, compare=False)
+
+    def at(self, t) -> np.ndarray:
+        """The model state at any time(s) ``t`` within the trajectory's span, shape ``np.shape(t) + X.shape[1:]``:
+        for ``method="exact"`` one exact step from the nearest saved state (no interpolation error; a physical
+        top's variables: ``top.from_state(tr.at(t))``).  Other methods: :class:`InvalidParameterError`."""
+        if self.dense is None:
+            raise InvalidParameterError(f"at(t) is the exact flow's dense output: this trajectory's method is "
+                                        f"{self.method!r} (solve one orbit with method='exact', or use t_eval with "
+                                        "'dop853'/'heyoka')")
+        return self.dense(t)
 
     def to_xarray(self):
         """An ``xarray.Dataset`` with ``X`` (time, ..., component) and ``integrals`` (time, ..., integral);

@@ -9,7 +9,8 @@ Methods (``docs/integrators.md``):
   rotation matched; exact for N = 2, the exact flow of a *modified* Hamiltonian for N ≥ 3);
 * ``"dop853"`` -- SciPy's DOP853 (adaptive; ``dt`` only sets the output grid), tolerances ``rtol``/``atol``;
 * ``"heyoka"`` -- heyoka's Taylor method (adaptive; tolerance ``rtol``), extra ``jetgaudin[heyoka]``;
-* ``"midpoint"`` -- :class:`jetgaudin.midpoint.ImplicitMidpoint`, order 2, fixed step.
+* ``"midpoint"`` -- :class:`jetgaudin.midpoint.ImplicitMidpoint`, order 2, fixed step;
+* ``"kahan"`` -- :class:`jetgaudin.kahan.KahanMap`, Kahan's map: order 2, one linear solve per step (tops and chains).
 
 The fixed-step methods take ``n = ⌈|t1 − t0|/|dt|⌉`` steps of ``(t1 − t0)/n`` (so the grid ends at ``t1``; the step
 used is ``info["dt"]``).  The result is a :class:`jetgaudin.Trajectory` (``t``, ``X``, the integrals and their drift).
@@ -18,6 +19,7 @@ used is ``info["dt"]``).  The result is a :class:`jetgaudin.Trajectory` (``t``, 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from enum import StrEnum
 from typing import Any
 
@@ -43,6 +45,7 @@ class SolveMethod(StrEnum):
     DOP853 = "dop853"
     HEYOKA = "heyoka"
     MIDPOINT = "midpoint"
+    KAHAN = "kahan"
 
     @classmethod
     def parse(cls, value: SolveMethod | str) -> SolveMethod:
@@ -66,6 +69,10 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
 
 
 def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
+    if method is SolveMethod.KAHAN:
+        from .kahan import KahanMap
+
+        return KahanMap(H, dt, Backend.parse(backend))
     if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
         from .exact_chain import ChainExactFlow
 
@@ -89,9 +96,43 @@ def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarra
     return np.array(idx), np.concatenate(rows, axis=0)
 
 
+def _exact_dense(H: Any, chain: bool, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
+    """``dense(t)``: the state at times ``t`` by one exact step from the nearest saved state (issue 34)."""
+    up = t_grid[-1] >= t_grid[0]
+    ts, Xs = (t_grid, X_grid) if up else (t_grid[::-1], X_grid[::-1])
+    span = abs(ts[-1] - ts[0])
+
+    def dense(t) -> np.ndarray:
+        try:
+            t = np.asarray(t, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidParameterError(f"t must be real times, got {t!r}") from None
+        flat = t.reshape(-1)
+        slack = 1e-12 * max(1.0, span)
+        if not np.all(np.isfinite(flat)) or np.any(flat < ts[0] - slack) or np.any(flat > ts[-1] + slack):
+            raise InvalidParameterError(f"t must lie in the trajectory's span [{ts[0]}, {ts[-1]}]; solve over a "
+                                        "longer t_span")
+        j = np.clip(np.searchsorted(ts, flat), 1, len(ts) - 1)
+        k = np.where(flat - ts[j - 1] <= ts[j] - flat, j - 1, j) if len(ts) > 1 else np.zeros(len(flat), int)
+        out = np.empty((len(flat),) + Xs.shape[1:])
+        for r, (kk, tt) in enumerate(zip(k, flat, strict=True)):
+            ds = float(tt - ts[kk])
+            if ds == 0.0:
+                out[r] = Xs[kk]
+            elif chain:
+                from .exact_chain import ChainExactFlow
+
+                out[r] = ChainExactFlow(H, ds)(Xs[kk])
+            else:
+                out[r] = ExactFlow(H, ds, substeps)(Xs[kk])
+        return out.reshape(t.shape + Xs.shape[1:])
+
+    return dense
+
+
 def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
           rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
-          backend: str = "auto") -> Trajectory:
+          backend: str = "auto", t_eval=None) -> Trajectory:
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
     ``model.hamiltonian(weights)`` (methods ``"exact"``: :class:`jetgaudin.ChainExactFlow`, ``"dop853"``,
     ``"heyoka"``) from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
@@ -101,6 +142,11 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     output spacing, default: the end points only).  ``substeps``: for ``"exact"``/``"bt"``, ``"auto"`` (split a step
     the leaf cannot take at once; :class:`jetgaudin.StepTooLargeError` never reaches you) or an integer (an
     infeasible step then raises).  ``backend``: ``"auto"``/``"compiled"``/``"numpy"`` for the map methods.
+    ``t_eval``: sample times (absolute) instead of the grid -- ``"dop853"``/``"heyoka"`` sample there, ``"exact"``
+    steps on the ``dt`` grid and reaches each ``t`` by one exact step from the nearest grid state
+    (:meth:`Trajectory.at`, kept on the result for ``"exact"``).  ``H`` may be a physical top
+    (:func:`jetgaudin.heavy_top`, :func:`jetgaudin.kirchhoff_clebsch`; then ``X0`` is its ``P0`` and the result has
+    physical times and ``Trajectory.physical``, :func:`jetgaudin.physical.solve_physical`).
 
     >>> import jetgaudin as jg
     >>> H = jg.physical_hamiltonian(3, 1.0)
@@ -109,15 +155,20 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     >>> tr.t.tolist(), bool(tr.drift.max() < 1e-13)
     ([0.0, 0.25, 0.5, 0.75, 1.0], True)
     """
+    if getattr(H, "is_physical_top", False):  # jg.heavy_top, jg.kirchhoff_clebsch (issue 34)
+        from .physical import solve_physical
+
+        return solve_physical(H, X0, t_span, dt=dt, method=method, rtol=rtol, atol=atol, save_every=save_every,
+                              substeps=substeps, backend=backend, t_eval=t_eval)
     method = SolveMethod.parse(method)
     chain = getattr(H, "model", None) is not None and callable(getattr(H, "record_integrals", None))
     if not isinstance(H, IntegralHamiltonian) and not chain:
         raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b)) or a chain "
                                     "Hamiltonian model.hamiltonian(weights)")
     if chain:
-        if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA):
+        if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA, SolveMethod.KAHAN):
             raise InvalidParameterError(f"method={method.value!r} is for the tops; a chain Hamiltonian takes "
-                                        "'exact', 'dop853' or 'heyoka'")
+                                        "'exact', 'dop853', 'heyoka' or 'kahan'")
         X0 = np.asarray(H.model.check_state(X0), dtype=float)
     else:
         X0, _ = as_state(X0)
@@ -129,7 +180,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
                           "solve")
     if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
         t0, t1 = (real_number(v, "t_span") for v in t_span)
-        if dt is None:
+        if t_eval is not None:
+            t_eval = np.asarray(t_eval, dtype=float) - t0
+        elif dt is None:
             t_eval = np.array([0.0, t1 - t0])
         else:
             _, h, n = time_grid(t_span, dt)
@@ -153,7 +206,17 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
             if not auto or exc.dt_max is None or exc.dt_max == 0:
                 raise
             s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
-    if method is not SolveMethod.MIDPOINT:
+    if method not in (SolveMethod.MIDPOINT, SolveMethod.KAHAN):
         info["substeps"] = s
     recorded = H.record_integrals(Xs) if chain else integrals(Xs, H.b, H.c)
-    return Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
+    tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
+    if method is SolveMethod.EXACT and (X0.ndim == 1 or not chain):
+        tr = replace(tr, dense=_exact_dense(H, chain, s, tr.t, Xs))
+    if t_eval is not None:  # the exact flow's dense output at the requested times
+        if tr.dense is None:
+            raise InvalidParameterError(f"t_eval needs dense output: method='exact', 'dop853' or 'heyoka', not "
+                                        f"{method.value!r} (a fixed-step map has states on its grid only)")
+        Xe = tr.at(t_eval)
+        rec = H.record_integrals(Xe) if chain else integrals(Xe, H.b, H.c)
+        tr = replace(tr, t=np.asarray(t_eval, dtype=float), X=Xe, integrals=np.asarray(rec, dtype=float))
+    return tr

@@ -534,7 +534,9 @@ def clebsch_top(modulus: float, position: float = 0.0) -> GaudinModel:
     (``a_i = A_i + μ``) is a Kirchhoff Hamiltonian (a rigid body in an ideal fluid) in **Clebsch's case**
     ``b_i = a_j a_k + const`` (``(i, j, k)`` cyclic; equivalently ``Σ_cyc (b_j − b_k)/a_i = 0``), with
     ``k² = (a_1 − a_2)/(a_1 − a_3)``.  Conversely a Clebsch Hamiltonian ``Σ a_i M_i² + Σ (θ a_j a_k + c) p_i²`` with
-    ``a_1 > a_2 > a_3`` and ``θ > 0`` is a member of this pencil plus Casimirs after rescaling time (``H → sH``,
-    ``s = 1/(a_1 − a_3)``) and ``p`` (``p → λp``, ``λ² = s/θ``, an automorphism of ``e(3)``), with that ``k``
-    (derived in the tutorial; the pencil's Clebsch form and ``k`` are tested in ``tests/test_elliptic.py``)."""
+    ``a_1 > a_2 > a_3`` and ``θ > 0`` is ``s^{-1}`` times a member of this pencil plus Casimirs (``s = 1/(a_1 − a_3)``)
+    after ``p → λp`` (``λ² = s/θ``, an automorphism of ``e(3)``), with that ``k`` (the pencil's Clebsch form and ``k``
+    are tested in ``tests/test_elliptic.py``).  As a motion, Kirchhoff's equations for ``½Σ a_i M_i² + ½Σ b_i p_i²``
+    are the flow of ``c0 + μ h_{1,2}`` (``μ = s a_3 + E/K``) at time ``t/(2s)`` in the variables ``−(M, p/λ)``:
+    :func:`jetgaudin.kirchhoff_clebsch` (``docs/physical.md`` §2)."""
     return GaudinModel(0.0, ((position, 2),), family="elliptic", modulus=modulus)
