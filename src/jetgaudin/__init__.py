@@ -14,6 +14,8 @@ from .gaudin import (
     ChainOnePointBacklund,
     ChainTwoPointBacklund,
     GaudinModel,
+    SunGaudinModel,
+    SunTwoPointBacklund,
     clebsch_top,
     gaudin_magnet,
     lagrange_chain,
@@ -22,6 +24,7 @@ from .gaudin import (
 )
 from .hamiltonians import *  # noqa: F403  (all of hamiltonians.__all__ is public)
 from .lax import lax_matrix, r_matrix, uvw
+from .lie import SU, su
 from .maps import Advance, Backend, Branch, Map, map_from_description
 from .solve import solve
 from .spectral import branch_points, integral_gradients, integrals, nu, nu_squared
@@ -88,6 +91,10 @@ __all__ = [
     "lagrange_chain",
     "twisted_chain",
     "parse_sites",
+    "su",
+    "SU",
+    "SunGaudinModel",
+    "SunTwoPointBacklund",
     *_LAZY,
 ]
 
