@@ -138,7 +138,12 @@ class SunGaudinModel(GaudinModel):
                 for a in range(1, self.dim + 1)]
 
     def check_state(self, X, *, allow_complex: bool = False) -> np.ndarray:
-        X, _ = as_state(X, allow_complex=allow_complex)
+        arr = np.asarray(X)
+        pad = (-arr.shape[-1]) % 3 if arr.ndim and arr.shape[-1] and arr.dtype.kind in "biufc" else 0
+        if pad:  # as_state (dtype, reality, finiteness) wants 3N components: pad with zeros, then drop them
+            arr = np.concatenate([arr, np.zeros(arr.shape[:-1] + (pad,), arr.dtype)], axis=-1)
+        X = as_state(arr, allow_complex=allow_complex)[0]
+        X = X[..., : X.shape[-1] - pad]
         if X.shape[-1] != self.n_state:
             raise InvalidStateError(
                 f"a state of the {self.algebra.name} chain with sites {list(self.sites)} has (n^2-1) M = "
