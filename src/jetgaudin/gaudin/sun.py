@@ -39,9 +39,9 @@ from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..families import make_family
 from ..lie import SU, parse_algebra
-from .model import GaudinModel, _check_sites, _taylor_coefficient
+from .model import ChainHamiltonian, GaudinModel, _check_sites, _taylor_coefficient
 
-__all__ = ["SunGaudinModel", "field_components"]
+__all__ = ["SunGaudinModel", "SunHamiltonian", "field_components"]
 
 
 def field_components(b, alg: SU) -> float | tuple[float, ...]:
@@ -333,9 +333,11 @@ class SunGaudinModel(GaudinModel):
 
     def interpolating_flow_hamiltonian(self, X, eta, branch: int = 0):
         """``Σ ω_I(X) h_I``: its flow from ``X`` is the flow of ``G^{(r)}_η`` (the ``ω`` are constant on it)."""
-        from .model import ChainHamiltonian
+        return SunHamiltonian(self, self.interpolating_weights(X, eta, branch))
 
-        return ChainHamiltonian(self, self.interpolating_weights(X, eta, branch))
+    def hamiltonian(self, weights) -> SunHamiltonian:
+        """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""
+        return SunHamiltonian(self, weights)
 
     def two_point_backlund(self, eta, branch=0, backend="auto", kernel=None):  # type: ignore[override]
         """The real two-point map ``B^{(r)}_η`` (:class:`jetgaudin.gaudin.sun_maps.SunTwoPointBacklund`)."""
@@ -359,3 +361,17 @@ class SunGaudinModel(GaudinModel):
 
     def one_point_backlund(self, *args, **kwargs):
         _not_here("the one-point map")
+
+
+@dataclass(frozen=True)
+class SunHamiltonian(ChainHamiltonian):
+    """``H = Σ_I w_I h_I`` on an su(n) chain.  For ``n ≥ 3`` the integrals are not quadratic, so it declares no
+    structure constants (:func:`jetgaudin.integrate` then takes the generic right-hand side :meth:`vector_field`,
+    not the affine-gradient one; heyoka's symbolic route refuses it), and it checks states of length ``(n²−1)M``."""
+
+    @property
+    def structure_constants(self):  # type: ignore[override]
+        return self.model.structure_constants if self.model.n == 2 else None
+
+    def check_state(self, X) -> np.ndarray:
+        return self.model.check_state(X)

@@ -34,7 +34,7 @@ import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
-from ..maps import Backend, Map, MapProperties, check_count, register_map, step_loop
+from ..maps import Advance, Backend, Map, MapProperties, register_map
 from .sun import SunGaudinModel
 from .sun_spectral import _GAP_TOL, branch_index, check_start, eigenvalue_branch
 
@@ -76,8 +76,9 @@ class SunTwoPointBacklund(Map):
     branch : int
         ``r = 0..n−1``: the ``r``-th largest eigenvalue of ``ℓ(Re η)`` continued to ``η`` (``"default"`` = 0; for
         ``n = 2`` ``"opposite"`` = 1).
-    backend, kernel : {"auto", "numpy"}
-        The NumPy route.
+    backend, kernel : {"auto", "numpy", "compiled"}
+        ``"compiled"``: the Numba kernel of :mod:`jetgaudin.gaudin._sun_kernel` (``n = 3`` only); ``"auto"`` takes
+        it from ``AUTO_MIN_WORK`` orbit-steps on.
 
     Raises
     ------
@@ -160,10 +161,39 @@ class SunTwoPointBacklund(Map):
         imag = np.max(np.abs(Xc.imag), axis=-1) / (1.0 + np.max(np.abs(Xr), axis=-1))
         return Xr.reshape(shape), mu.reshape(shape[:-1]), imag.reshape(shape[:-1])
 
-    def advance(self, X, carry, steps, save_every=1):
+    @property
+    def has_compiled(self) -> bool:
+        """su(3) has a compiled route (:mod:`jetgaudin.gaudin._sun_kernel`); other ``n`` the NumPy one."""
+        return self.model.n == 3
+
+    def _auto_backend(self, X, steps) -> Backend:
+        """Compiled from :data:`jetgaudin.gaudin._backend.AUTO_MIN_WORK` orbit-steps on (compiling costs seconds)."""
+        from ._backend import AUTO_MIN_WORK
+
+        work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
+        return Backend.COMPILED if work >= AUTO_MIN_WORK else Backend.NUMPY
+
+    def _compiled_advance(self, X, carry, steps, save_every) -> Advance:
+        """The Numba kernel (one orbit, or a batch on all cores); ``μ_r`` at ``X`` by the NumPy branch rule; no
+        imaginary residue (zeros)."""
+        from . import _sun_kernel as K
+
         X = self.model.check_state(X)
-        check_count(steps, "steps")
-        return step_loop(self, X, self.start(X) if carry is None else carry, steps, save_every)
+        shape = X.shape
+        Xb = np.ascontiguousarray(X.reshape(-1, shape[-1]))
+        mu = (self.start(Xb) if carry is None else np.broadcast_to(np.asarray(carry, dtype=complex),
+                                                                    shape[:-1]).reshape(-1)).astype(complex)
+        c = K.orbit_constants(self.model, self.eta)
+        if Xb.shape[0] == 1:
+            r, xf, m = K.run_orbit(Xb[0], c[0], complex(mu[0]), *c[1:], self.eta, steps, save_every)
+            rows, final, last = r[:, None], xf[None], np.array([m])
+        else:
+            rows, final, last = K.run_batch(Xb, c[0], mu, *c[1:], self.eta, steps, save_every)
+        if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
+            raise SingularStepError("the compiled su(3) orbit produced non-finite values (eta at a branch point?); "
+                                    "change eta")
+        return Advance(rows=rows.reshape((rows.shape[0],) + shape), X=final.reshape(shape),
+                       carry=last.reshape(shape[:-1]), imag_max=np.zeros(shape[:-1]))
 
     def inverse(self) -> SunTwoPointBacklund:
         """``B^{(r)}_{η̄}`` (module docstring)."""
