@@ -342,7 +342,8 @@ class FlowMap(Map):
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         steps = check_count(steps, "steps")
         save_every = check_count(save_every, "save_every", 1)
-        X = self.H.check_state(X) if callable(getattr(self.H, "check_state", None)) else as_state(X)[0]
+        check = getattr(self.H, "check_state", None)  # a Hamiltonian on its own state space (an su(n) chain)
+        X = check(X) if callable(check) else as_state(X)[0]
         zeros = np.zeros(X.shape[:-1], dtype=complex)
         if steps == 0:
             return Advance(rows=np.empty((0,) + X.shape), X=X.copy(), carry=zeros, imag_max=zeros.real)

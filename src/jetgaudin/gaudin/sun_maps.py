@@ -184,11 +184,13 @@ class SunTwoPointBacklund(Map):
         mu = (self.start(Xb) if carry is None else np.broadcast_to(np.asarray(carry, dtype=complex),
                                                                     shape[:-1]).reshape(-1)).astype(complex)
         c = K.orbit_constants(self.model, self.eta)
+        run_orbit: Any = K.run_orbit  # Numba dispatchers
+        run_batch: Any = K.run_batch
         if Xb.shape[0] == 1:
-            r, xf, m = K.run_orbit(Xb[0], c[0], complex(mu[0]), *c[1:], self.eta, steps, save_every)
+            r, xf, m = run_orbit(Xb[0], c[0], complex(mu[0]), *c[1:], self.eta, steps, save_every)
             rows, final, last = r[:, None], xf[None], np.array([m])
         else:
-            rows, final, last = K.run_batch(Xb, c[0], mu, *c[1:], self.eta, steps, save_every)
+            rows, final, last = run_batch(Xb, c[0], mu, *c[1:], self.eta, steps, save_every)
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled su(3) orbit produced non-finite values (eta at a branch point?); "
                                     "change eta")
