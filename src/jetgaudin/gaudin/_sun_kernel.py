@@ -4,13 +4,16 @@ The arithmetic of :func:`jetgaudin.gaudin.sun_maps.dress` with what is constant 
 ``f_c = (η − λ_c)^{−(k_c+1)}`` (the weights of ``ℓ(η)``).  Per step:
 
 * ``ℓ(η) = Σ_a λ_a ξ^a(η)`` from ``ξ = b + Σ_c f_c y_c`` (the Gell-Mann matrices written out);
-* ``μ_r(η)`` is an integral of the map: the carry, Newton-polished (three steps) on the characteristic polynomial
+* ``μ_r(η)`` is an integral of the map: the carry, Newton-polished (two steps) on the characteristic polynomial
   ``μ³ − ½ tr(ℓ²) μ − det ℓ`` of the current ``ℓ(η)`` (no eigen-solver);
 * the eigenvector ``v`` (``(ℓ(η) − μ) v = 0``) is the cross product of two rows of ``ℓ(η) − μ`` (no conjugation: each
   row annihilates ``v``); of the three pairs the one with the largest product;
-* ``P = v v^†/(v^† v)``, ``D_0 = (λ_i − η̄) + (η̄ − η) P``,
-  ``D^{−1}_c = (−1)^c [α^{c+1} + (β^{c+1} − α^{c+1}) P]`` (``α = 1/(λ_i − η̄)``, ``β = 1/(λ_i − η)``),
-  ``Ỹ_k = Σ_{j≥k} D_0 Y_j D^{−1}_{j−k} + Y_j D^{−1}_{j−k−1}``, and ``y^a = Re tr(λ_a Ỹ)/2``.
+* ``u = v/|v|``, ``P = u u^†``, ``D_0 = d_0 + d_1 P`` (``d_0 = λ_i − η̄``, ``d_1 = η̄ − η``),
+  ``D^{−1}_c = a_c + g_c P`` (``a_c = (−α)^c α``, ``g_c = (−1)^c (β^{c+1} − α^{c+1})``, ``α = 1/(λ_i − η̄)``,
+  ``β = 1/(λ_i − η)``); with ``w = Y u``, ``s = u^† w`` and ``Y`` Hermitian (``YP = w u^†``, ``PY = u w^†``,
+  ``PYP = s u u^†``) every term of ``Ỹ_k = Σ_{j≥k} D_0 Y_j D^{−1}_{j−k} + Y_j D^{−1}_{j−k−1}`` is
+  ``(d_0 a_c + a_{c−1}) Y + (d_0 g_c + g_{c−1}) w u^† + d_1 a_c u w^† + d_1 g_c s u u^†`` (``c = j − k``,
+  ``a_{−1} = g_{−1} = 0``): no 3×3 product; and ``y^a = Re tr(λ_a Ỹ)/2``.
 
 The branch rule at the first state is applied by the caller (NumPy); the orbits agree with the NumPy route to
 round-off (``tests/test_sun_kernel.py``).  ``run_batch`` runs orbits on all cores (``prange``), each its single run.
@@ -63,7 +66,7 @@ def _mm(A, B, C):
 
 
 @njit(cache=True)
-def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, P, Y, T, U, acc, Dinv):
+def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc):
     """One step from ``x`` into ``out``; returns the polished ``μ_r(η)``."""
     for a in range(8):
         xi[a] = b[a]
@@ -78,7 +81,7 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, P, Y, T, U, 
     det = (L[0, 0] * (L[1, 1] * L[2, 2] - L[1, 2] * L[2, 1]) - L[0, 1] * (L[1, 0] * L[2, 2] - L[1, 2] * L[2, 0])
            + L[0, 2] * (L[1, 0] * L[2, 1] - L[1, 1] * L[2, 0]))
     p = -0.5 * t2
-    for _ in range(3):
+    for _ in range(2):
         mu = mu - (mu * mu * mu + p * mu - det) / (3.0 * mu * mu + p)
     for i in range(3):
         L[i, i] -= mu
@@ -91,39 +94,39 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, P, Y, T, U, 
         nrm = c0.real**2 + c0.imag**2 + c1.real**2 + c1.imag**2 + c2.real**2 + c2.imag**2
         if nrm > best:
             best, v0, v1, v2 = nrm, c0, c1, c2
-    v = (v0, v1, v2)
-    for i in range(3):
-        for j in range(3):
-            P[i, j] = v[i] * v[j].conjugate() / best
+    nv = np.sqrt(best)
+    u[0], u[1], u[2] = v0 / nv, v1 / nv, v2 / nv
     eb = eta.conjugate()
+    d0, d1 = 0j, eb - eta
     for s in range(site_pos.shape[0]):
         lam, o, N = site_pos[s], site_off[s], site_n[s]
         alpha, beta = 1.0 / (lam - eb), 1.0 / (lam - eta)
+        d0 = lam - eb
         ap, bp = alpha, beta
-        for c in range(N):
+        for c in range(N):  # D^{-1}_c = a_c + g_c P
             sg = 1.0 if c % 2 == 0 else -1.0
-            for i in range(3):
-                for j in range(3):
-                    Dinv[c, i, j] = sg * (bp - ap) * P[i, j]
-                Dinv[c, i, i] += sg * ap
+            ac[c], gc[c] = sg * ap, sg * (bp - ap)
             ap, bp = ap * alpha, bp * beta
-        d0, d1 = lam - eb, eb - eta
         for k in range(N):
             for i in range(3):
                 for j in range(3):
                     acc[i, j] = 0j
             for j in range(k, N):
+                c = j - k
+                A, Bc, C, E = d0 * ac[c], d0 * gc[c], d1 * ac[c], d1 * gc[c]
+                if c > 0:
+                    A += ac[c - 1]
+                    Bc += gc[c - 1]
                 _mat(x, 8 * (o + j), Y)
-                _mm(Y, Dinv[j - k], T)  # Y D^{-1}_{j-k}
-                _mm(P, T, U)  # P Y D^{-1}_{j-k}
+                sw = 0j
                 for i in range(3):
+                    w[i] = Y[i, 0] * u[0] + Y[i, 1] * u[1] + Y[i, 2] * u[2]
+                    sw += u[i].conjugate() * w[i]
+                for i in range(3):
+                    bi, ci, ei = Bc * w[i], C * u[i], E * sw * u[i]
                     for m in range(3):
-                        acc[i, m] += d0 * T[i, m] + d1 * U[i, m]
-                if j > k:
-                    _mm(Y, Dinv[j - k - 1], T)
-                    for i in range(3):
-                        for m in range(3):
-                            acc[i, m] += T[i, m]
+                        acc[i, m] += A * Y[i, m] + bi * u[m].conjugate() + ci * w[m].conjugate() + \
+                            ei * u[m].conjugate()
             _put(acc, out, 8 * (o + k))
     return mu
 
@@ -137,15 +140,15 @@ def run_orbit(x0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every)
     out = np.empty(n)
     xi = np.empty(8, dtype=np.complex128)
     L = np.empty((3, 3), dtype=np.complex128)
-    P = np.empty((3, 3), dtype=np.complex128)
+    u = np.empty(3, dtype=np.complex128)
+    w = np.empty(3, dtype=np.complex128)
     Y = np.empty((3, 3), dtype=np.complex128)
-    T = np.empty((3, 3), dtype=np.complex128)
-    U = np.empty((3, 3), dtype=np.complex128)
     acc = np.empty((3, 3), dtype=np.complex128)
-    Dinv = np.empty((max(1, np.max(site_n)), 3, 3), dtype=np.complex128)
+    ac = np.empty(max(1, np.max(site_n)), dtype=np.complex128)
+    gc = np.empty(max(1, np.max(site_n)), dtype=np.complex128)
     mu = mu0
     for t in range(steps):
-        mu = _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, P, Y, T, U, acc, Dinv)
+        mu = _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc)
         x, out = out, x
         if (t + 1) % save_every == 0:
             rows[(t + 1) // save_every - 1] = x
