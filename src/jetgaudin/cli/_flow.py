@@ -77,6 +77,7 @@ def flow(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
@@ -94,9 +95,9 @@ def flow(
 
             X0 = init_from(init_from_dir)[0]
         else:
-            X0 = np.array(cm.parse_init(init))
+            X0 = np.array(cm.parse_init(init, multiple=3 if algebra is None else 1))  # su(n): checked below
         N = len(X0) // 3
-        fam = _chains.family_kw(sites, family, gamma, modulus=modulus)
+        fam = _chains.family_kw(sites, family, gamma, modulus=modulus, algebra=algebra)
         model = None if sites is None else _chains.chain_model(sites, bf, **fam)
         if model is not None:
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
@@ -215,7 +216,8 @@ def parse_hamiltonian(text: str, X0, b: float, model=None) -> tuple[str, np.ndar
             jg.physical_hamiltonian(len(X0) // 3, b).weights, dtype=float)
     n = 2 * (len(X0) // 3) if model is None else int(model.n_integrals)  # a family's extras (J, c0) last
     try:
-        w = np.array(cm.parse_init(text, "--hamiltonian"), dtype=float)
+        w = np.array(cm.parse_init(text, "--hamiltonian", multiple=1 if isinstance(model, jg.SunGaudinModel) else 3),
+                     dtype=float)
     except cm.CliInputError:
         raise cm.CliInputError(f"--hamiltonian: give 'interpolating', 'physical' or {n} comma-separated weights "
                                f"w_1,...,w_{n}, got {text!r}") from None
