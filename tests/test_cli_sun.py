@@ -6,10 +6,10 @@ import json
 
 import numpy as np
 import pytest
-from test_cli_chains import one_line_error
-from test_run import run_cli
 
 import jetgaudin as jg
+from test_cli_chains import one_line_error
+from test_run import run_cli
 
 SITES = "0:1,1:1"
 MODEL = jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su3")
