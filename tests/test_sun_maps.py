@@ -193,3 +193,19 @@ def test_integrate_and_flow_map():
     assert np.allclose(F.iterate(X, 2)[-1], tr.X[-1], atol=1e-9)
     G = jg.map_from_description(F.describe())
     assert type(G.H) is type(H) and np.array_equal(G.H.weights, H.weights)
+
+
+def test_order_two_in_im_eta():
+    """MapProperties.order = 2: B^{(r)}_{a+ih} is the flow of μ_r(a) over the time −2h up to O(h³) per step (G =
+    −2∫₀ʰ Re μ_r(a + is) ds = −2h μ_r(a) + O(h³), the O(s) term of μ_r being imaginary).  The weights of μ_r(a) are
+    ω(a + iε)/(−2ε) at ε = 1e-7 (relative error O(ε²)); halving h divides the error by 8 (log₂ ratio in [2.7, 3.3])."""
+    m = _model()
+    X = _state(m, seed=10)
+    a = 0.3
+    w = m.interpolating_weights(X, a + 1e-7j, 1) / (-2e-7)
+    H = m.hamiltonian(w)
+    errs = []
+    for h in (0.08, 0.04):
+        flow = solve_ivp(lambda t, x: H.vector_field(x), (0.0, -2 * h), X, method="DOP853", rtol=1e-13, atol=1e-13)
+        errs.append(np.max(np.abs(m.two_point_backlund(a + 1j * h, branch=1)(X) - flow.y[:, -1])))
+    assert 2.7 < np.log2(errs[0] / errs[1]) < 3.3
