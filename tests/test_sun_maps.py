@@ -209,3 +209,8 @@ def test_order_two_in_im_eta():
         flow = solve_ivp(lambda t, x: H.vector_field(x), (0.0, -2 * h), X, method="DOP853", rtol=1e-13, atol=1e-13)
         errs.append(np.max(np.abs(m.two_point_backlund(a + 1j * h, branch=1)(X) - flow.y[:, -1])))
     assert 2.7 < np.log2(errs[0] / errs[1]) < 3.3
+
+
+def test_su2_chain_maps_refuse_an_sun_model():
+    with pytest.raises(jg.InvalidParameterError, match="two_point_backlund\\(eta, branch=r\\)"):
+        jg.ChainTwoPointBacklund(_model(), ETA)

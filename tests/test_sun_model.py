@@ -203,3 +203,15 @@ def test_a_degenerate_field_loses_an_integral():
     m = jg.GaudinModel(0.5, [(0.0, 1), (1.0, 2)], algebra="su4")
     g = m.integral_gradients(_state(m, seed=11))
     assert np.linalg.matrix_rank(g, tol=1e-9 * np.max(np.abs(g))) == m.n_integrals - 1
+
+
+def test_pickle_and_replace_keep_the_class():
+    """Dask ships models by pickle; dataclasses.replace rebuilds them: both keep the su(n) class and the su(2) one."""
+    import dataclasses
+    import pickle
+
+    m = jg.GaudinModel(0.5, SITES, algebra="su3")
+    for x in (m, jg.GaudinModel(0.5, SITES), m.two_point_backlund(0.3 + 0.2j, branch=2)):
+        y = pickle.loads(pickle.dumps(x))
+        assert y == x and type(y) is type(x)
+    assert type(dataclasses.replace(m, b=1.0)) is SunGaudinModel
