@@ -14,6 +14,8 @@ from .gaudin import (
     ChainOnePointBacklund,
     ChainTwoPointBacklund,
     GaudinModel,
+    SunGaudinModel,
+    SunTwoPointBacklund,
     clebsch_top,
     gaudin_magnet,
     lagrange_chain,
@@ -22,6 +24,7 @@ from .gaudin import (
 )
 from .hamiltonians import *  # noqa: F403  (all of hamiltonians.__all__ is public)
 from .lax import lax_matrix, r_matrix, uvw
+from .lie import SU, su
 from .maps import Advance, Backend, Branch, Map, map_from_description
 from .physical import heavy_top, kirchhoff_clebsch
 from .solve import solve
@@ -91,6 +94,10 @@ __all__ = [
     "lagrange_chain",
     "twisted_chain",
     "parse_sites",
+    "su",
+    "SU",
+    "SunGaudinModel",
+    "SunTwoPointBacklund",
     *_LAZY,
 ]
 

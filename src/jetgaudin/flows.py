@@ -258,7 +258,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     >>> bool(tr.drift.max() < 1e-11)
     True
     """
-    X0, N = as_state(X0)
+    check = getattr(H, "check_state", None)  # a Hamiltonian on its own state space (an su(n) chain: (n²−1)M)
+    X0, N = (check(X0), 0) if callable(check) else as_state(X0)
     T, t_eval = _check_times(T, t_eval)
     rtol = _check_tol("rtol", rtol, True)
     atol = _check_tol("atol", atol, False)
@@ -410,7 +411,8 @@ class FlowMap(Map):
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         steps = check_count(steps, "steps")
         save_every = check_count(save_every, "save_every", 1)
-        X, _ = as_state(X)
+        check = getattr(self.H, "check_state", None)  # a Hamiltonian on its own state space (an su(n) chain)
+        X = check(X) if callable(check) else as_state(X)[0]
         zeros = np.zeros(X.shape[:-1], dtype=complex)
         if steps == 0:
             return Advance(rows=np.empty((0,) + X.shape), X=X.copy(), carry=zeros, imag_max=zeros.real)

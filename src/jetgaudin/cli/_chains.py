@@ -23,13 +23,42 @@ FAMILY_HELP = ("the Gaudin family of --sites: 'rational' (XXX, the paper's), 'tr
 GAMMA_HELP = "anisotropy γ > 0 of --family trigonometric (sites distinct modulo π/γ) [default: 1]"
 MODULUS_HELP = ("modulus k in [0, 1) of --family elliptic (sites distinct modulo 2K(k), |Im η| < 0.9 K'(k)); "
                 "required by it")
+ALGEBRA_HELP = ("the Lie algebra of --sites: su2 (the default) or suN, e.g. su3 (rational family; --init then takes "
+                "(N²−1)M numbers, --b is the field along λ_3; docs/sun.md)")
+
+
+def algebra_kw(sites: str | None, algebra: str | None, fam: dict) -> dict:
+    """``{"algebra": "su(n)"}`` for :func:`chain_model` from ``--algebra`` (nothing for su(2), today's models); one
+    line naming the option otherwise."""
+    if algebra is None:
+        return {}
+    import jetgaudin as jg
+    from jetgaudin.lie import parse_algebra
+
+    if sites is None:
+        raise CliInputError("--algebra: su(n) models are chains; give --sites (e.g. --sites 0:1,1:1)")
+    try:
+        alg = parse_algebra(algebra)
+    except jg.JetGaudinError as exc:
+        raise CliInputError("--algebra: " + one_line(exc)) from None
+    if alg.n == 2:
+        return {}
+    if fam.get("family", "rational") != "rational":
+        raise CliInputError(f"--algebra: {alg.name} models are rational only; drop --family/--gamma/--modulus")
+    return {"algebra": alg.name}
 
 
 def family_kw(sites: str | None, family: str | None, gamma: str | None, record: dict | None = None, *,
-              modulus: str | None = None) -> dict:
+              modulus: str | None = None, algebra: str | None = None) -> dict:
     """``{"family": …, "gamma": …, "modulus": …}`` for :func:`chain_model` from ``--family`` / ``--gamma`` /
-    ``--modulus`` (or, when all are absent, from a recorded run's map description, ``record``); one line naming the
-    option otherwise."""
+    ``--modulus`` (or, when all are absent, from a recorded run's map description, ``record``), and ``"algebra"``
+    from ``--algebra`` (:func:`algebra_kw`); one line naming the option otherwise."""
+    fam = _family_kw(sites, family, gamma, record, modulus=modulus)
+    return {**fam, **algebra_kw(sites, algebra, fam)}
+
+
+def _family_kw(sites: str | None, family: str | None, gamma: str | None, record: dict | None = None, *,
+               modulus: str | None = None) -> dict:
     m = (record or {}).get("map", {})
     if family is None and gamma is None and modulus is None:
         return {k: m[k] for k in ("family", "gamma", "modulus") if k in m}
@@ -86,7 +115,7 @@ def parse_chain_b(text: Any, option: str = "--b") -> float:
 
 
 def chain_model(sites: str, b: float, family: str = "rational", gamma: float | None = None,
-                modulus: float | None = None):
+                modulus: float | None = None, algebra: str = "su(2)"):
     """The :class:`~jetgaudin.gaudin.GaudinModel` of ``--sites`` in the field ``b e_3`` (``--family``, ``--gamma``,
     ``--modulus``: :func:`family_kw`)."""
     import jetgaudin as jg
@@ -95,7 +124,7 @@ def chain_model(sites: str, b: float, family: str = "rational", gamma: float | N
     if not str(sites).isascii() or "_" in str(sites):  # float() reads Unicode digits (١:3 was site 1.0) and 1_0
         raise CliInputError(f"--sites: {sites!r}: write the sites with ASCII digits, e.g. --sites -1:3,0.5:3")
     try:
-        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus)
+        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus, algebra)
     except jg.JetGaudinError as exc:
         msg = one_line(exc)
         if "gamma" in msg and "sites" not in msg:
@@ -112,8 +141,10 @@ def check_chain_state(model, X: Any, option: str = "--init") -> np.ndarray:
     X = np.asarray(X, dtype=float)
     if X.shape[-1] != model.n_state:
         sites = ",".join(f"{p:g}:{N}" for p, N in model.sites)
-        raise CliInputError(f"--sites: the sites {sites} need 3M = {model.n_state} numbers in {option} (M = sum of the "
-                            f"orders = {model.M}: one 3-vector per site and order), got {X.shape[-1]}")
+        d = model.n_state // model.M
+        raise CliInputError(f"--sites: the sites {sites} need {'3M' if d == 3 else f'{d}M'} = {model.n_state} numbers "
+                            f"in {option} (M = sum of the orders = {model.M}: one {d}-vector per site and order), got "
+                            f"{X.shape[-1]}")
     return X
 
 
@@ -122,10 +153,24 @@ def chain_map(model, eta: complex, branch: str, kernel: str | None):
     import jetgaudin as jg
 
     try:
+        if isinstance(model, jg.SunGaudinModel):  # su(n): the map's rules for eta first, then the run layer's limit
+            jg.SunTwoPointBacklund(model, eta, 0)
+            refuse_sun_runs(model)
         return jg.ChainTwoPointBacklund(model, eta, jg.Branch.parse(branch), jg.Backend.parse(kernel or "auto"))
     except jg.InvalidParameterError as exc:
         option = "--sites" if "is a site" in str(exc) else "--eta"
         raise CliInputError(f"{option}: {one_line(exc)}") from None
+
+
+def refuse_sun_runs(model) -> None:
+    """One line for an su(n) model (n ≥ 3) where a run is asked: the run layer records 3N-component states."""
+    import jetgaudin as jg
+
+    if isinstance(model, jg.SunGaudinModel):
+        raise CliInputError(
+            f"--algebra: {model.algebra.name} runs (orbit, ensemble, flow) are not built yet: the run layer records "
+            "3N-component states; use `jetgaudin info --algebra` or the Python API "
+            "(model.two_point_backlund(eta, branch=r).iterate(X, steps), docs/sun.md)")
 
 
 def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
@@ -168,7 +213,9 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
     bb = parse_chain_b(b)
     eta_c = parse_eta(eta, pole_at_zero=False)
     model = chain_model(sites, bb, **(fam or {}))
-    X = check_chain_state(model, parse_init(init))
+    X = check_chain_state(model, parse_init(init, multiple=1 if isinstance(model, jg.SunGaudinModel) else 3))
+    if isinstance(model, jg.SunGaudinModel):
+        return _sun_info(model, X, eta_c, as_json)
     with blame("--init"):
         h = model.integrals(X)
     kinds = ["Casimir" if c else "Hamiltonian" for c in model.casimir_mask()]
@@ -213,3 +260,57 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
               f"undefined: {d['G_eta_note']}")
     con.print(t)
     con.print("branch points (zeros of ν²): " + ", ".join(complex_text(complex(x, y)) for x, y in d["branch_points"]))
+
+
+def _sun_info(model, X, eta_c: complex, as_json: bool) -> None:
+    """``info --sites --algebra suN``: the integrals ``h^(k)_(j,m)`` (Casimir / Hamiltonian), the eigenvalue branches
+    ``μ_r(η)`` and ``G^(r)_η``."""
+    import json
+    import math
+
+    import typer
+
+    import jetgaudin as jg
+
+    from ._common import console
+
+    with blame("--init"):
+        h = model.integrals(X)
+    kinds = ["Casimir" if c else "Hamiltonian" for c in model.casimir_mask()]
+    d: dict[str, Any] = {**model.describe(), "M": model.M, "eta": [eta_c.real, eta_c.imag],
+                         "state": dict(zip(model.labels(), X.tolist(), strict=True)),
+                         "integrals": [{"name": n, "kind": k, "value": float(v)}
+                                       for n, k, v in zip(model.integral_labels(), kinds, h, strict=True)],
+                         "branches": []}
+    for r in range(model.n):
+        row: dict[str, Any] = {"r": r}
+        try:
+            mu = complex(np.asarray(model.eigenvalue(X, eta_c, r)))
+            G = float(np.asarray(model.interpolating_hamiltonian(X, eta_c, r)))
+            if not (math.isfinite(abs(mu)) and math.isfinite(G)):
+                raise jg.InvalidParameterError("not finite (the state or eta is too large)")
+            row.update(mu=[mu.real, mu.imag], G=G)
+        except jg.JetGaudinError as exc:
+            row.update(mu=None, G=None, note=one_line(exc))
+        d["branches"].append(row)
+    if as_json:
+        typer.echo(json.dumps(d, indent=1))
+        return
+    from rich.table import Table
+
+    sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
+    t = Table(title=f"{model.algebra.name} chain (λ:N) = {sites_text} (M = {model.M}): principal parts of tr ℓ^k/k",
+              title_justify="left")
+    for col in ("integral", "kind", "value"):
+        t.add_column(col, justify="right" if col == "value" else "left")
+    for row in d["integrals"]:
+        t.add_row(row["name"], row["kind"], f"{row['value']:.17g}")
+    eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
+    for row in d["branches"]:
+        r = row["r"]
+        if row["mu"] is None:
+            t.add_row(f"μ_{r}({eta_s}), G^({r})", "", f"undefined: {row['note']}")
+        else:
+            t.add_row(f"μ_{r}({eta_s})", "", f"{row['mu'][0]:.17g} {row['mu'][1]:+.17g} i")
+            t.add_row(f"G^({r})_η", "", f"{row['G']:.17g}")
+    console().print(t)

@@ -158,8 +158,9 @@ def parse_eta(text: str, option: str = "--eta", *, pole_at_zero: bool = True) ->
     return val
 
 
-def parse_init(text: str, option: str = "--init") -> list[float]:
-    """Comma-separated 3N finite numbers (order y_0, y_1, ...); N is inferred from the count."""
+def parse_init(text: str, option: str = "--init", *, multiple: int = 3) -> list[float]:
+    """Comma-separated 3N finite numbers (order y_0, y_1, ...); N is inferred from the count (``multiple=1``: any
+    count, checked by the caller, e.g. an su(n) chain's (n²−1)M)."""
     parts = [p.strip() for p in str(text).split(",")]
     if not parts or parts == [""]:
         raise CliInputError(f"{option}: no numbers given; give 3N comma-separated numbers y_0, y_1, ...")
@@ -174,7 +175,7 @@ def parse_init(text: str, option: str = "--init") -> list[float]:
         if not math.isfinite(v):
             raise CliInputError(f"{option}: value {i} ({p!r}) is not finite; give finite numbers")
         vals.append(v)
-    if len(vals) % 3:
+    if len(vals) % multiple:
         raise CliInputError(
             f"{option}: got {len(vals)} numbers, not a multiple of 3; give 3N numbers (the N vectors y_0, ..., "
             "y_(N-1), 3 components each; 9 for the generalised Lagrange top)"

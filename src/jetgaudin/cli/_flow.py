@@ -77,6 +77,7 @@ def flow(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
@@ -96,9 +97,10 @@ def flow(
                 raise cm.CliInputError("--init and --init-from both give the starting state; give one of them")
             X0 = init_from(init_from_dir)[0]
         else:
-            X0 = np.array(cm.parse_init(cm.APPENDIX2_INIT if init is None else init))
+            X0 = np.array(cm.parse_init(cm.APPENDIX2_INIT if init is None else init,
+                                        multiple=3 if algebra is None else 1))  # su(n): checked below
         N = len(X0) // 3
-        fam = _chains.family_kw(sites, family, gamma, modulus=modulus)
+        fam = _chains.family_kw(sites, family, gamma, modulus=modulus, algebra=algebra)
         model = None if sites is None else _chains.chain_model(sites, bf, **fam)
         if model is not None:
             X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")

@@ -65,11 +65,12 @@ def info(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
 ) -> None:
     """Integrals, Casimirs, ν(η) on both roots, G_η, branch points, and whether the canonical realisation applies.
     With --sites: the chain's integrals h_(i,m), each marked Casimir or Hamiltonian, ν(η), G_η, branch points."""
     with reported_errors():
-        fam = _chains.family_kw(sites, family, gamma, modulus=modulus)
+        fam = _chains.family_kw(sites, family, gamma, modulus=modulus, algebra=algebra)
         if sites is not None:
             return _chains.info(sites, b, eta, init, as_json, fam)
         if not (math.isfinite(tol) and tol > 0):

@@ -181,6 +181,7 @@ def orbit(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map; with no options, reproduce Appendix 2 of the paper.
 
@@ -204,7 +205,7 @@ def orbit(
         if steps is not None:
             expect["steps"] = parse_steps(steps)
         if init is not None:
-            expect["init"] = parse_init(init)
+            expect["init"] = parse_init(init, multiple=3 if algebra is None else 1)  # su(n): (n²−1)M, checked below
         if branch is not None:
             expect["branch"] = branch.value
         if save_every is not None:
@@ -269,10 +270,12 @@ def orbit(
             ee = complex(*expect["eta"]) if "eta" in expect else defaults["eta"]
             model = None
             if sites is not None:
-                model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec, modulus=modulus))
+                model = _chains.chain_model(sites, bb, **_chains.family_kw(sites, family, gamma, rec, modulus=modulus,
+                                                                           algebra=algebra))
                 X0 = _chains.check_chain_state(model, X0, "--init" if init_from_dir is None else "--init-from")
             else:
-                _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
+                # --family / --gamma / --algebra need --sites
+                _chains.family_kw(sites, family, gamma, modulus=modulus, algebra=algebra)
                 check_state_scale(X0, bb)
             if timed is not None:
                 m = _exact(timed, np.array(X0, dtype=float), bb, model, kernel)

@@ -142,6 +142,7 @@ def ensemble_command(
     family: Annotated[str | None, typer.Option("--family", help=_chains.FAMILY_HELP)] = None,
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
+    algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
     backend: Annotated[EnsembleBackend | None, typer.Option(
         "--backend", help="'compiled' (Numba kernels on all CPU cores), 'gpu' (one thread per orbit on an NVIDIA GPU; "
         "needs jetgaudin[gpu]), 'numpy' (the reference route, slow) or 'auto' (compiled; the GPU where one is "
@@ -202,10 +203,12 @@ def ensemble_command(
             out_dir = out_path(out, "jetgaudin-ensemble")
             draw = dict(orbits=orbits, seed=seed, casimirs=casimirs, scale=scale)
             res = _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expect, common, out_dir,
-                                  overwrite, progress, _chains.family_kw(sites, family, gamma, source, modulus=modulus),
+                                  overwrite, progress,
+                                  _chains.family_kw(sites, family, gamma, source, modulus=modulus, algebra=algebra),
                                   draw)
         else:
-            _chains.family_kw(sites, family, gamma, modulus=modulus)  # --family / --gamma need --sites
+            # --family / --gamma / --algebra need --sites
+            _chains.family_kw(sites, family, gamma, modulus=modulus, algebra=algebra)
             if sum(x is not None for x in (input, sample, init_from_dir)) > 1:
                 raise CliInputError("give at most one of --input FILE, --sample leaf|energy and --init-from DIR")
             bb = parse_b(b)
@@ -269,6 +272,7 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
     bb = _chains.parse_chain_b(b)
     ee = parse_eta(eta, pole_at_zero=False)
     model = _chains.chain_model(sites, bb, **(fam or {}))
+    _chains.refuse_sun_runs(model)
     if input is not None:
         X0, b_file, eta_file = _read_input(input)
         if b_file is not None or eta_file is not None:

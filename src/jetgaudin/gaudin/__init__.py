@@ -7,6 +7,8 @@ the field ``b = 0``, the checks and the matching with the literature.
 from .flow import ChainFlowMap
 from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
 from .model import ChainHamiltonian, GaudinModel, clebsch_top, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
+from .sun import SunGaudinModel
+from .sun_maps import SunTwoPointBacklund
 
 __all__ = [
     "GaudinModel",
@@ -19,4 +21,6 @@ __all__ = [
     "clebsch_top",
     "lagrange_chain",
     "twisted_chain",
+    "SunGaudinModel",
+    "SunTwoPointBacklund",
 ]

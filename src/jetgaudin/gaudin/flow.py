@@ -72,7 +72,7 @@ class ChainFlowMap(FlowMap):
 
 def _chain_flow_from(d: dict) -> ChainFlowMap:
     model = GaudinModel.from_description(d)
-    return ChainFlowMap(ChainHamiltonian(model, np.asarray(d["weights"], dtype=float)), float(d["dt"]),
+    return ChainFlowMap(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
                         Method.parse(d["method"]), float(d["rtol"]), float(d["atol"]))
 
 

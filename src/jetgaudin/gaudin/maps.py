@@ -66,6 +66,9 @@ def _orbit_constants(model: GaudinModel, eta: complex) -> tuple:
 def _check_model(model) -> None:
     if not isinstance(model, GaudinModel):
         raise InvalidParameterError(f"model must be a GaudinModel, got {type(model).__name__}")
+    if model.algebra != "su(2)":  # an su(n) model: its own maps (jetgaudin.gaudin.sun_maps)
+        raise InvalidParameterError(f"the su(2) chain maps take su(2) models; an {model.algebra} model has "
+                                    "model.two_point_backlund(eta, branch=r)")
 
 
 def _check_eta(model: GaudinModel, eta) -> complex:

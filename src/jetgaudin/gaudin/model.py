@@ -147,6 +147,10 @@ class GaudinModel:
     modulus : float, optional
         The modulus ``k ∈ [0, 1)`` of the elliptic (XYZ) family (required by it; ``b`` must be 0 there,
         :mod:`jetgaudin.families.elliptic`).
+    algebra : str or jetgaudin.lie.SU, optional
+        ``"su(2)"`` (default: this class) or ``"su(n)"`` / ``"sun"`` / ``jg.su(n)``, ``n ≥ 3``: the su(n) chain of
+        :class:`jetgaudin.gaudin.sun.SunGaudinModel` (rational family; ``b`` a float along ``λ_3``, ``n² − 1``
+        components or a traceless Hermitian matrix), which the constructor returns.
 
     Raises
     ------
@@ -161,8 +165,25 @@ class GaudinModel:
     family: Any = "rational"
     gamma: float | None = None
     modulus: float | None = None
+    algebra: Any = "su(2)"
+
+    def __new__(cls, *args, **kwargs):
+        """``algebra`` other than su(2): a :class:`jetgaudin.gaudin.sun.SunGaudinModel` (issue 32)."""
+        if cls is GaudinModel:
+            from ..lie import parse_algebra
+
+            if parse_algebra(kwargs.get("algebra", args[5] if len(args) > 5 else "su(2)")).n != 2:
+                from .sun import SunGaudinModel
+
+                cls = SunGaudinModel
+        return object.__new__(cls)
 
     def __post_init__(self):
+        from ..lie import parse_algebra
+
+        if parse_algebra(self.algebra).n != 2:
+            raise InvalidParameterError(f"{self.algebra}: use GaudinModel(..., algebra=...) for su(n), n >= 3")
+        object.__setattr__(self, "algebra", "su(2)")
         if np.iscomplexobj(self.b) or isinstance(self.b, bool):
             raise InvalidParameterError(f"the field strength b must be a real number, got {self.b!r}")
         try:
@@ -228,7 +249,7 @@ class GaudinModel:
     @classmethod
     def from_description(cls, d: dict) -> GaudinModel:
         """The model :meth:`describe` (or a map's description) describes."""
-        extra = {k: d[k] for k in ("gamma", "modulus") if k in d}
+        extra = {k: d[k] for k in ("gamma", "modulus", "algebra") if k in d}
         return cls(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]), d.get("family", "rational"), **extra)
 
     # ---- integrals as quadratic forms --------------------------------------------------------

@@ -68,8 +68,10 @@ _MAP = r"""
   integrals in involution; jetgaudin's trigonometric family, issue 23; the elliptic family, issue 24: the addition
   identity of ns, ds, cs and the r-matrix relation, the exact expansion of nu^2, the Clebsch case of the order-2
   site); the constructions themselves are cited, not derived in this paper
-- NC | Intro: the construction generalises to any simple Lie algebra
-  reason: $CITED
+- P SUn-r, SUn-dressing | Intro: the construction generalises to any simple Lie algebra
+  reason: announced, not done in the paper; su(n) with jet sites (rational) is built and checked by jetgaudin
+  (issue 32: the r-matrix relation, the rank-one dressing of the real two-point maps); other simple algebras and the
+  trigonometric and elliptic su(n) families are not
 - P Sec3-structure, Sec3-cocycle | Intro: the N = 3 algebra includes su(2) and R^3 as proper subalgebras but is no
   longer a semidirect sum
   reason: read literally this contradicts Section 3 (g^(3) = su(2) (+)_s G); checked in Section 3's sense: G is not
