@@ -258,3 +258,171 @@ def test_ensemble_without_the_drift_pass(on_gpu):
     assert a.drift is None and b.drift is not None
     with pytest.raises(jg.InvalidParameterError, match="want_drift=False"):
         a.max_drift  # noqa: B018
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# The run layer on the GPU with the states on the device between calls (jetgaudin.gpu._resident; issue 36)
+
+
+def _resident_calls(monkeypatch):
+    """Count the calls of the device-resident layer (the run layer must take it for an ensemble on the GPU)."""
+    from jetgaudin.gpu import _resident
+
+    calls = []
+    original = _resident.ResidentMap.advance
+
+    def counted(self, X, carry, steps, save_every=1):
+        calls.append((isinstance(X, _resident.DeviceStates), steps, save_every))
+        return original(self, X, carry, steps, save_every)
+
+    monkeypatch.setattr(_resident.ResidentMap, "advance", counted)
+    return calls
+
+
+def _ens_spec(backend, B=6, steps=40, every=4, max_drift=1e-6, seed=5):
+    from jetgaudin import run as rl
+
+    X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], B, seed=seed)
+    m = jg.ensemble.BatchBacklund(np.linspace(0.9, 1.2, B), (5 + 0.1j) + 0.03 * np.arange(B), backend=backend)
+    return rl.RunSpec(m, X0, steps, every, rl.HealthLimits(max_drift=max_drift), csv=False,
+                      program="jetgaudin ensemble")
+
+
+@pytest.mark.parametrize("chunk", [1, 3, 7, None])
+def test_resident_split_runs_equal_the_unsplit_run_bit_for_bit(tmp_path, monkeypatch, chunk):
+    """Calls of 1, 3, 7 steps (off the save grid of 4 for 3 and 7) or as the driver chooses: the states stay on the
+    device between calls (every call after the first is given a device handle) and the saved rows equal the one-call
+    GPU run bit for bit (the same kernel continued from the carried ν1)."""
+    from jetgaudin import run as rl
+
+    calls = _resident_calls(monkeypatch)
+    spec = _ens_spec("gpu")
+    res = rl.start(spec, tmp_path / "r", max_chunk_steps=chunk)
+    assert res.state is rl.RunStatus.COMPLETED
+    assert calls and not calls[0][0] and all(c[0] for c in calls[1:])
+    if chunk is not None:
+        assert len(calls) >= -(-40 // chunk)  # at most `chunk` steps a call
+    ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 40, save_every=4, gpu=True, want_drift=False)
+    d = rl.load(tmp_path / "r")
+    np.testing.assert_array_equal(d.X, np.moveaxis(ref.states, 0, 1) if d.X.shape[0] == spec.B else ref.states)
+
+
+def test_resident_health_and_drift_equal_the_cpu_route(tmp_path, monkeypatch):
+    """The drift maxima, the radius deviation and the status computed on the device equal the host's (the CPU route
+    through the same run layer) to round-off: |Δ drift| <= 4 ulp of max(1, |I(0)|) per integral (the device sums the
+    integrals in another order than NumPy; under the simulator the states are the CPU's bits, so only that order
+    differs).  Calls of 4 steps on the save grid of 4 for both (the driver's call length follows the measured rate,
+    and a chunk ending off the grid has its end state checked: the states checked would depend on the timing)."""
+    from jetgaudin import run as rl
+    from jetgaudin.run import driver
+
+    monkeypatch.setattr(driver.Driver, "_L", 4)
+    monkeypatch.setattr(driver.Driver, "_adapt", lambda self, L, k, dt: 4)
+
+    g = rl.start(_ens_spec("gpu"), tmp_path / "g")
+    c = rl.start(_ens_spec("compiled"), tmp_path / "c")
+    assert g.status == c.status == "completed"
+    scale = np.maximum(1.0, np.abs(c.integrals0))
+    assert np.all(np.abs(g.drift_abs - c.drift_abs) <= 4 * np.spacing(scale))
+    assert c.drift_abs.max() > 0  # round-off drift, not zeros: the comparison compares something
+    assert abs(g.sphere_max_deviation - c.sphere_max_deviation) <= 4 * np.spacing(1.0 + np.abs(c.sphere_radius0).max())
+    np.testing.assert_array_equal(rl.load(tmp_path / "g").X, rl.load(tmp_path / "c").X)
+
+
+def test_resident_orbit_failing_off_the_save_grid(tmp_path, monkeypatch):
+    """An orbit whose step fails at step 13 (off the save grid of 4) on the device: the run fails with the CPU route's
+    exception for that orbit, named in the status, at the start of the call that met it; the rows up to it are kept
+    and equal the unfailed run (the failure is planted in the device's status arrays after the real kernel: the
+    layer's handling of a device status is what is tested)."""
+    from jetgaudin import run as rl
+    from jetgaudin.backlund.kernels._status import STATUS_RESIDUAL
+    from jetgaudin.gpu import _kernels
+
+    real3, realg = _kernels.top_kernels()
+    done = {"n": 0}
+
+    class FailAt:
+        def __getitem__(self, launch):
+            def run(X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last):
+                real3[launch](X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last)
+                n0 = done["n"]
+                done["n"] += int(steps)
+                if n0 <= 13 < n0 + int(steps):
+                    st, fl = status.copy_to_host(), fail.copy_to_host()
+                    st[2], fl[2] = STATUS_RESIDUAL, 13 - n0
+                    status.copy_to_device(st)
+                    fail.copy_to_device(fl)
+            return run
+
+    monkeypatch.setattr(_kernels, "top_kernels", lambda: (FailAt(), realg))
+    spec = _ens_spec("gpu")
+    res = rl.start(spec, tmp_path / "f", max_chunk_steps=3)
+    assert res.state is rl.RunStatus.FAILED
+    # calls of 3 steps from 0: the call 12..15 meets step 13; its rows are discarded, the run stops at step 12
+    assert res.status.startswith("failed: SingularStepError after step 12") and "orbit 2" in res.status
+    assert res.last_safe_step == 12
+    d = rl.load(tmp_path / "f")
+    ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 12, save_every=4, gpu=True, want_drift=False)
+    np.testing.assert_array_equal(d.X, np.moveaxis(ref.states, 0, 1) if d.X.shape[0] == spec.B else ref.states)
+
+
+def test_resident_resume_bit_for_bit(tmp_path):
+    """SIGINT at step 9 (calls of 3 steps), then resume: the checkpoint's states and ν1 come from the device; the
+    resumed run equals the uninterrupted GPU run bit for bit."""
+    from jetgaudin import run as rl
+    from test_gaudin_run import interrupt
+
+    spec = _ens_spec("gpu")
+    assert 0 < interrupt(spec, tmp_path / "i", 9).last_safe_step < 40
+    assert rl.resume(tmp_path / "i").state is rl.RunStatus.COMPLETED
+    ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 40, save_every=4, gpu=True, want_drift=False)
+    d = rl.load(tmp_path / "i")
+    np.testing.assert_array_equal(d.X, np.moveaxis(ref.states, 0, 1) if d.X.shape[0] == spec.B else ref.states)
+
+
+def _scaled(x, spin, f):
+    """``x`` with the spin ``y_spin`` scaled by ``f``."""
+    x = np.array(x)
+    x[..., 3 * spin:3 * spin + 3] *= f
+    return x
+
+
+def test_resident_health_finds_the_planted_breach_and_folds_up_to_it(tmp_path, monkeypatch):
+    """Rows of orbit 1 changed on the device after the real kernel, in one call of 20 steps: at step 8 its last spin
+    ``y_2`` scaled by 1.004 (radius deviation 0.004, drifts below max_drift 1e-2), at step 12 its first spin ``y_0``
+    by 1.5 (a breach, radius unchanged), at step 16 ``y_2`` by 1.3 (worse, after the breach).  The breach is the row
+    of step 12 (worded as the CPU route words it), and the maxima fold the rows up to it and not the row after it in
+    the same call: ``drift_abs`` of orbit 1 is the host's max |I(x) − I(0)| over the rows of steps 8 and 12, and the
+    radius deviation that of step 8 (found on the device only: the host words the breach from row 12 alone).
+    Tolerance 1e-12 relative: the device sums the integrals in another order."""
+    from jetgaudin import run as rl
+    from jetgaudin.gpu import _kernels
+
+    real3, realg = _kernels.top_kernels()
+    done = {"n": 0}
+    change = {8: (2, 1.004), 12: (0, 1.5), 16: (2, 1.3)}
+
+    class Change:
+        def __getitem__(self, launch):
+            def run(X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last):
+                real3[launch](X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last)
+                n0, se = done["n"], int(save_every)
+                done["n"] += int(steps)
+                rows = out.copy_to_host()
+                for step, (spin, f) in change.items():
+                    if n0 < step <= n0 + int(steps) and (step - n0) % se == 0:
+                        rows[(step - n0) // se, 1] = _scaled(rows[(step - n0) // se, 1], spin, f)
+                out.copy_to_device(rows)
+            return run
+
+    monkeypatch.setattr(_kernels, "top_kernels", lambda: (Change(), realg))
+    spec = _ens_spec("gpu", max_drift=1e-2)
+    res = rl.start(spec, tmp_path / "h", max_chunk_steps=20)
+    assert res.status.startswith("failed: integral drift") and "of orbit 1" in res.status
+    assert "at step 12 " in res.status and res.last_safe_step == 8
+    ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 12, save_every=4, gpu=True, want_drift=False)
+    x8, x12 = _scaled(ref.states[2, 1], *change[8]), _scaled(ref.states[3, 1], *change[12])
+    I = jg.ensemble.per_orbit_integrals(np.array([x8, x12]), np.full(2, spec.map.b[1]))
+    np.testing.assert_allclose(res.drift_abs[1], np.max(np.abs(I - res.integrals0[1]), axis=0), rtol=1e-12)
+    r0 = np.linalg.norm(spec.X0[1, -3:])
+    np.testing.assert_allclose(res.sphere_max_deviation, abs(np.linalg.norm(x8[-3:]) - r0), rtol=1e-12)

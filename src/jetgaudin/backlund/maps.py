@@ -328,9 +328,12 @@ class TwoPointBacklund(Map):
         orbit, final, nu = self._orbit_compiled(X, carry, steps, save_every)
         return Advance(rows=orbit[1:], X=final, carry=nu, imag_max=np.zeros(X.shape[:-1]))
 
-    def _orbit_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int) -> tuple[Any, Any, Any]:
+    def _orbit_compiled(self, X: np.ndarray, carry: Any, steps: int, save_every: int,
+                        route: Backend | None = None) -> tuple[Any, Any, Any]:
         """``(orbit (steps//save_every + 1, ..., 3N) including X, final state, ν1)`` by the compiled kernels (on the
-        GPU for ``backend="gpu"``, or ``AUTO`` resolved to it: :mod:`jetgaudin.gpu`, the same loop per orbit)."""
+        GPU for ``backend="gpu"``, or ``AUTO`` resolved to it: :mod:`jetgaudin.gpu`, the same loop per orbit).
+        ``route``: :meth:`resolved_backend` when the caller has it (resolving ``AUTO`` again cost ~15 µs of the
+        Appendix 2 call's ~60, issue 36)."""
         K = _compiled.kernels()
         cont = carry is not None
         lead = X.shape[:-1]
@@ -339,7 +342,7 @@ class TwoPointBacklund(Map):
         bb = np.array([self.b]) if B == 1 else np.full(B, self.b)
         ee = np.array([self.eta], dtype=complex) if B == 1 else np.full(B, self.eta, dtype=complex)
         nu0 = np.reshape(carry, -1) if cont else K.nu_default(Xb, bb, ee, self.sheet)
-        gpu = self.resolved_backend(X, steps) is Backend.GPU
+        gpu = (self.resolved_backend(X, steps) if route is None else route) is Backend.GPU
         if X.ndim == 1 and not gpu:
             out, final, _, nu = K.iterate_single(X, self.b, self.eta, complex(nu0[0]), cont, steps, save_every,
                                                  want_drift=False)
@@ -351,6 +354,16 @@ class TwoPointBacklund(Map):
         out, final, _, nu = iterate_batch(Xb, bb, ee, nu0, cont, steps, save_every, want_drift=False)
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
         return orbit, final.reshape(X.shape), nu.reshape(lead)
+
+    def _with_backend_cached(self, choice: Backend) -> TwoPointBacklund:
+        """:meth:`with_backend`, kept per map and backend: building the map again (validation included) was ~20 µs of
+        the ~60 of an Appendix 2 call with ``kernel="compiled"`` (issue 36).  The maps are frozen: the copy stays
+        equal to a new one."""
+        cache = self.__dict__.setdefault("_backend_variants", {})
+        m = cache.get(choice)
+        if m is None:
+            m = cache[choice] = self.with_backend(choice)
+        return m
 
     def iterate(self, X0, steps: int, *, save_every: int = 1, kernel: Backend | str | None = None, nu1=None,
                 return_nu: bool = False, carry=None, return_carry: bool = False,
@@ -378,7 +391,7 @@ class TwoPointBacklund(Map):
         first to see it and time it apart (the run layer and the CLI do).
         """
         choice = backend_option(backend, kernel)
-        m = self if choice is None else self.with_backend(choice)
+        m = self if choice is None else self._with_backend_cached(choice)
         X, _ = as_state(X0)
         steps = check_count(steps, "steps")
         save_every = check_count(save_every, "save_every", 1)
@@ -386,8 +399,9 @@ class TwoPointBacklund(Map):
         c = nu1 if carry is None else carry
         if c is not None:
             c = _check_nu(c, X.shape[:-1], "nu1")
-        if X.size and m.resolved_backend(X, steps) in (Backend.COMPILED, Backend.GPU):  # the kernels write X_0 too
-            orbit, _, c = m._orbit_compiled(X, c, steps, save_every)
+        route = m.resolved_backend(X, steps) if X.size else None
+        if route in (Backend.COMPILED, Backend.GPU):  # the kernels write X_0 too
+            orbit, _, c = m._orbit_compiled(X, c, steps, save_every, route)
         else:
             adv = m.with_backend(Backend.NUMPY).advance(X, c, steps, save_every)
             orbit, c = np.concatenate([X[None], adv.rows], axis=0), adv.carry

@@ -14,6 +14,7 @@ No mathematics here: everything comes from :mod:`jetgaudin.ensemble` and
 from __future__ import annotations
 
 import dataclasses
+import math
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
@@ -364,6 +365,25 @@ def _report(res, show):
     if B:
         _report_quantiles(con, res.drift, names, res.out_dir)
     con.print(f"status: {res.status}; {res.rows} saved rows of {B} states in {res.out_dir / 'ensemble.h5'}")
+    if B and math.isfinite(res.step_rate):
+        con.print(f"rate: {_rate_line(res)}")
+
+
+def _rate_line(res) -> str:
+    """The session's stepping rate with the fraction of the device's FP64 peak (:mod:`jetgaudin.peak`)."""
+    from jetgaudin import TwoPointBacklund
+    from jetgaudin import peak as pk
+    from jetgaudin.ensemble import BatchBacklund
+
+    m = res.spec.map
+    chain = not isinstance(m, (BatchBacklund, TwoPointBacklund))
+    if m.resolved_backend(res.spec.X0, res.spec.steps).value == "gpu":
+        from jetgaudin import gpu
+
+        peak = pk.gpu_peak(gpu.probe()[1])
+    else:
+        peak = pk.cpu_peak()
+    return pk.rate_text(res.step_rate, pk.flops_per_step_of(res.spec.n_state // 3, chain), peak)
 
 
 def _report_quantiles(con, drift, names, out_dir) -> None:

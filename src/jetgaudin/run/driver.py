@@ -185,6 +185,12 @@ class Driver:
         self.max_steps = max_chunk_steps
         self.n_start = pos.n
         self.t_start = time.monotonic()
+        #: the map the loop advances: on the GPU, one that keeps the states, health and drift on the device
+        self.map = spec.map
+        if spec.map.backend is Backend.GPU:
+            from ..gpu._resident import attach
+
+            self.map = attach(spec, health, store)
 
     def summary(self, status: str) -> dict:
         """The layout's summary fields, ``status`` and the stepping rate of this session (orbit-steps per second of
@@ -205,7 +211,7 @@ class Driver:
 
     def run(self) -> Outcome:
         spec, store, pos, health = self.spec, self.store, self.pos, self.health
-        steps, every, m = spec.steps, spec.save_every, spec.map
+        steps, every, m = spec.steps, spec.save_every, self.map
         per_step = m.backend is Backend.NUMPY and getattr(m, "chunk_invariant", True)
         invariant = getattr(m, "chunk_invariant", True)
         sample_imag = m.backend in (Backend.COMPILED, Backend.GPU) and m.properties.real and np.isfinite(
@@ -254,7 +260,7 @@ class Driver:
         """Advance by kernel calls for about :data:`FLUSH_SECONDS` (longer when the checks are slow: see
         :data:`FLUSH_SHARE`; or one fixed chunk), then check the health of the rows and the end state and append the
         rows that passed.  Returns a failure reason or ``None``."""
-        spec, pos, health, m = self.spec, self.pos, self.health, self.spec.map
+        spec, pos, health, m = self.spec, self.pos, self.health, self.map
         steps, every = spec.steps, spec.save_every
         rows_n: list[int] = []
         rows: list[np.ndarray] = []

@@ -18,30 +18,16 @@ _state: dict[str, Any] = {}
 
 
 def _prefer_256_bit_vectors() -> bool:
-    """Ask LLVM for 256-bit vectors on AVX-512 hosts (the target feature ``prefer-256-bit``, a tuning hint).
+    """Whether to ask LLVM for 256-bit vectors on AVX-512 hosts (the target feature ``prefer-256-bit``): no longer.
 
-    Measured on an AMD EPYC (znver4) host: the lock-step ensemble kernel runs 3.7e7-3.8e7 orbit-steps/s per thread
-    with it against 2.1e7-2.3e7 with LLVM's default 512-bit choice there (on the Intel Xeon of
-    docs/performance.md LLVM already picks 256 bits).  The arithmetic is unchanged (IEEE operations, no
-    contraction), so the bits are the same.  Applied only when Numba has not created its CPU target yet in this
-    process and the user has set neither NUMBA_CPU_NAME nor NUMBA_CPU_FEATURES; it then holds for the process's
-    Numba code (Numba reads the features once, when its CPU target context is created).
+    It was requested on AMD EPYC (znver4) hosts, where LLVM otherwise picks 512-bit vectors, because the lanes
+    kernel of that time ran 3.7e7 against 2.1e7 orbit-steps/s per thread with it.  The select-free lanes of issue 14
+    reverse this: on a znver4 host (issue 36, docs/performance.md) one thread runs 8.2e7-8.6e7 with LLVM's own
+    512-bit choice against 6.6e7-7.1e7 with 256-bit vectors (alternated processes).  On Intel AVX-512 hosts LLVM
+    already prefers 256 bits.  So Numba's default target is kept everywhere (the arithmetic, hence the bits, does
+    not depend on the vector width: IEEE operations, explicit fused multiply-adds, no contraction).
     """
-    import numba.core.config as config
-    from numba.core import registry
-
-    if config.CPU_FEATURES is not None or config.CPU_NAME is not None or "target_context" in vars(registry.cpu_target):
-        return False
-    try:
-        import llvmlite.binding as ll
-
-        features = ll.get_host_cpu_features()
-    except (ImportError, RuntimeError):
-        return False
-    if not features.get("avx512f", False):
-        return False
-    config.CPU_FEATURES = features.flatten() + ",+prefer-256-bit"
-    return True
+    return False
 
 
 def sources_digest() -> str:
