@@ -5,8 +5,8 @@ principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the wei
 ``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``) and ``K`` taken as
 ``|k|² (λ + M0)``, with the Taylor coefficients ``g_d`` of ``1/det K`` at each site from the step's own ``K``
 (:func:`jetgaudin.gaudin.maps.monic_series`: the determinant of a normalised ``K`` is the same at every step and its
-rounding, the same at every step, made the sites' Casimirs drift linearly; ``docs/reliability.md``).  With ``K' = K(λ_i)``, ``A' = adj K(λ_i)``,
-``s = |k|²``, the four terms of the dressing sum collapse to
+rounding, the same at every step, made the sites' Casimirs drift linearly; ``docs/reliability.md``).
+With ``K' = K(λ_i)``, ``A' = adj K(λ_i)``, ``s = |k|²``, the four terms of the dressing sum collapse to
 
 .. math:: \breve\ell_k = \sum_{j \ge k} g_{j-k} K' \ell_j A' + g_{j-k-1}\, s (K' \ell_j + \ell_j A')
           + g_{j-k-2}\, s^2 \ell_j .
