@@ -160,9 +160,10 @@ def orbit(
     kernel: Annotated[
         Kernel | None,
         typer.Option(
-            "--kernel",
+            "--backend", "--kernel",
             help="'compiled' (Numba kernels, fast), 'numpy' (reference route; checks the imaginary residue of every "
-            "step) or 'auto' (NumPy for short runs, compiled where it pays off) [default: auto]",
+            "step) or 'auto' (the route of the smaller estimated time: NumPy for short runs, compiled where it pays "
+            "off) [default: auto]; --kernel is an alias",
         ),
     ] = None,
     progress: ProgressOption = None,
