@@ -11,7 +11,8 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import _chains, app
+from . import _chains
+from ._app import app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,

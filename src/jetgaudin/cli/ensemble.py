@@ -22,7 +22,8 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import _chains, app
+from . import _chains
+from ._app import app
 from ._common import (
     EXIT_FAILED,
     Branch,

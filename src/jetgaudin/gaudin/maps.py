@@ -44,7 +44,7 @@ from ._curve import _component_poles, nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
-__all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
+__all__ = ["ChainTwoPointBacklund", "monic_series"]  # ChainOnePointBacklund: module __getattr__ (gaudin._one_point)
 
 #: relative size of the would-be residue at eta above which a step is refused (as backlund.maps: round-off
 #: level in exact arithmetic zero; larger means eta is numerically at a branch point)
@@ -528,5 +528,12 @@ def _two_point_from(d: dict) -> ChainTwoPointBacklund:
 
 register_map("chain_two_point", _two_point_from)
 
-# the one-point map lives in its own module (every family's one-point dressing); re-exported here
-from ._one_point import ChainOnePointBacklund  # noqa: E402
+
+def __getattr__(name: str):
+    """``ChainOnePointBacklund``, which lives in :mod:`jetgaudin.gaudin._one_point` (every family's one-point
+    dressing; it imports this module's helpers), still importable from here (looked up on use: no import cycle)."""
+    if name == "ChainOnePointBacklund":
+        from ._one_point import ChainOnePointBacklund
+
+        return ChainOnePointBacklund
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
