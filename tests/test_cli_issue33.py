@@ -45,3 +45,35 @@ def test_bad_weights_are_one_line(tmp_path, capsys, text, words):
     code, _, err = run_cli(capsys, "flow", "--sites", "-0.5:1,0.4:1", "--family", "trigonometric", "--b", "1",
                            "--hamiltonian", text, "--init", INIT, "--steps", "2", "--no-plots", "--out", tmp_path / "f")
     assert one_line_error(code, err, *words), err
+
+
+@pytest.mark.parametrize("command", ["orbit", "ensemble"])
+def test_backend_is_the_option_name_on_every_command_and_kernel_its_alias(tmp_path, capsys, command):
+    """``orbit --kernel`` but ``ensemble --backend`` (issue 33): both commands take both names, with the same effect
+    (the route recorded in run.json)."""
+    base = [command, "--steps", "3", "--no-plots" if command == "orbit" else "--orbits", *([] if command == "orbit"
+                                                                                      else ["2"])]
+    routes = []
+    for name in ("--backend", "--kernel"):
+        out = tmp_path / name.strip("-")
+        code, _, err = run_cli(capsys, *base, name, "numpy", "--out", out)
+        assert code == 0, err
+        routes.append(json.loads((out / "run.json").read_text())["map" if command == "orbit" else "inputs"])
+    assert routes[0] == routes[1]
+    assert "numpy" in json.dumps(routes[0])
+    code, out, _ = run_cli(capsys, command, "--help")
+    assert "--backend" in out and "--kernel" in out
+
+
+def test_auto_names_the_slow_route_on_stderr(tmp_path, capsys, monkeypatch):
+    """``--backend auto`` on a chain says in one line when it takes the NumPy route (here: kernels to be compiled,
+    a run too short to pay for it)."""
+    from jetgaudin.gaudin import _backend
+
+    monkeypatch.setattr(_backend, "kernel_state", lambda family, batch=1: "cold")
+    code, _, err = run_cli(capsys, "orbit", "--sites", "-0.5:1,0.4:1", "--family", "elliptic", "--modulus", "0.6",
+                           "--b", "0", "--eta", "1.5+0.2i", "--init", INIT, "--steps", "3", "--no-plots",
+                           "--out", tmp_path / "o")
+    assert code == 0, err
+    notes = [ln for ln in err.splitlines() if "backend auto" in ln]
+    assert len(notes) == 1 and "NumPy route" in notes[0] and "--backend compiled" in notes[0]

@@ -44,6 +44,7 @@ from __future__ import annotations
 import abc
 import copy
 import dataclasses
+import importlib
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -384,6 +385,11 @@ def step_loop(m: Map, X: np.ndarray, carry: Any, steps: int, save_every: int = 1
 
 
 _REGISTRY: dict[str, Callable[[dict], Map]] = {}
+#: the modules whose import registers the built-in map kinds (:func:`register_map`); imported by name in
+#: :func:`map_from_description`, so that this interface module imports none of its implementations (issue 33: a
+#: 13-module import circle ran through here)
+_BUILTIN_MAP_MODULES = ("jetgaudin.backlund", "jetgaudin.exact", "jetgaudin.exact_chain",
+                        "jetgaudin.flows", "jetgaudin.gaudin", "jetgaudin.midpoint")
 
 
 def register_map(kind: str, factory: Callable[[dict], Map]) -> None:
@@ -395,8 +401,8 @@ def map_from_description(d: dict) -> Map:
     """The map a :meth:`Map.describe` dictionary describes (:class:`InvalidParameterError` for unknown kinds)."""
     if not isinstance(d, dict) or "kind" not in d:
         raise InvalidParameterError(f"a map description must be a dict with a 'kind', got {d!r}")
-    from . import backlund, exact, exact_chain, flows, gaudin, midpoint  # noqa: F401  (they register the built-in kinds)
-
+    for module in _BUILTIN_MAP_MODULES:  # they register the built-in kinds when imported (by name: no import cycle)
+        importlib.import_module(module)
     kind = d["kind"]
     if not isinstance(kind, str) or kind not in _REGISTRY:
         raise MapDescriptionError(f"unknown map kind {kind!r} (known: {', '.join(sorted(_REGISTRY))})", "kind")

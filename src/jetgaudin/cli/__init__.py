@@ -2,7 +2,7 @@
 
 Commands: ``orbit`` (the real two-point Bäcklund map; Appendix 2 by default), ``flow`` (continuous flows
 of ``H_2/2`` or ``G_η``, ``--compare`` with the map), ``info`` (integrals, Casimirs, ``ν(η)``, ``G_η`` of a
-state).  Other modules add commands with ``from . import app`` and ``@app.command()``; they are imported
+state).  Other modules add commands with ``from ._app import app`` and ``@app.command()``; they are imported
 at the end of this module if present (``ensemble``, ``bench``, ``verify``).
 
 Errors never show a traceback: bad input prints one line ``jetgaudin <command>: error: ...`` on stderr and exits
@@ -27,15 +27,7 @@ except ImportError:  # pragma: no cover
 
 __all__ = ["app", "main"]
 
-app = typer.Typer(
-    name="jetgaudin",
-    help="Jet-extended Gaudin models: Bäcklund orbits (Appendix 2), continuous flows, spectral data of a state.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-    rich_markup_mode=None,
-    context_settings={"help_option_names": ["-h", "--help"]},
-)
+from ._app import app  # noqa: E402  (the Typer object, in its own module: the commands import it from there)
 
 
 @app.callback(invoke_without_command=True)

@@ -15,8 +15,9 @@ import jetgaudin as jg
 from .. import run as runlayer
 from ..flows import FlowMap
 from ..flows import Method as FlowMethod
-from . import _chains, app
+from . import _chains
 from . import _common as cm
+from ._app import app
 
 
 class Hamiltonian(StrEnum):

@@ -12,7 +12,8 @@ import typer
 import jetgaudin as jg
 
 from .. import recording as rec
-from . import _chains, app
+from . import _chains
+from ._app import app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,

@@ -11,7 +11,8 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import _chains, app
+from . import _chains
+from ._app import app
 from ._common import (
     APPENDIX2_B,
     APPENDIX2_ETA,
@@ -160,9 +161,10 @@ def orbit(
     kernel: Annotated[
         Kernel | None,
         typer.Option(
-            "--kernel",
+            "--backend", "--kernel",
             help="'compiled' (Numba kernels, fast), 'numpy' (reference route; checks the imaginary residue of every "
-            "step) or 'auto' (NumPy for short runs, compiled where it pays off) [default: auto]",
+            "step) or 'auto' (the route of the smaller estimated time: NumPy for short runs, compiled where it pays "
+            "off) [default: auto]; --kernel is an alias",
         ),
     ] = None,
     progress: ProgressOption = None,

@@ -9,7 +9,7 @@ from typing import Annotated
 
 import typer
 
-from . import app
+from ._app import app
 from ._common import CliInputError, OverwriteOption, console, reported_errors
 
 

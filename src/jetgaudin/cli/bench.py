@@ -12,7 +12,7 @@ from typing import Annotated, Any
 
 import typer
 
-from . import app
+from ._app import app
 
 __all__ = ["harness", "bench_command"]
 

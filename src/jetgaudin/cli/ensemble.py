@@ -23,7 +23,8 @@ import numpy as np
 import typer
 
 from .. import run as runlayer
-from . import _chains, app
+from . import _chains
+from ._app import app
 from ._common import (
     EXIT_FAILED,
     Branch,
@@ -145,9 +146,10 @@ def ensemble_command(
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
     algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
     backend: Annotated[EnsembleBackend | None, typer.Option(
-        "--backend", help="'compiled' (Numba kernels on all CPU cores), 'gpu' (one thread per orbit on an NVIDIA GPU; "
-        "needs jetgaudin[gpu]), 'numpy' (the reference route, slow) or 'auto' (compiled; the GPU where one is "
-        "present and the run is large) [default: auto]")] = None,
+        "--backend", "--kernel", help="'compiled' (Numba kernels on all CPU cores), 'gpu' (one thread per orbit on "
+        "an NVIDIA GPU; needs jetgaudin[gpu]), 'numpy' (the reference route, slow) or 'auto' (the route of the smaller "
+        "estimated time; the GPU where one is present and the run is large) [default: auto]; --kernel is an alias")] \
+        = None,
 ) -> None:
     """Iterate the real two-point Bäcklund map on an ensemble of orbits, streamed to disk; report the drift."""
     from jetgaudin import ensemble as ens

@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from . import app
+from ._app import app
 from ._common import CliInputError, OverwriteOption, console, reported_errors
 
 #: the figures ``plot`` may write (``save_run_figures``; the last two for ``flow --compare`` runs)

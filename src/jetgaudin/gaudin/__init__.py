@@ -4,8 +4,9 @@ See ``docs/chains.md``: the model, the state layout, the integrals (Casimirs and
 the field ``b = 0``, the checks and the matching with the literature.
 """
 
+from ._one_point import ChainOnePointBacklund
 from .flow import ChainFlowMap
-from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
+from .maps import ChainTwoPointBacklund
 from .model import ChainHamiltonian, GaudinModel, clebsch_top, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
 from .sun import SunGaudinModel
 from .sun_maps import SunTwoPointBacklund

@@ -26,7 +26,6 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 from __future__ import annotations
 
 import cmath
-import math
 from functools import lru_cache
 
 import numpy as np
@@ -80,9 +79,6 @@ def _elliptic_coefficients(gk, a1, a2, c):
             c[3] = n3
         if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
             break
-    scale = 1.0 / math.sqrt(best)
-    for q in range(4):
-        c[q] *= scale
 
 
 @njit(cache=True)
@@ -92,15 +88,18 @@ def _coefficients(rule, gk, a1, a2, c):
     p = _abs2(a1)
     q = _abs2(a2)
     n = p + q
-    if rule == 0:  # rational: (1, M0_00, M0_01, M0_10, 1, M0_11), M0 of backlund._dressing.real_two_point_M0
+    # every rule leaves D unnormalised (times n, or the cofactors as they come): a normalised D has the same
+    # determinant at every step, whose reciprocal then rounds alike at every step (a linear drift of the integrals;
+    # gaudin.maps.monic_series, issue 33); the dressing D ℓ adj D / det D does not depend on D's scale
+    if rule == 0:  # rational: n (1, M0_00, M0_01, M0_10, 1, M0_11), M0 of backlund._dressing.real_two_point_M0
         eta = gk[0]
-        cc = 2j * eta.imag / n
-        c[0] = 1.0
-        c[1] = -eta + cc * q
+        cc = 2j * eta.imag
+        c[0] = n
+        c[1] = -eta * n + cc * q
         c[2] = -cc * a1 * a2.conjugate()
         c[3] = -cc * a1.conjugate() * a2
-        c[4] = 1.0
-        c[5] = -eta.conjugate() - cc * q
+        c[4] = n
+        c[5] = -eta.conjugate() * n - cc * q
     elif rule == 2:
         _elliptic_coefficients(gk, a1, a2, c)
     else:  # trigonometric: families.trigonometric.gauge_rule("symmetric")
@@ -108,9 +107,8 @@ def _coefficients(rule, gk, a1, a2, c):
         e2m = gk[1]
         e1p = gk[2]
         e2p = gk[3]
-        inv = 1.0 / n
-        off = gk[4] * inv
-        d = -0.5j * inv  # 1/(2i n)
+        off = gk[4]
+        d = -0.5j
         c[0] = (p * e1m + q * e2m) * d
         c[1] = -(p * e1p + q * e2p) * d
         c[2] = -a1 * a2.conjugate() * off

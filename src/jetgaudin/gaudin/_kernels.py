@@ -1,13 +1,15 @@
 r"""Compiled (Numba) kernel of the real two-point map of a chain, any sites and orders.
 
 The same arithmetic as :class:`jetgaudin.gaudin.maps.ChainTwoPointBacklund.step` (the site-wise dressing of the
-principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the quantities that are constant along an
-orbit hoisted out of the loop: ``f_c = (η − λ_c)^{−(k_c+1)}`` (the weights of ``ℓ(η)``) and the Taylor
-coefficients ``g_d`` of ``1/((λ_i − η + z)(λ_i − η̄ + z))`` per site.  For ``K = λ + M0``, ``adj K = λ + adj M0``
-the four terms of the dressing sum collapse to
+principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the weights of ``ℓ(η)``,
+``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``) and ``K`` taken as
+``|k|² (λ + M0)``, with the Taylor coefficients ``g_d`` of ``1/det K`` at each site from the step's own ``K``
+(:func:`jetgaudin.gaudin.maps.monic_series`: the determinant of a normalised ``K`` is the same at every step and its
+rounding, the same at every step, made the sites' Casimirs drift linearly; ``docs/reliability.md``).
+With ``K' = K(λ_i)``, ``A' = adj K(λ_i)``, ``s = |k|²``, the four terms of the dressing sum collapse to
 
-.. math:: \breve\ell_k = \sum_{j \ge k} g_{j-k} K' \ell_j A' + g_{j-k-1} (K' \ell_j + \ell_j A') + g_{j-k-2}\, \ell_j,
-          \qquad K' = M_0 + \lambda_i,\ A' = \operatorname{adj} M_0 + \lambda_i .
+.. math:: \breve\ell_k = \sum_{j \ge k} g_{j-k} K' \ell_j A' + g_{j-k-1}\, s (K' \ell_j + \ell_j A')
+          + g_{j-k-2}\, s^2 \ell_j .
 
 ``ν1`` is continued along the orbit as the root of ``ν(η)² = u² + vw`` closest to the previous one (the branch rule
 at the first state is applied by the caller, on the NumPy route).  The residual check and the imaginary residue
@@ -54,7 +56,7 @@ def _put_site(out, c, s00, s01, s10):
 
 
 @njit(cache=True)
-def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, wp):
+def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0, w1, wp):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used.  ``g`` (Nmax,) is scratch: the
     Taylor coefficients of ``1/det K`` at each site from this step's ``M0`` (``gaudin.maps.monic_series``)."""
     # ℓ(η) = diag(b, −b) + Σ_c f_c P_c,  P = [[y3, y1 − i y2], [y1 + i y2, −y3]]
@@ -65,9 +67,11 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
         y1 = x[3 * c]
         y2 = x[3 * c + 1]
         y3 = x[3 * c + 2]
-        u += f[c] * y3
-        v += f[c] * complex(y1, -y2)
-        w += f[c] * complex(y1, y2)
+        # f + flo: the weights to ~1e-32 (a rounded constant f alone repeats its error at every step: ℓ(η), hence
+        # the eigenvector, off by the same relative ~1e-16 each time, whose dropped residue at η drifts linearly)
+        u += f[c] * y3 + flo[c] * y3
+        v += f[c] * complex(y1, -y2) + flo[c] * complex(y1, -y2)
+        w += f[c] * complex(y1, y2) + flo[c] * complex(y1, y2)
     r = np.sqrt(u * u + v * w)
     if (r.conjugate() * nu_prev).real < 0:
         r = -r
@@ -84,14 +88,18 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
         k1 = c1
         k2 = c2
     n2 = _abs2(k1) + _abs2(k2)
-    cc = 2j * eta.imag / n2
+    # K = n2 (λ + M0) (eq. (mm) times |k|², no division): the dressing does not depend on the factor, and with a
+    # factor varying along the orbit the rounding of K and of 1/det K changes from step to step (a normalised K has
+    # a constant det whose reciprocal rounds alike at every step: a linear drift; gaudin.maps.monic_series, issue 33)
+    t = 2j * eta.imag
     ak2 = _abs2(k2)
-    m00 = -eta + cc * ak2
-    m01 = -cc * k1 * k2.conjugate()
-    m10 = -cc * k1.conjugate() * k2
-    m11 = -eta.conjugate() - cc * ak2
+    m00 = -eta * n2 + t * ak2
+    m01 = -t * k1 * k2.conjugate()
+    m10 = -t * k1.conjugate() * k2
+    m11 = -eta.conjugate() * n2 - t * ak2
+    s2 = n2 * n2
     for i in range(site_pos.shape[0]):
-        lam = site_pos[i]
+        lam = site_pos[i] * n2
         o = site_off[i]
         N = site_n[i]
         K00 = m00 + lam
@@ -100,15 +108,15 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
         A11 = m00 + lam
         A01 = -m01
         A10 = -m10
-        # 1/det K(λ_i + z) from this step's M0 (det = d0 + d1 z + z²): a rounded per-orbit constant
-        # 1/((λ_i − η)(λ_i − η̄)) would repeat its rounding error at every step (a linear drift; issue 33)
+        # 1/det K(λ_i + z) from this step's K (det = d0 + d1 z + n2² z²), each product of two factors that vary
+        # with n2 (d1 g0 or n2² g0 are the same at every step: they would round alike; gaudin.maps.monic_series)
         g0 = 1.0 / (K00 * K11 - m01 * m10)
-        d1 = 2.0 * lam + m00 + m11
+        d1 = n2 * (K00 + K11)
         g[0] = g0
         if N > 1:
-            g[1] = -d1 * g0 * g0
+            g[1] = -d1 * (g0 * g0)
         for d in range(2, N):
-            g[d] = -(d1 * g[d - 1] + g[d - 2]) * g0
+            g[d] = -(d1 * (g[d - 1] * g0) + s2 * (g[d - 2] * g0))
         # per component: P, K'P + PA', K'PA' (each once), then the O(N²) combination with the g's
         for j in range(N):
             c = o + j
@@ -127,8 +135,9 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
             wp[j, 2] = p10
             wp[j, 3] = p11
             for e in range(4):
-                w1[j, e] = kp[e] + pa[e]
+                w1[j, e] = n2 * (kp[e] + pa[e])
                 w0[j, e] = kpa[e]
+                wp[j, e] = s2 * wp[j, e]
         for k in range(N):
             s00 = 0j
             s01 = 0j
@@ -147,7 +156,7 @@ def _step(x, out, b, eta, nu_prev, f, g, site_pos, site_off, site_n, M, w0, w1, 
 
 
 @njit(cache=True)
-def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_every):
+def run_orbit(x0, b, eta, nu0, f, flo, site_pos, site_off, site_n, steps, save_every):
     """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
     n = x0.shape[0]
     M = n // 3
@@ -155,14 +164,16 @@ def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_eve
     rows[0] = x0
     x = x0.copy()
     y = np.empty(n)
-    Nmax = g.shape[1]
+    Nmax = 1
+    for i in range(site_n.shape[0]):
+        Nmax = max(Nmax, site_n[i])
     w0 = np.empty((Nmax, 4), dtype=np.complex128)
     w1 = np.empty((Nmax, 4), dtype=np.complex128)
     wp = np.empty((Nmax, 4), dtype=np.complex128)
-    gs = np.empty(Nmax, dtype=np.complex128)  # per step: 1/det K at a site (g: the per-orbit tables, their shape)
+    gs = np.empty(Nmax, dtype=np.complex128)  # per step: 1/det K at a site
     nu = nu0
     for s in range(steps):
-        nu = _step(x, y, b, eta, nu, f, gs, site_pos, site_off, site_n, M, w0, w1, wp)
+        nu = _step(x, y, b, eta, nu, f, flo, gs, site_pos, site_off, site_n, M, w0, w1, wp)
         x, y = y, x
         if (s + 1) % save_every == 0:
             rows[(s + 1) // save_every] = x
@@ -170,16 +181,19 @@ def run_orbit(x0, b, eta, nu0, f, g, site_pos, site_off, site_n, steps, save_eve
 
 
 def orbit_constants(model, eta):
-    """``(f, g, site_pos, site_off, site_n)``: the per-orbit constants of the kernel (see module docstring)."""
+    """``(f, flo, site_pos, site_off, site_n)``: the per-orbit constants of the kernel (module docstring); the weights
+    of ``ℓ(η)``, ``f_c = (η − λ_c)^{−(k_c+1)}``, as two words ``f + flo`` (``flo`` the rounding error of ``f``,
+    computed with mpmath at 40 digits)."""
+    import mpmath
+
     from ._curve import _component_poles
 
     pos, power = _component_poles(model.sites)
-    f = (complex(eta) - pos) ** (-power)
-    Nmax = max(model.orders)
-    g = np.zeros((len(model.sites), Nmax), dtype=complex)
-    for i, (lam, N) in enumerate(model.sites):
-        s1 = np.array([(-1) ** p * (lam - eta) ** (-(p + 1)) for p in range(N)])
-        s2 = np.array([(-1) ** p * (lam - np.conj(eta)) ** (-(p + 1)) for p in range(N)])
-        g[i, :N] = np.convolve(s1, s2)[:N]
-    return (np.asarray(f, dtype=complex), g, model.positions.astype(float),
-            np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))
+    eta = complex(eta)
+    with mpmath.workdps(40):
+        exact = [(mpmath.mpc(eta.real, eta.imag) - mpmath.mpf(float(p))) ** (-int(k)) for p, k in zip(pos, power,
+                                                                                                       strict=True)]
+        f = np.array([complex(z) for z in exact], dtype=complex)
+        flo = np.array([complex(z - mpmath.mpc(c.real, c.imag)) for z, c in zip(exact, f, strict=True)], dtype=complex)
+    return (f, flo, model.positions.astype(float), np.array(model.offsets, dtype=np.int64),
+            np.array(model.orders, dtype=np.int64))

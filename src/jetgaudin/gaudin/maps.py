@@ -44,7 +44,7 @@ from ._curve import _component_poles, nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
-__all__ = ["ChainTwoPointBacklund", "ChainOnePointBacklund"]
+__all__ = ["ChainTwoPointBacklund", "monic_series"]  # ChainOnePointBacklund: module __getattr__ (gaudin._one_point)
 
 #: relative size of the would-be residue at eta above which a step is refused (as backlund.maps: round-off
 #: level in exact arithmetic zero; larger means eta is numerically at a branch point)
@@ -137,27 +137,33 @@ def dress_sites(model, parts, series):
     return out
 
 
-def monic_series(model, M0, A0):
-    r"""The Taylor series at every site of ``K = λ + M0``, ``adj K = λ + A0`` and ``1/det K`` for
-    :func:`dress_sites`, with ``1/det K`` from the computed ``M0`` itself: ``det K(λ_i + z) = d_0 + d_1 z + z²``,
-    ``d_0 = det(λ_i + M0)``, ``d_1 = 2λ_i + tr M0``, inverted as a series (``g_0 = 1/d_0``, ``g_1 = −d_1 g_0²``,
-    ``g_m = −(d_1 g_{m−1} + g_{m−2}) g_0``).  In exact arithmetic ``det K = (λ − η)(λ − η̄)``; the rounded constant
-    ``1/((λ_i − η)(λ_i − η̄))`` used before was off by the same relative amount at every step (~2.6e-16 at
-    ``λ_i = 0.4``, ``η = 1.5 + 0.2i``), which made each site's Casimir drift linearly with the steps (issue 33;
-    ``docs/reliability.md``, "Drift like round-off")."""
-    tr = M0[..., 0, 0] + M0[..., 1, 1]
+def monic_series(model, M0, A0, scale=None):
+    r"""The Taylor series at every site of ``K = s(λ + M0)``, ``adj K = s(λ + A0)`` and ``1/det K`` for
+    :func:`dress_sites` (the dressing ``K ℓ adj K / det K`` does not depend on the factor ``s``, ``scale`` ``(B,)``,
+    default 1), with ``1/det K`` from the computed ``K`` itself: ``det K(λ_i + z) = d_0 + d_1 z + s² z²``,
+    ``d_0 = det K(λ_i)``, ``d_1 = s tr K(λ_i)``, inverted as a series: ``g_0 = 1/d_0``, ``g_1 = −d_1 (g_0 g_0)``,
+    ``g_m = −(d_1 (g_{m−1} g_0) + s² (g_{m−2} g_0))``.
+
+    Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): a quantity whose exact value is the same at every
+    step rounds (nearly) alike at every step, and a relative error repeated at every step is a linear drift.
+    ``det(λ + M0) = (λ − η)(λ − η̄)`` is such a constant (and the rounded ``1/((λ_i − η)(λ_i − η̄))`` used before
+    multiplied each site's Casimir by the same ``1 + δ`` at every step), and so are ``d_1 g_0`` and ``s² g_0``.  With
+    ``s`` varying along the orbit (the two-point map passes ``|k|²`` of its eigenvector) and the products grouped as
+    above, every rounded quantity varies from step to step: the rounding errors add up as a random walk."""
+    s = np.ones(M0.shape[:-2]) if scale is None else np.asarray(scale, dtype=float)
+    sI = s[..., None, None] * _ID
     series = []
     for lam_i, N in model.sites:
-        K = M0 + lam_i * _ID
-        d0 = K[..., 0, 0] * K[..., 1, 1] - K[..., 0, 1] * K[..., 1, 0]
-        d1 = 2 * lam_i + tr
-        g = [1.0 / d0]
+        K = s[..., None, None] * (M0 + lam_i * _ID)
+        A = s[..., None, None] * (A0 + lam_i * _ID)
+        g0 = 1.0 / (K[..., 0, 0] * K[..., 1, 1] - K[..., 0, 1] * K[..., 1, 0])
+        d1 = s * (K[..., 0, 0] + K[..., 1, 1])
+        g = [g0]
         if N > 1:
-            g.append(-d1 * g[0] * g[0])
+            g.append(-d1 * (g0 * g0))
         for _ in range(2, N):
-            g.append(-(d1 * g[-1] + g[-2]) * g[0])
-        series.append(((K, np.broadcast_to(_ID, K.shape)), (A0 + lam_i * _ID, np.broadcast_to(_ID, A0.shape)),
-                       np.array(g)))
+            g.append(-(d1 * (g[-1] * g0) + s * s * (g[-2] * g0)))
+        series.append(((K, sI), (A, sI), np.array(g)))
     return series
 
 
@@ -501,7 +507,9 @@ class ChainTwoPointBacklund(_ChainMap):
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
         if series is None:
-            new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, M0, A0))
+            k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)  # |k|²: a factor varying per step
+            kk = np.abs(k1) ** 2 + np.abs(k2) ** 2
+            new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, M0, A0, kk))
         else:
             new = dress_sites(self.model, ell[..., 1:, :, :], series)
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
@@ -523,5 +531,12 @@ def _two_point_from(d: dict) -> ChainTwoPointBacklund:
 
 register_map("chain_two_point", _two_point_from)
 
-# the one-point map lives in its own module (every family's one-point dressing); re-exported here
-from ._one_point import ChainOnePointBacklund  # noqa: E402
+
+def __getattr__(name: str):
+    """``ChainOnePointBacklund``, which lives in :mod:`jetgaudin.gaudin._one_point` (every family's one-point
+    dressing; it imports this module's helpers), still importable from here (looked up on use: no import cycle)."""
+    if name == "ChainOnePointBacklund":
+        from ._one_point import ChainOnePointBacklund
+
+        return ChainOnePointBacklund
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

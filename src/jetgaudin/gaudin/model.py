@@ -41,7 +41,8 @@ from ..families import make_family
 from ..maps import Backend, Branch
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .maps import ChainOnePointBacklund, ChainTwoPointBacklund
+    from ._one_point import ChainOnePointBacklund
+    from .maps import ChainTwoPointBacklund
 
 __all__ = [
     "GaudinModel",
@@ -464,9 +465,9 @@ class GaudinModel:
         self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
         kernel: Backend | str | None = None,
     ) -> ChainOnePointBacklund:
-        """The complex one-point map (:class:`~jetgaudin.gaudin.maps.ChainOnePointBacklund`): rational family with
+        """The complex one-point map (:class:`~jetgaudin.gaudin.ChainOnePointBacklund`): rational family with
         ``b ≠ 0``, trigonometric with ``b + iγJ ≠ 0`` (``docs/families.md`` §3.1); the elliptic family has none."""
-        from .maps import ChainOnePointBacklund
+        from ._one_point import ChainOnePointBacklund
 
         return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
 
