@@ -230,10 +230,20 @@ def _check_times(T, t_eval):
     return T, t_eval
 
 
-def _check_tol(name, val, positive):
+#: the smallest relative tolerance of the adaptive integrators (``dop853``, ``heyoka``): 1e-18, a hundredth of the
+#: machine epsilon (no double-precision step gains anything below it; heyoka's own default is the epsilon).  Far
+#: below it heyoka's Taylor order and step count grew without bound (``flow --method heyoka --rtol 1e-300`` ran for
+#: ever past 1.2 GB, deaf to SIGINT); it is refused instead
+RTOL_FLOOR = 1e-18
+
+
+def _check_tol(name, val, positive, floor: float = 0.0):
     val = real_number(val, name)
     if val < 0 or (positive and val == 0):
         raise InvalidParameterError(f"{name} must be finite and {'> 0' if positive else '>= 0'}, got {val}")
+    if val < floor:
+        raise InvalidParameterError(f"{name} = {val:g} is below {floor:.3g} (a hundredth of the machine epsilon), "
+                                    f"which no double-precision step can meet; give {name} >= {floor:.3g}")
     return val
 
 
@@ -261,7 +271,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     check = getattr(H, "check_state", None)  # a Hamiltonian on its own state space (an su(n) chain: (n²−1)M)
     X0, N = (check(X0), 0) if callable(check) else as_state(X0)
     T, t_eval = _check_times(T, t_eval)
-    rtol = _check_tol("rtol", rtol, True)
+    rtol = _check_tol("rtol", rtol, True, RTOL_FLOOR)
     atol = _check_tol("atol", atol, False)
     method = Method.parse(method)
     is_integral = isinstance(H, IntegralHamiltonian)
@@ -392,7 +402,7 @@ class FlowMap(Map):
                                         f"units (hours to forever); give dt <= {MAX_FLOW_DT:g} and more steps")
         object.__setattr__(self, "dt", dt)
         object.__setattr__(self, "method", Method.parse(self.method))
-        object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True))
+        object.__setattr__(self, "rtol", _check_tol("rtol", self.rtol, True, RTOL_FLOOR))
         object.__setattr__(self, "atol", _check_tol("atol", self.atol, False))
         self._init_backend()
 

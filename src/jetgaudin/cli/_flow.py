@@ -109,8 +109,11 @@ def flow(
             cm.check_state_scale(X0, bf)
         kind, weights = parse_hamiltonian(hamiltonian, X0, bf, model)
         hamiltonian = Hamiltonian(kind) if kind != "weights" else "weights"
-        if not (0 < rtol < 1):
-            raise cm.CliInputError(f"--rtol: must be in (0, 1), got {rtol}")
+        from ..flows import RTOL_FLOOR
+
+        if not (RTOL_FLOOR <= rtol < 1):  # below the machine epsilon an adaptive method never meets it
+            raise cm.CliInputError(f"--rtol: must be in [{RTOL_FLOOR:.3g}, 1) (below, no double-precision step meets it), got "
+                                   f"{rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
             raise cm.CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:

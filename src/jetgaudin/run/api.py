@@ -256,7 +256,8 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
     where the compile messages go (the map's kernels are compiled or loaded before the loop, with a message
     giving the expected time and one when done; default: stderr; nothing is said when they are loaded).
 
-    Returns a :class:`RunResult`; raises :class:`RunInterrupted` on SIGINT/SIGTERM (checkpoint written),
+    Returns a :class:`RunResult`; raises :class:`RunInterrupted` on SIGINT/SIGTERM (checkpoint written; also when
+    the signal came as the run completed: its ``result`` is then complete),
     :class:`jetgaudin.RunDirectoryError` / :class:`jetgaudin.RunLockedError` for a refused directory.
     """
     out_dir = Path(out_dir)
@@ -346,6 +347,10 @@ def _drive(spec: RunSpec, out_dir: Path, store: Store, pos: Position, health: He
         session_steps=out.last_safe_step - n0, session_seconds=out.elapsed - elapsed0)
     if out.status is RunStatus.INTERRUPTED:
         raise RunInterrupted(out.signum, out.last_safe_step, out_dir, command=spec.program, result=result)
+    if out.signum and out.status is RunStatus.COMPLETED:  # the signal came as the last step was saved
+        raise RunInterrupted(out.signum, out.last_safe_step, out_dir, command=spec.program, result=result,
+                             message=f"as the run completed (all {out.last_safe_step} steps saved in {out_dir}); "
+                                     f"nothing else was done (draw the figures with: jetgaudin plot {out_dir})")
     return result
 
 

@@ -249,8 +249,9 @@ class Driver:
                 return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
             if self.progress is not None:
                 self.progress(pos.n, steps)
-        return Outcome(status, failure, pos.n, self.elapsed(), signum=sig.signum if status is RunStatus.INTERRUPTED
-                       else 0)
+        # a signal that came after the last step (during the last checkpoint or the last progress call) is still
+        # reported: the run completed, and the caller stops there (no exit 0 after a SIGINT)
+        return Outcome(status, failure, pos.n, self.elapsed(), signum=sig.signum)
 
     _L = 1
     _fixed = float("inf")  # the shortest call's seconds (:meth:`_adapt`)
