@@ -2,7 +2,8 @@
 route, against the su(2) chain with the same sites in the same run (the baseline), then the same work two ways: the
 compiled map against heyoka integrating the flow of ``G^{(r)}_η`` (whose time-1 flow is the map) over the same time.
 
-Run: ``python benchmarks/bench_sun.py [--steps 1000000] [--work-steps 1000]``.  Prints the machine, steps/s (thread CPU
+Run: ``python benchmarks/bench_sun.py [--steps 1000000] [--work-steps 1000]`` (``--drift``: the drift table of
+``docs/sun.md`` only).  Prints the machine, steps/s (thread CPU
 time, median of 3, after a warm-up that compiles or loads the kernels), the drift of the integrals over the run, and
 for the same-work comparison wall times (median of 3; heyoka's includes building its Taylor integrator) and the
 distance between the two orbits.  heyoka's system: ``Ẋ = Π(X) ∇H``, ``H = Σ ω_I h_I`` with ``∇H`` a quadratic
@@ -57,12 +58,33 @@ def heyoka_system(H, n):
     return list(zip(xs, rhs, strict=True))
 
 
+def drift_table(steps=10_000):
+    """The drift table of docs/sun.md: max |h − h0| / max |h0| after ``steps`` steps, each branch and route."""
+    cases = [("su(3), [(0,1),(1,1)]", jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su3"), 0.4 + 0.1j),
+             ("su(3), [(0,3)]", jg.GaudinModel(0.5, [(0.0, 3)], algebra="su3"), -0.3 + 0.2j),
+             ("su(3), [(-1,2),(0.7,1)]", jg.GaudinModel(0.5, [(-1.0, 2), (0.7, 1)], algebra="su3"), 0.3 + 0.25j),
+             ("su(4), [(0,1),(1,1)]", jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su4"), 0.4 + 0.1j)]
+    for name, m, eta in cases:
+        X = 0.5 * np.random.default_rng(8).normal(size=m.n_state)
+        I0 = m.integrals(X)
+        row = [name]
+        for r in range(m.n) if m.n == 3 else [0]:
+            for be in ("numpy", "compiled") if m.n == 3 else ("numpy",):
+                adv = m.two_point_backlund(eta, branch=r, backend=be).advance(X, None, steps, steps)
+                row.append(f"r={r} {be}: {np.max(np.abs(m.integrals(adv.X) - I0)) / np.max(np.abs(I0)):.1e}")
+        print(" | ".join(row))
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=1_000_000)
     p.add_argument("--work-steps", type=int, default=1000)
+    p.add_argument("--drift", action="store_true", help="only the drift table of docs/sun.md (10^4 steps)")
     a = p.parse_args()
     print("machine:", machine())
+    if a.drift:
+        drift_table()
+        return
     rng = np.random.default_rng(8)
     m3 = jg.GaudinModel(0.5, SITES, algebra="su3")
     m2 = jg.GaudinModel(0.5, SITES)

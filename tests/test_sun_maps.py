@@ -168,13 +168,14 @@ def test_description_and_batches():
 
 
 def test_drift_over_1e4_steps():
-    """Integrals kept over 10⁴ steps of an su(3) chain with two order-1 sites: a random walk of round-off (the
-    measured drift is ~1e-14 relative; tolerance 1e-11)."""
+    """Integrals kept over 10⁴ steps of an su(3) chain with two order-1 sites: round-off accumulating about linearly
+    (measured 3.7e-12 relative to max |h|, as the su(2) chain's map with the same sites: 8.6e-12 absolute, 2.2e-12
+    relative; tolerance 5e-11, a planted O(1e-13) error per step would give 1e-9)."""
     m = _model(3, [(0.0, 1), (1.0, 1)])
     X = _state(m, seed=8)
     adv = m.two_point_backlund(0.4 + 0.1j, branch=0).advance(X, None, 10_000, 10_000)
     I0, I1 = m.integrals(X), m.integrals(adv.X)
-    assert np.max(np.abs(I1 - I0)) < 1e-11 * (1 + np.max(np.abs(I0)))
+    assert np.max(np.abs(I1 - I0)) < 5e-11 * np.max(np.abs(I0))
     assert np.max(adv.imag_max) < 1e-12
 
 
