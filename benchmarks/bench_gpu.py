@@ -19,8 +19,8 @@ import time
 
 import numpy as np
 
-#: flops of one real N = 3 step (docs/performance.md, "flop count of the real form"; ``kernels._flops``)
-FLOPS_N3 = 349
+#: flops of one real N = 3 step (``kernels.flops_per_step(3)["total"]``; docs/performance.md, issue 36)
+FLOPS_N3 = 351
 #: FP64 peak (FLOP/s, vector units without the tensor cores) of the GPUs this is run on: NVIDIA's data sheets
 FP64_PEAK = {"H100": 34e12, "H200": 34e12, "A100": 9.7e12}
 

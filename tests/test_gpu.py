@@ -294,14 +294,29 @@ def test_resident_split_runs_equal_the_unsplit_run_bit_for_bit(tmp_path, monkeyp
     device between calls (every call after the first is given a device handle) and the saved rows equal the one-call
     GPU run bit for bit (the same kernel continued from the carried ν1)."""
     from jetgaudin import run as rl
+    from jetgaudin.gpu import _resident
 
     calls = _resident_calls(monkeypatch)
+    ahead = []
+    original = _resident.DeviceStates.copy_ahead
+    monkeypatch.setattr(_resident.DeviceStates, "copy_ahead", lambda self, buf, ev: (ahead.append(1),
+                                                                                      original(self, buf, ev)))
+    asked = []
+    pinned = _resident.ResidentMap._pinned_rows
+    monkeypatch.setattr(_resident.ResidentMap, "_pinned_rows",
+                        lambda self, shape, dtype: (asked.append(shape), pinned(self, shape, dtype))[1])
     spec = _ens_spec("gpu")
     res = rl.start(spec, tmp_path / "r", max_chunk_steps=chunk)
     assert res.state is rl.RunStatus.COMPLETED
     assert calls and not calls[0][0] and all(c[0] for c in calls[1:])
     if chunk is not None:
         assert len(calls) >= -(-40 // chunk)  # at most `chunk` steps a call
+    # the rows of exactly the calls that end on the save grid (or at the end) are copied ahead, on the copy stream,
+    # each into a free pinned buffer of the pool (at most POOL of them: a chunk holding more calls' rows copies the
+    # others when the loop takes them)
+    ends = np.cumsum([c[1] for c in calls])
+    assert len(asked) == sum(1 for e in ends if e % 4 == 0 or e == 40) > 0
+    assert 0 < len(ahead) <= len(asked)
     ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 40, save_every=4, gpu=True, want_drift=False)
     d = rl.load(tmp_path / "r")
     np.testing.assert_array_equal(d.X, np.moveaxis(ref.states, 0, 1) if d.X.shape[0] == spec.B else ref.states)

@@ -10,8 +10,13 @@ gives the loop a map whose ``advance`` keeps them on the device:
   reads it -- the checkpoint (every ``checkpoint_seconds``: :func:`attach` wraps ``store.checkpoint``), the reference
   step of the imaginary residue (64 states), a state off the save grid at the end of a chunk.  Each call writes new
   device arrays (the old ones are freed once no handle refers to them), so a handle never changes.
-* **Only saved rows come back.**  ``Advance.rows`` is a handle too; the loop takes all of a call's rows or its last
-  one, and only what it takes is copied (through a pinned host buffer, on the map's CUDA stream).
+* **Only saved rows come back, their copy overlapping the next call.**  ``Advance.rows`` is a handle too.  A call
+  that ends on the save grid (or at the run's last step: the loop takes its rows) starts the copy of its rows into a
+  pinned host buffer at once, on a second CUDA stream after the call's kernel, and returns: the copy runs while the
+  host goes on and the next call steps; the loop's first look at the rows waits for it.  The pinned buffers are a
+  pool of :data:`POOL`, each reused once nothing refers to it any more (the loop copies the rows it appends); a call
+  that finds none free, or whose rows the loop may not take (off the grid), copies what the loop takes when it takes
+  it.
 * **Health on the device.**  The health of the rows the loop took (integrals ``κ`` of every orbit against
   ``I(X_0)``, relative to ``max(1, |I(X_0)|)``; non-finite or above ``max_drift`` is a breach), the running maxima
   of the drift and of the radius deviation ``||y_{N−1}| − |y_{N−1}(0)||`` are computed by CUDA kernels, one thread
@@ -25,8 +30,8 @@ gives the loop a map whose ``advance`` keeps them on the device:
 The steps are the GPU route's own kernels (:func:`._kernels.top_kernels`), so a run split into calls equals the unsplit
 run bit for bit on the same device, and a checkpoint resumes bit for bit, as before.  The integrals on the device
 sum in another order than NumPy's: the drift values agree with the host's to round-off of ``max(1, |I|)``, not bit
-for bit (``tests/test_gpu.py``).  What is not overlapped: the loop takes a call's rows right after the call, so the
-copy of saved rows is not overlapped with the next call's steps (it is with nothing else of the host either).
+for bit (``tests/test_gpu.py``).  The simulator runs streams in order, so the tests check the copies' content and
+bookkeeping, not their overlap.
 
 Ensembles of the top (``BatchBacklund``, N ≤ :data:`._kernels.MAX_N`) only; chains keep the host path.
 """
@@ -34,6 +39,7 @@ Ensembles of the top (``BatchBacklund``, N ≤ :data:`._kernels.MAX_N`) only; ch
 from __future__ import annotations
 
 import functools
+import sys
 from typing import Any
 
 import numpy as np
@@ -45,6 +51,8 @@ from ._kernels import MAX_N, THREADS
 #: ``numba.cuda``, bound by :func:`_health_kernels` (a module global: the CUDA simulator swaps the kernels' global
 #: ``cuda`` for its own, as in :mod:`._kernels`)
 cuda: Any = None
+#: at most this many pinned buffers for the rows' copies (a chunk of the loop holds a few calls' rows)
+POOL = 4
 
 __all__ = ["attach", "DeviceStates", "ResidentMap"]
 
@@ -57,6 +65,12 @@ class DeviceStates:
     def __init__(self, dev: Any, owner: ResidentMap, on_take: Any = None):
         self.dev, self.owner, self._on_take = dev, owner, on_take
         self._host: np.ndarray | None = None
+        self._copy: tuple[np.ndarray, Any] | None = None  # (pinned buffer, event): a copy on its way (copy_ahead)
+        self.step: int | None = None  # the step a state handle is at (ResidentMap tracks the position)
+
+    def copy_ahead(self, buf: np.ndarray, event: Any) -> None:
+        """The copy into the pinned ``buf`` is on its way (done at ``event``): :meth:`host` waits for it."""
+        self._copy = (buf, event)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -79,7 +93,12 @@ class DeviceStates:
 
     def host(self) -> np.ndarray:
         if self._host is None:
-            self._host = self.owner.to_host(self.dev)
+            if self._copy is not None:
+                buf, event = self._copy
+                event.synchronize()
+                self._host = buf
+            else:
+                self._host = self.owner.to_host(self.dev)
         return self._host
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
@@ -95,7 +114,7 @@ class DeviceStates:
         if self._on_take is not None and isinstance(idx, int):  # a call's last row: the only one copied
             j = idx % len(self)
             self._on_take(j, j + 1)
-            return self.owner.to_host(self.dev[j]) if self._host is None else self._host[j]
+            return self.owner.to_host(self.dev[j]) if self._host is None and self._copy is None else self.host()[j]
         if self._host is None and isinstance(idx, slice) and idx.step in (None, 1):
             return self.owner.to_host(self.dev[idx])
         return self.host()[idx]
@@ -180,10 +199,13 @@ class ResidentMap:
     """The map of a GPU run as the run layer's loop sees it (module docstring): ``advance`` on device-resident states;
     everything else is the wrapped :class:`jetgaudin.ensemble.BatchBacklund`'s."""
 
-    def __init__(self, m: Any, health: Any):
+    def __init__(self, m: Any, health: Any, n0: int = 0, every: int = 1, steps: int = 0):
         self.m = m
         self.c = require()
         self.stream = self.c.stream()
+        self.copy_stream = self.c.stream()  # the saved rows' copies, beside the next call's steps
+        self.n0, self.every, self.steps = int(n0), int(every), int(steps)
+        self._pool: list[np.ndarray] = []  # pinned buffers of the rows' copies, reused once nothing refers to them
         c, B = self.c, len(m.b)
         self.B = B
         self.d_b = c.to_device(np.ascontiguousarray(m.b, dtype=np.float64), stream=self.stream)
@@ -215,6 +237,19 @@ class ResidentMap:
         dev.copy_to_host(buf, stream=self.stream)
         self.stream.synchronize()
         return np.array(buf)
+
+    def _pinned_rows(self, shape: tuple, dtype: Any) -> np.ndarray | None:
+        """A pinned buffer of ``shape`` that nothing outside the pool refers to (the loop has copied the rows it held
+        into its own arrays), or a new one (at most :data:`POOL` in all); ``None`` when all are in use."""
+        for i in range(len(self._pool)):
+            if self._pool[i].shape == shape and sys.getrefcount(self._pool[i]) <= 2:  # the pool's and the argument's
+                return self._pool[i]
+        if len(self._pool) >= POOL:
+            self._pool = [b for b in self._pool if sys.getrefcount(b) > 2]  # drop free buffers of other shapes
+            if len(self._pool) >= POOL:
+                return None
+        self._pool.append(self.c.pinned_array(shape, dtype=dtype))
+        return self._pool[-1]
 
     def _device(self, x: Any, dtype: Any) -> Any:
         if isinstance(x, DeviceStates) and x.owner is self:
@@ -258,6 +293,18 @@ class ResidentMap:
         kernel[grid, THREADS, s](dX, self.d_b, self.d_eta, d_nu0, cont, np.int64(steps), np.int64(save_every), d_out,
                                  d_final, d_status, d_fail, d_nu)
         stop.record(stream=s)
+        at = X.step if isinstance(X, DeviceStates) and X.owner is self and X.step is not None else self.n0
+        rows = DeviceStates(d_out[1:], self, on_take=lambda j0, j1: self.taken.append((d_out, j0 + 1, j1 + 1)))
+        # the rows the loop will take (the call ends on the save grid, or the run ends) are copied at once, on the copy
+        # stream, while the host goes on and the next call steps: their copy overlaps the next call
+        if S > 1 and ((at + steps) % self.every == 0 or at + steps == self.steps):
+            buf = self._pinned_rows((S - 1, B, n), np.float64)
+            if buf is not None:
+                stop.wait(stream=self.copy_stream)
+                d_out[1:].copy_to_host(buf, stream=self.copy_stream)
+                copied = c.event()
+                copied.record(stream=self.copy_stream)
+                rows.copy_ahead(buf, copied)
         _, _, failed = _health_kernels()
         d_bad = c.to_device(np.array([B, 0], dtype=np.int64), stream=s)
         failed[grid, THREADS, s](d_status, d_bad)
@@ -272,11 +319,9 @@ class ResidentMap:
             exc = kernels().status_error(st, fl, i)
             raise type(exc)(f"{exc} ({int(bad[1])} orbit(s) of {B} failed)")
 
-        def take(j0: int, j1: int) -> None:
-            self.taken.append((d_out, j0 + 1, j1 + 1))
-
-        rows = DeviceStates(d_out[1:], self, on_take=take)
-        return Advance(rows=rows, X=DeviceStates(d_final, self), carry=DeviceStates(d_nu, self),  # type: ignore[arg-type]
+        end = DeviceStates(d_final, self)
+        end.step = at + steps
+        return Advance(rows=rows, X=end, carry=DeviceStates(d_nu, self),  # type: ignore[arg-type]
                        imag_max=np.zeros(0))
 
     # ------------------------------------------------------------------ health
@@ -348,7 +393,7 @@ def _device_health_class(base: Any) -> type:
     return DeviceHealth
 
 
-def attach(spec: Any, health: Any, store: Any) -> Any:
+def attach(spec: Any, health: Any, store: Any, n0: int = 0) -> Any:
     """The map the run layer's loop advances for ``spec``: a :class:`ResidentMap` for an ensemble of the top on the
     GPU (``health`` then checks on the device, ``store``'s checkpoints copy the states they record), else
     ``spec.map`` (nothing changed)."""
@@ -359,7 +404,7 @@ def attach(spec: Any, health: Any, store: Any) -> Any:
     if (not isinstance(m, BatchBacklund) or m.backend is not Backend.GPU or spec.X0.ndim != 2 or spec.B == 0
             or spec.n_state > 3 * MAX_N):
         return m
-    r = ResidentMap(m, health)
+    r = ResidentMap(m, health, n0, spec.save_every, spec.steps)
     sphere = health.sphere
     health.__dict__.pop("drift", None)
     health.__dict__.pop("sphere", None)

@@ -190,7 +190,7 @@ class Driver:
         if spec.map.backend is Backend.GPU:
             from ..gpu._resident import attach
 
-            self.map = attach(spec, health, store)
+            self.map = attach(spec, health, store, pos.n)
 
     def summary(self, status: str) -> dict:
         """The layout's summary fields, ``status`` and the stepping rate of this session (orbit-steps per second of
