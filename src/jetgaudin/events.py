@@ -17,9 +17,8 @@ import numpy as np
 
 from ._errors import InvalidParameterError
 from ._validate import as_state
-from .exact import ExactFlow
 from .hamiltonians import IntegralHamiltonian
-from .solve import solve
+from .solve import SolveMethod, _map, solve
 
 __all__ = ["Events", "find_events", "poincare_section"]
 
@@ -66,11 +65,11 @@ def find_events(H: IntegralHamiltonian, X0, g: Callable, t_span, dt: float, *, d
         x = tr.X[n]
 
         def f(sv: float, x=x) -> float:
-            return _scalar(g, ExactFlow(H, sv, s)(x)) if sv != 0 else _scalar(g, x)
+            return _scalar(g, _map(SolveMethod.EXACT, H, sv, s, "auto")(x)) if sv != 0 else _scalar(g, x)
 
         root = brentq(f, 0.0, h, xtol=1e-15, rtol=4 * np.finfo(float).eps)
         times.append(tr.t[n] + root)
-        states.append(ExactFlow(H, root, s)(x) if root != 0 else x)
+        states.append(_map(SolveMethod.EXACT, H, root, s, "auto")(x) if root != 0 else x)
         dirs.append(d)
     n3 = X0.shape[-1]
     return Events(np.array(times), np.array(states).reshape(-1, n3), np.array(dirs, dtype=int))
