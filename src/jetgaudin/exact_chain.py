@@ -36,7 +36,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ._errors import BranchPointError, InvalidParameterError, StepTooLargeError
+from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
 from .maps import Advance, Map, MapProperties, check_count, register_map
@@ -334,19 +334,45 @@ class ChainExactFlow(Map):
     def _orbit(self, x: np.ndarray, steps: int, save_every: int, rows: np.ndarray) -> np.ndarray:
         """``steps`` steps of one orbit ``x``: the saved rows into ``rows`` ``(steps // save_every, 3M)``; returns
         the last state.  The maps run unrotated (they commute with the rotation), and each row is rotated once
-        through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row."""
+        through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row.  Maps with
+        a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
+        each map's ``ν1`` from the compiled branch rule at ``x`` and then continued; else ``k s`` steps of each map
+        per call of its NumPy route (the maps commute)."""
         eta, theta = self.parameters(x)
         s = self.substeps
+        # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         maps = [self.model.two_point_backlund(e) for e in eta if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
+        if maps and all(mp.has_compiled for mp in maps):
+            return self._orbit_compiled(x, maps, theta, steps, save_every, rows)
         z, done = x, 0
         while done < steps:
             n = min(save_every - done % save_every, steps - done)
-            for mp in maps:  # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
+            for mp in maps:
                 z = mp.advance(z, None, n * s, n * s).X
             done += n
             if done % save_every == 0:
                 rows[done // save_every - 1] = rotate_about_field(z, (done * s) * theta)
         return rotate_about_field(z, (steps * s) * theta)
+
+    def _orbit_compiled(self, x: np.ndarray, maps: list, theta: float, steps: int, save_every: int,
+                        rows: np.ndarray) -> np.ndarray:
+        from . import _exact_chain_loop as L
+        from .gaudin.maps import _orbit_constants
+
+        x = np.ascontiguousarray(x, dtype=float)
+        nu = np.array([complex(mp._compiled_start(x[None])[0]) for mp in maps])
+        consts = L.stack_constants([_orbit_constants(self.model, mp.eta) for mp in maps])
+        out = np.empty((steps // save_every, x.size))
+        final = np.empty(x.size)
+        tail = (float(theta), steps, save_every, self.substeps, out, final)
+        if len(consts) == 5:
+            L.rows_rational(x, float(self.model.b), np.array([mp.eta for mp in maps]), nu, *consts, *tail)
+        else:
+            L.rows_family(x, float(self.model.b), nu, *consts, *tail)
+        if not (np.all(np.isfinite(out)) and np.all(np.isfinite(final))):
+            raise SingularStepError("the compiled exact chain step produced non-finite values; give a smaller dt")
+        rows[...] = out
+        return final
 
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit), rows every
