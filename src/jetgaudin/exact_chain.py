@@ -30,6 +30,7 @@ separate the sites' weights at a higher order in ``1/ρ``): ~0.02 for the Lagran
 
 from __future__ import annotations
 
+import importlib
 import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -356,8 +357,9 @@ class ChainExactFlow(Map):
 
     def _orbit_compiled(self, x: np.ndarray, maps: list, theta: float, steps: int, save_every: int,
                         rows: np.ndarray) -> np.ndarray:
-        from . import _exact_chain_loop as L
         from .gaudin.maps import _orbit_constants
+
+        L: Any = importlib.import_module("jetgaudin._exact_chain_loop")  # Numba dispatchers (untyped for mypy)
 
         x = np.ascontiguousarray(x, dtype=float)
         nu = np.array([complex(mp._compiled_start(x[None])[0]) for mp in maps])
