@@ -72,6 +72,9 @@ _STAGES = np.array(_CONTINUATION_STAGES, dtype=np.int64)
 #: the continued ``ν(η_j)`` must equal the branch rule's to this relative tolerance (a branch point near a segment
 #: flips the sign: a difference of order 1)
 _BRANCH_TOL = 1e-8
+#: rows at most this many (sub-)steps apart run in the one compiled loop of :mod:`jetgaudin._exact_loop` (a map
+#: kernel call per step); farther apart, ``k s`` steps of each map per kernel call
+_FUSED_ROWS = 16
 #: batches of at least this many orbits solve on all threads (below, a thread start costs more than the work)
 _PARALLEL_FROM = 256
 
@@ -361,25 +364,52 @@ class ExactFlow(FixedStep, Map):
     def _run(self, X: np.ndarray, eta: np.ndarray, theta: np.ndarray, nu: np.ndarray, steps: int,
              save_every: int) -> tuple[np.ndarray, np.ndarray]:
         """``(rows, final)`` of ``steps`` steps on a flat batch ``X`` (B, 3N) with the maps' ``eta`` (B, k), their
-        first ``ν1`` ``nu`` (B, k) and the rotation angles ``theta`` (B,) of one sub-step."""
+        first ``ν1`` ``nu`` (B, k) and the rotation angles ``theta`` (B,) of one sub-step.  The maps run on the
+        unrotated orbit ``Z`` (they commute with the rotation) and each row is ``R_{n s θ} Z_n``, one rotation
+        through the accumulated angle: the rotation's round-off does not accumulate (a fixed ``R_θ`` applied at
+        every step changes ``|y|`` by the same ``O(ε)`` factor every step, a drift linear in the steps).  Compiled,
+        with rows at most :data:`_FUSED_ROWS` steps apart: every step in one compiled loop
+        (:mod:`jetgaudin._exact_loop`); farther apart: ``k s`` steps of each map per kernel call."""
         s = self.substeps
         rows = np.empty((steps // save_every,) + X.shape)
         compiled = self.resolved_backend(X, steps) is Backend.COMPILED
-        X = np.ascontiguousarray(X, dtype=float)
+        Z = np.ascontiguousarray(X, dtype=float)
+        if compiled and save_every * s <= _FUSED_ROWS:
+            return self._run_fused(Z, eta, theta, nu, steps, save_every, rows)
+        rotate: Any = rotate_about_field
         if compiled:
             from ._exact_kernels import rotate
         done = 0
         while done < steps:
             k = min(save_every - done % save_every, steps - done)
             if compiled:
-                X = rotate(self._maps_compiled(X, eta, nu, k * s), (k * s) * theta)
+                Z = self._maps_compiled(Z, eta, nu, k * s)
             else:
                 for _ in range(k * s):
-                    X = rotate_about_field(self._maps_numpy(X.copy(), eta), theta)
+                    Z = self._maps_numpy(Z.copy(), eta)
             done += k
             if done % save_every == 0:
-                rows[done // save_every - 1] = X
-        return rows, X
+                rows[done // save_every - 1] = rotate(Z, (done * s) * theta)
+        return rows, rotate(Z, (steps * s) * theta)
+
+    def _run_fused(self, Z: np.ndarray, eta: np.ndarray, theta: np.ndarray, nu: np.ndarray, steps: int,
+                   save_every: int, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        from ._exact_loop import rows_batch, rows_single
+        from .backlund._compiled import kernels
+
+        final = np.empty_like(Z)
+        info = np.zeros((Z.shape[0], 2), dtype=np.int64)
+        args = (float(self.b), np.ascontiguousarray(eta), np.ascontiguousarray(nu))
+        if Z.shape[0] == 1:
+            rows_single(Z[0], args[0], args[1][0], args[2][0], float(theta[0]), steps, save_every, self.substeps,
+                        rows[:, 0], final[0], info[0])
+        else:
+            rows_batch(Z, *args, np.ascontiguousarray(theta, dtype=float), steps, save_every, self.substeps, rows,
+                       final, info)
+        if info[:, 0].any():
+            i = int(np.flatnonzero(info[:, 0])[0])
+            raise kernels().status_error(info[i, 0], info[i, 1], i if Z.shape[0] > 1 else None)
+        return rows, final
 
     def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
         adv = self.advance(X, carry, 1)

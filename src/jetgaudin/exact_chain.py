@@ -30,15 +30,17 @@ separate the sites' weights at a higher order in ``1/ρ``): ~0.02 for the Lagran
 
 from __future__ import annotations
 
+import importlib
+import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ._errors import InvalidParameterError, StepTooLargeError
+from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from ._validate import real_number
-from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _node_scales, nonzero_step, rotate_about_field
-from .maps import Map, MapProperties, register_map
+from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
+from .maps import Advance, Map, MapProperties, check_count, register_map
 
 __all__ = ["ChainExactFlow"]
 
@@ -71,20 +73,96 @@ def _identities(model, keep: np.ndarray) -> np.ndarray:
     return vt[sv <= 1e-10 * sv[0]]
 
 #: Newton: step tolerance (relative to |h|), largest number of iterations, residual accepted (relative to the scale
-#: of the weights; the adaptive quadrature's epsrel is 1e-13)
+#: of the weights)
 _STEP_TOL, _ITERATIONS, _RES_TOL = 1e-13, 30, 1e-11
+#: the Gauss–Legendre rule of the weights and the accepted estimate ``|Q_64 − Q_32|`` (relative to the weights'
+#: scale); an orbit whose rule does not converge to it falls back to the adaptive quadrature
+#: (``model.interpolating_weights``, epsrel 1e-13)
+_NODES, _QUAD_TOL = 64, 1e-13
+#: the smallest ``R`` of the real-part rule: below it (one site and no branch points: the elliptic family, whose
+#: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
+#: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
+_R_FLOOR = 1e-6
+
+
+class _Weights:
+    """The weights ``ω_I(ρ_j + i h_j)`` of the matched integrals ``I`` (``keep``) of one orbit ``x`` and their
+    derivatives ``∂ω_I/∂h = −Re[∂ν²/∂I(η)/ν(η)]`` (the integrand at the end point), by the 64-point
+    Gauss–Legendre rule on ``s ∈ [0, h]`` of ``−Re[∂ν²/∂I(ρ + is)/ν(ρ + is)]``, with the estimate
+    ``|Q_64 − Q_32|``.  ``ν`` at the nodes: ``ν²`` evaluated directly (one call of ``model.nu_squared``) and its
+    root continued node by node from ``+√ν²(ρ) > 0`` (the nodes sorted along the segment; each time the root
+    nearer to the previous one, and no step may move ``ν`` by more than a quarter of its size, else
+    :class:`~jetgaudin.BranchPointError`: a branch point near the segment).  That is the default branch of
+    ``model.nu`` while no branch point is near the segment; the solve checks the end values against
+    ``model.nu`` itself (:meth:`branch_ok`)."""
+
+    def __init__(self, flow: ChainExactFlow, x: np.ndarray, keep: np.ndarray):
+        self.flow, self.x, self.keep = flow, x, keep
+
+    def _nu(self, lam: np.ndarray) -> np.ndarray:
+        """``ν`` continued along each row of ``lam`` ``(k, n)`` (points ``ρ_j + i s``, ``s`` in any order)."""
+        s = lam.imag
+        pts = np.concatenate([lam[:, :1].real + 0j, lam], axis=1)  # the start ρ_j first
+        order = np.argsort(np.abs(np.concatenate([np.zeros((len(lam), 1)), s], axis=1)), axis=1, kind="stable")
+        r = np.sqrt(np.asarray(self.flow.model.nu_squared(self.x, pts), dtype=complex))
+        rs = np.take_along_axis(r, order, axis=1)
+        v = np.where(rs[:, 0].real < 0, -rs[:, 0], rs[:, 0])
+        out = np.empty_like(rs)
+        out[:, 0] = v
+        ok = np.ones(len(lam), dtype=bool)
+        for q in range(1, rs.shape[1]):
+            rq = np.where(np.abs(rs[:, q] - v) <= np.abs(rs[:, q] + v), rs[:, q], -rs[:, q])
+            ok &= np.abs(rq - v) <= 0.25 * np.maximum(np.abs(rq), np.abs(v))
+            out[:, q] = v = rq
+        if not (ok.all() and np.all(np.abs(out) > 0)):
+            raise BranchPointError("nu cannot be continued along an exact step's segment (a branch point near it)")
+        nu = np.empty_like(out)
+        np.put_along_axis(nu, order, out, axis=1)
+        return nu[:, 1:]
+
+    def __call__(self, rho: np.ndarray, h: np.ndarray, estimate: bool = False):
+        """``(ω (k, n_keep), ∂ω/∂h (k, n_keep), relative quadrature estimate)`` (the estimate only with ``estimate``,
+        else 0)."""
+        rules = [_gauss_legendre(_NODES)] + ([_gauss_legendre(_NODES // 2)] if estimate else [])
+        nodes = np.concatenate([np.concatenate([xg, [1.0]]) for xg, _ in rules])
+        lam = rho[:, None] + 1j * h[:, None] * nodes
+        nu = self._nu(lam)
+        self.nu_end = nu[:, _NODES]
+        F = self.flow._basis_values(self.x, lam.ravel(), self.keep).reshape(lam.shape + (-1,))
+        f = (F / nu[..., None]).real
+        n = _NODES
+        om = -h[:, None] * np.einsum("q,jqi->ji", rules[0][1], f[:, :n])
+        if not estimate:
+            return om, -f[:, n], 0.0
+        om2 = -h[:, None] * np.einsum("q,jqi->ji", rules[1][1], f[:, n + 1:-1])
+        return om, -f[:, n], float(np.max(np.abs(om - om2)) / (np.abs(om).sum(axis=0).max() + 1e-300))
+
+    def branch_ok(self, eta: np.ndarray) -> bool:
+        """Whether the continued end values (the last call's) are ``model.nu``'s default branch at ``η_j`` (to
+        1e-8 relative: the maps take that branch)."""
+        ref = np.asarray(self.flow.model.nu(self.x, eta))
+        return bool(np.all(np.abs(ref - self.nu_end) <= 1e-8 * np.abs(ref)))
 
 
 @dataclass(frozen=True, eq=False)
 class ChainExactFlow(Map):
     r"""The exact time-``dt`` flow of a chain Hamiltonian ``H = model.hamiltonian(weights)`` (module doc), one orbit
-    ``(3M,)`` or a batch (each orbit its own parameters, solved at every :meth:`step` / :meth:`advance` call)."""
+    ``(3M,)`` or a batch (each orbit its own parameters, solved at the start of every :meth:`step` /
+    :meth:`advance` call, from its integrals: constant along the orbit).
+
+    ``substeps = s``: one step is ``s`` exact sub-steps of ``dt/s`` (an exact composition).  Between two saved rows
+    the ``k s`` steps of each map run in one call of the map's own route (its compiled kernel where it has one:
+    the maps commute), and every row is the unrotated map orbit rotated once through its accumulated angle: the
+    rotation's round-off does not accumulate (``docs/integrators.md`` §7).  Each orbit is stepped on its own, so a
+    batch member equals its single run bit for bit, and an orbit without parameters raises
+    :class:`~jetgaudin.StepTooLargeError` naming it and its ``dt_max`` (:meth:`max_dt`)."""
 
     H: Any  # a jetgaudin.ChainHamiltonian
     dt: float
     rho_factor: float = RHO_FACTOR
+    substeps: int = 1
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
-    chunk_invariant: ClassVar[bool] = True
+    chunk_invariant: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         model = getattr(self.H, "model", None)
@@ -96,6 +174,7 @@ class ChainExactFlow(Map):
         if rf <= 1:
             raise InvalidParameterError(f"rho_factor must be > 1, got {rf}")
         object.__setattr__(self, "rho_factor", rf)
+        object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
 
     @property
     def model(self):
@@ -144,66 +223,188 @@ class ChainExactFlow(Map):
         F = np.concatenate([np.stack(cols, -1), np.broadcast_to(dconst, lam.shape + dconst.shape)], -1)
         return F[:, keep]
 
-    def parameters(self, x: np.ndarray) -> tuple[np.ndarray, float]:
-        """``(η_1..η_k, θ)`` of one step for the orbit ``x`` ``(3M,)``: the maps and the rotation angle;
-        :class:`~jetgaudin.StepTooLargeError` where Newton's method finds none (give a smaller ``dt``)."""
+    def _real_parts(self, x: np.ndarray, k: int) -> np.ndarray | None:
+        """``ρ_1..ρ_k`` (module doc); ``None`` where no rule applies (one site, no branch points, no period)."""
         model = self.model
-        keep, E, rate = self._design()
         lc = float(np.mean(model.positions))
-        target = self.dt * np.asarray(self.H.weights, dtype=float)[keep]
-        k = int(keep.sum()) - E.shape[1]
         bp = np.ravel(model.branch_points(x))
         R = max(float(np.max(np.abs(bp - lc))) if bp.size else 0.0, float(np.max(np.abs(model.positions - lc))),
-                1e-6)
+                _R_FLOOR)
         P = model.family.period
         rho = lc + self.rho_factor * R / _node_scales(k)
-        if not bp.size and len(model.sites) == 1 and P is not None:
-            # one site of a family without computed branch points (the elliptic Clebsch top, issue 34): R would be
-            # the 1e-6 floor (real parts on the site) and ±ρ make ν²'s even basis functions coincide (a singular
-            # Jacobian); take one-sided real parts P/4, P/8, … (a quarter period off the site)
-            rho = lc + P / 4 / np.arange(1, k + 1)
-        if P is not None and np.max(np.abs(rho[:, None] - model.positions[None, :])) >= P / 2:  # it would wrap
-            rho = _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
+        if P is not None and (R <= _R_FLOOR or np.max(np.abs(rho[:, None] - model.positions[None, :])) >= P / 2):
+            return _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
+        return None if R <= _R_FLOOR else rho
 
-        def jac(eta, nus):
-            J = -(self._basis_values(x, eta, keep) / nus[:, None]).real.T
-            return np.concatenate([J, -E], axis=1)
+    def _solve(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float] | None:
+        """``(η_1..η_k, θ)`` of the exact time-``dt`` step on the orbit ``x``, or ``None`` (no accepted solution:
+        Newton's method diverges, leaves the monotone branch, meets a branch point or a period's edge)."""
+        try:
+            return self._newton(x, dt)
+        except (BranchPointError, InvalidParameterError, np.linalg.LinAlgError):
+            return None
 
-        u = np.linalg.solve(jac(rho.astype(complex), np.array([model.nu(x, r).real for r in rho])), target)
+    def _newton(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float] | None:
+        model = self.model
+        keep, E, rate = self._design()
+        target = dt * np.asarray(self.H.weights, dtype=float)[keep]
+        k = int(keep.sum()) - E.shape[1]
+        rho = self._real_parts(x, k)
+        if rho is None:
+            return None
+        lc = float(np.mean(model.positions))
+        P = model.family.period
+        weights = _Weights(self, x, keep)
+
+        def jac(dom):
+            return np.concatenate([dom.T, -E], axis=1)
+
+        nus = np.asarray(model.nu(x, rho.astype(complex))).real
+        J0 = jac(-(self._basis_values(x, rho.astype(complex), keep) / nus[:, None]).real)
+        if not np.all(np.isfinite(J0)) or np.linalg.cond(J0) > 1e12:
+            return None
+        u = np.linalg.solve(J0, target)
+        # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
+        # points η, η̄ coincide modulo the period 2iK')
+        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
         for _ in range(_ITERATIONS):
-            eta = rho + 1j * u[:k]
-            om = np.array([model.interpolating_weights(x, e) for e in eta])[:, keep]
-            du = np.linalg.solve(jac(eta, np.array([model.nu(x, e) for e in eta])), om.sum(axis=0) - E @ u[k:] - target)
+            if np.any(np.abs(u[:k]) > bound) or not np.all(np.isfinite(u)):
+                return None
+            om, dom, _ = weights(rho, u[:k])
+            J = jac(dom)
+            if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om))) or np.linalg.cond(J) > 1e12:
+                return None
+            du = np.linalg.solve(J, om.sum(axis=0) - E @ u[k:] - target)
             u = u - du
-            if np.any(np.abs(u[:k]) > 2 * np.abs(rho - lc) + (P or 0.0)) or not np.all(np.isfinite(u)):
-                break
+            if np.any(np.abs(u[:k]) > bound) or not np.all(np.isfinite(u)):
+                return None
             if np.all(np.abs(du) <= _STEP_TOL * np.abs(u)):
-                om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
+                om, _, quad = weights(rho, u[:k], estimate=True)
+                if quad > _QUAD_TOL:  # the rule has not converged on some segment: the adaptive quadrature
+                    om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
                 scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
-                if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL:
-                    return rho + 1j * u[:k], -rate * u[k] if rate else 0.0
-                break
-        raise StepTooLargeError(f"dt = {self.dt:g}: no well-conditioned chain Bäcklund parameters give the exact "
-                                f"time-dt step on this orbit (Newton's method failed); give a smaller dt")
+                eta = rho + 1j * u[:k]
+                if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and weights.branch_ok(eta):
+                    return eta, -rate * u[k] if rate else 0.0
+                return None
+        return None
+
+    def parameters(self, x: np.ndarray) -> tuple[np.ndarray, float]:
+        """``(η_1..η_k, θ)`` of one sub-step (``dt/substeps``) for the orbit ``x`` ``(3M,)``: the maps and the
+        rotation angle; :class:`~jetgaudin.StepTooLargeError` (with ``dt_max``) where Newton's method finds none."""
+        x = np.asarray(self.model.check_state(x), dtype=float)
+        if x.ndim != 1:
+            raise InvalidParameterError(f"parameters take one orbit (shape ({self.n_state},)), got {x.shape}")
+        dt = self.dt / self.substeps
+        sol = self._solve(x, dt)
+        if sol is None:
+            dmax = self._largest_dt(x, dt)
+            if dmax == 0.0:
+                raise StepTooLargeError(
+                    f"dt = {dt:g}: no well-conditioned chain Bäcklund parameters give the exact time-dt step on this "
+                    "orbit at any step size (no real parts off the sites and branch points); give a smaller dt or "
+                    "use method='dop853'", dt_max=0.0)
+            raise StepTooLargeError(
+                f"dt = {dt:g} is too large for this orbit's leaf: no well-conditioned chain Bäcklund parameters give "
+                f"the exact time-dt step; the largest feasible time step is dt = {dmax:.4g}: give a smaller dt "
+                f"(|dt| <= {abs(dmax):.4g}) or substeps >= "
+                f"{math.ceil(abs(self.dt) / abs(dmax) * 1.01)}", dt_max=dmax)
+        return sol
+
+    def _largest_dt(self, x: np.ndarray, dt: float, rel: float = 1e-3) -> float:
+        """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x``, by bisection to ``rel``
+        (0 when even ``|dt| · 1e-6`` fails)."""
+        if self._solve(x, dt * 1e-6) is None:
+            return 0.0
+        lo, hi = abs(dt) * 1e-6, abs(dt)
+        while hi - lo > rel * hi:
+            mid = 0.5 * (lo + hi)
+            if self._solve(x, math.copysign(mid, dt)) is not None:
+                lo = mid
+            else:
+                hi = mid
+        return math.copysign(lo, dt)
+
+    def max_dt(self, X) -> np.ndarray:
+        """The largest feasible ``|dt|`` of one sub-step for each orbit of ``X`` ``(..., 3M)`` (bisection to 1e-3,
+        searched up to ``10 |dt|``), so one step of this map is feasible iff ``|dt|/substeps`` is below it."""
+        X = np.asarray(self.model.check_state(X), dtype=float)
+        flat = X.reshape(-1, X.shape[-1])
+        return np.array([abs(self._largest_dt(x, 10 * self.dt)) for x in flat]).reshape(X.shape[:-1])
+
+    def _orbit(self, x: np.ndarray, steps: int, save_every: int, rows: np.ndarray) -> np.ndarray:
+        """``steps`` steps of one orbit ``x``: the saved rows into ``rows`` ``(steps // save_every, 3M)``; returns
+        the last state.  The maps run unrotated (they commute with the rotation), and each row is rotated once
+        through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row.  Maps with
+        a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
+        each map's ``ν1`` from the compiled branch rule at ``x`` and then continued; else ``k s`` steps of each map
+        per call of its NumPy route (the maps commute)."""
+        eta, theta = self.parameters(x)
+        s = self.substeps
+        # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
+        maps = [self.model.two_point_backlund(e) for e in eta if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
+        if maps and all(mp.has_compiled for mp in maps):
+            return self._orbit_compiled(x, maps, theta, steps, save_every, rows)
+        z, done = x, 0
+        while done < steps:
+            n = min(save_every - done % save_every, steps - done)
+            for mp in maps:
+                z = mp.advance(z, None, n * s, n * s).X
+            done += n
+            if done % save_every == 0:
+                rows[done // save_every - 1] = rotate_about_field(z, (done * s) * theta)
+        return rotate_about_field(z, (steps * s) * theta)
+
+    def _orbit_compiled(self, x: np.ndarray, maps: list, theta: float, steps: int, save_every: int,
+                        rows: np.ndarray) -> np.ndarray:
+        from .gaudin.maps import _orbit_constants
+
+        L: Any = importlib.import_module("jetgaudin._exact_chain_loop")  # Numba dispatchers (untyped for mypy)
+
+        x = np.ascontiguousarray(x, dtype=float)
+        nu = np.array([complex(mp._compiled_start(x[None])[0]) for mp in maps])
+        consts = L.stack_constants([_orbit_constants(self.model, mp.eta) for mp in maps])
+        out = np.empty((steps // save_every, x.size))
+        final = np.empty(x.size)
+        tail = (float(theta), steps, save_every, self.substeps, out, final)
+        if len(consts) == 5:
+            L.rows_rational(x, float(self.model.b), np.array([mp.eta for mp in maps]), nu, *consts, *tail)
+        else:
+            L.rows_family(x, float(self.model.b), nu, *consts, *tail)
+        if not (np.all(np.isfinite(out)) and np.all(np.isfinite(final))):
+            raise SingularStepError("the compiled exact chain step produced non-finite values; give a smaller dt")
+        rows[...] = out
+        return final
+
+    def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit), rows every
+        ``save_every`` (class doc)."""
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X = np.asarray(self.model.check_state(X), dtype=float)
+        flat = X.reshape(-1, X.shape[-1])
+        rows = np.empty((steps // save_every,) + flat.shape)
+        final = flat.copy()
+        if steps:
+            for i, x in enumerate(flat):
+                try:
+                    final[i] = self._orbit(x, steps, save_every, rows[:, i])
+                except StepTooLargeError as exc:
+                    raise StepTooLargeError(f"orbit {i}: {exc}", dt_max=exc.dt_max) from None
+        zeros = np.zeros(X.shape[:-1])
+        return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros.astype(complex),
+                       imag_max=zeros)
 
     def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
-        X = np.asarray(self.model.check_state(X), dtype=float)
-        flat = X.reshape(-1, X.shape[-1]).copy()
-        for i, x in enumerate(flat):
-            eta, theta = self.parameters(x)
-            for e in eta:
-                if abs(e.imag) > 1e-13 * abs(e.real):  # |Im η| at round-off: weights ~1e-17, the map is the identity
-                    x = self.model.two_point_backlund(e)(x)
-            flat[i] = rotate_about_field(x, theta)
-        zeros = np.zeros(X.shape[:-1])
-        return flat.reshape(X.shape), zeros.astype(complex), zeros
+        adv = self.advance(X, carry, 1)
+        return adv.X, adv.carry, adv.imag_max
 
     def inverse(self) -> ChainExactFlow:
-        return ChainExactFlow(self.H, -self.dt, self.rho_factor)
+        return ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)
 
     def describe(self) -> dict:
         return {"kind": "chain_exact", **self.model.describe(), "weights": np.asarray(self.H.weights).tolist(),
-                "dt": self.dt, "rho_factor": self.rho_factor}
+                "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps}
 
 
 def _chain_exact_from(d: dict) -> ChainExactFlow:
@@ -211,7 +412,7 @@ def _chain_exact_from(d: dict) -> ChainExactFlow:
 
     model = GaudinModel.from_description(d)
     return ChainExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
-                          float(d.get("rho_factor", RHO_FACTOR)))
+                          float(d.get("rho_factor", RHO_FACTOR)), int(d.get("substeps", 1)))
 
 
 register_map("chain_exact", _chain_exact_from)

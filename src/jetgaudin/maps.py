@@ -389,7 +389,7 @@ _REGISTRY: dict[str, Callable[[dict], Map]] = {}
 #: :func:`map_from_description`, so that this interface module imports none of its implementations (issue 33: a
 #: 13-module import circle ran through here)
 _BUILTIN_MAP_MODULES = ("jetgaudin.backlund", "jetgaudin.exact", "jetgaudin.exact_chain",
-                        "jetgaudin.flows", "jetgaudin.gaudin", "jetgaudin.midpoint")
+                        "jetgaudin.flows", "jetgaudin.gaudin", "jetgaudin.kahan", "jetgaudin.midpoint")
 
 
 def register_map(kind: str, factory: Callable[[dict], Map]) -> None:

@@ -76,9 +76,7 @@ def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
     if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
         from .exact_chain import ChainExactFlow
 
-        if substeps != 1:
-            raise InvalidParameterError("a chain's exact flow takes no substeps: give a smaller dt")
-        return ChainExactFlow(H, dt)
+        return ChainExactFlow(H, dt, substeps=substeps)
     if method is SolveMethod.MIDPOINT:
         return ImplicitMidpoint(H, dt)
     cls = ExactFlow if method is SolveMethod.EXACT else MatchedBacklund

@@ -268,10 +268,7 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
     fm: jg.ExactFlow | jg.ChainExactFlow
     with cm.blame("--dt"):
         if model is not None:
-            if substeps != 1:
-                raise cm.CliInputError("--substeps: a chain's exact flow takes one step per --dt (give a smaller "
-                                       "--dt instead)")
-            fm = jg.ChainExactFlow(H, dt)
+            fm = jg.ChainExactFlow(H, dt, substeps=substeps)
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
     try:

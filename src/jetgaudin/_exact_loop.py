@@ -1,0 +1,94 @@
+r"""The compiled stepping loop of :class:`jetgaudin.ExactFlow` for runs that save often (private): every step
+``B_{η_1} ∘ … ∘ B_{η_k}`` of one orbit in one compiled call, each map's step the two-point map's own kernel
+(:func:`jetgaudin.backlund.kernels._n3.orbit3` for N = 3, :func:`~jetgaudin.backlund.kernels._generic.orbit_generic`
+otherwise; the same arithmetic as the map's single-orbit route), and each saved row the unrotated map orbit ``Z_n``
+rotated **once** through its accumulated angle ``n s θ`` (the maps commute with the rotation about the field, so
+``X_n = R_{nsθ} Z_n``).  Applying ``R_θ`` at every step instead multiplies ``|y|`` by ``√(c² + s²)`` at every step,
+a fixed factor ``1 + O(ε)`` for a fixed ``θ``: a drift linear in the number of steps (``docs/integrators.md`` §6).
+
+Before this loop, ``iterate`` (every row) made two kernel calls and a rotation call from Python per step: 100× the
+end-state call's time (``benchmarks/exact_rows.py``).  Numba's cache keys this module by its own source: after an
+edit of the map kernels, clear ``jetgaudin/__pycache__/_exact_loop.*`` (the kernels' own stale-cache check does not
+see this module).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .backlund.kernels._drivers import kernel_module
+
+_orbit3 = kernel_module("_n3").orbit3
+_orbit_generic = kernel_module("_generic").orbit_generic
+
+__all__ = ["rows_single", "rows_batch"]
+
+
+@njit(cache=True, error_model="numpy")
+def _rotate_into(z, angle, out):
+    c = np.cos(angle)
+    s = np.sin(angle)
+    for n in range(z.shape[0] // 3):
+        out[3 * n] = c * z[3 * n] - s * z[3 * n + 1]
+        out[3 * n + 1] = s * z[3 * n] + c * z[3 * n + 1]
+        out[3 * n + 2] = z[3 * n + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def rows_single(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
+    """One orbit ``x0`` (3N,): ``steps`` steps, each ``substeps`` times every map ``η_j`` (``eta`` (k,), first ``ν1``
+    ``nu`` (k,), then continued) and the rotation ``θ`` per sub-step; ``rows[r] = X_{(r+1) save_every}``,
+    ``final = X_steps``; ``info = (status, failing step)`` (status 0: fine, else the map kernel's status)."""
+    n3 = x0.shape[0]
+    N = n3 // 3
+    k = eta.shape[0]
+    z = x0.copy()
+    out = np.empty((2, n3))
+    fin = np.empty(n3)
+    nus = nu.copy()
+    eu = np.empty(N + 1)
+    ev = np.empty(N + 1, np.complex128)
+    ew = np.empty(N + 1, np.complex128)
+    Ru = np.empty(N + 3, np.complex128)
+    Rv = np.empty(N + 3, np.complex128)
+    Rw = np.empty(N + 3, np.complex128)
+    Qu = np.zeros(N + 1, np.complex128)
+    Qv = np.zeros(N + 1, np.complex128)
+    Qw = np.zeros(N + 1, np.complex128)
+    xs = np.empty(n3)
+    xn = np.empty(n3)
+    info[0] = 0
+    info[1] = 0
+    left = save_every
+    r = 0
+    for n in range(steps):
+        for q in range(substeps):
+            cont = n > 0 or q > 0
+            for j in range(k):
+                if N == 3:
+                    st, _, nv = _orbit3(z, b, eta[j], nus[j], cont, 1, 1, out, fin)
+                else:
+                    st, _, nv = _orbit_generic(z, b, eta[j], nus[j], cont, 1, 1, out, fin, eu, ev, ew, Ru, Rv, Rw,
+                                               Qu, Qv, Qw, xs, xn)
+                if st != 0:
+                    info[0] = st
+                    info[1] = n
+                    return
+                nus[j] = nv
+                for i in range(n3):
+                    z[i] = fin[i]
+        left -= 1
+        if left == 0:
+            left = save_every
+            _rotate_into(z, ((n + 1) * substeps) * theta, rows[r])
+            r += 1
+    _rotate_into(z, (steps * substeps) * theta, final)
+
+
+@njit(cache=True, error_model="numpy", parallel=True)
+def rows_batch(X0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
+    """:func:`rows_single` for every orbit of ``X0`` (B, 3N) on all threads (``eta``, ``nu`` (B, k), ``theta`` (B,),
+    ``rows`` (S, B, 3N), ``info`` (B, 2)): every orbit the bits of its single run."""
+    for i in prange(X0.shape[0]):
+        rows_single(X0[i], b, eta[i], nu[i], theta[i], steps, save_every, substeps, rows[:, i], final[i], info[i])
