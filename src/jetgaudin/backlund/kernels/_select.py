@@ -81,9 +81,19 @@ def _cache_dirs() -> list[str]:
     return [in_tree, os.path.expanduser("~/.cache/numba")]
 
 
+#: the kernels found loaded in this process (they stay loaded: a dispatcher's ``signatures`` is looked at once, not
+#: on every ``auto`` call, where it cost ~10 µs of the Appendix 2 call's ~60; issue 36)
+_LOADED: set[str] = set()
+
+
 def _loaded(name: str) -> bool:
+    if name in _LOADED:
+        return True
     mod = sys.modules.get(f"{__package__}.{KERNEL_MODULES[name]}")
-    return bool(getattr(getattr(mod, name, None), "signatures", None))
+    if getattr(getattr(mod, name, None), "signatures", None):
+        _LOADED.add(name)
+        return True
+    return False
 
 
 def _cached(name: str) -> bool:
@@ -119,22 +129,14 @@ def kernels_state(names: Sequence[str]) -> str:
     return "cached" if all(_loaded(n) or _cached(n) for n in names) else "cold"
 
 
-#: the kernel sets :func:`auto_kernel` found loaded in this process
-_LOADED: set[tuple[str, ...]] = set()
-
-
 def auto_kernel(steps: int, n_state: int, batch_shape: Sequence[int] = ()) -> str:
     """The kernel ``kernel="auto"`` picks for ``steps`` steps of ``prod(batch_shape)`` orbits of ``n_state`` = 3N
     components: ``"compiled"`` when it pays off (kernels loaded; or cached and at least ``_AUTO_MIN_WORK``
     orbit-steps; or at least ``_AUTO_MIN_WORK_COLD`` orbit-steps), else ``"numpy"``."""
     size = max(1, math.prod(int(s) for s in batch_shape))
-    names = kernel_names(int(n_state), len(batch_shape) > 0, size)
-    if names in _LOADED:  # kernels stay loaded: the files and dispatchers are looked at once (~10 µs a call)
-        return "compiled"
     work = int(steps) * size
-    state = kernels_state(names)
+    state = kernels_state(kernel_names(int(n_state), len(batch_shape) > 0, size))
     if state == "loaded":
-        _LOADED.add(names)
         return "compiled"
     threshold = _AUTO_MIN_WORK if state == "cached" else _AUTO_MIN_WORK_COLD
     return "compiled" if work >= threshold else "numpy"
