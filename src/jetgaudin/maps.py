@@ -372,7 +372,7 @@ def map_from_description(d: dict) -> Map:
     """The map a :meth:`Map.describe` dictionary describes (:class:`InvalidParameterError` for unknown kinds)."""
     if not isinstance(d, dict) or "kind" not in d:
         raise InvalidParameterError(f"a map description must be a dict with a 'kind', got {d!r}")
-    from . import backlund, exact, exact_chain, flows, gaudin, midpoint  # noqa: F401  (they register the built-in kinds)
+    from . import backlund, exact, exact_chain, flows, gaudin, kahan, midpoint  # noqa: F401  (they register the built-in kinds)
 
     kind = d["kind"]
     if kind not in _REGISTRY:
