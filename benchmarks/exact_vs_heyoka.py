@@ -77,10 +77,10 @@ def main(repeat: int = 5) -> None:
         dtmax = float(cls(H, 1.0).max_dt(X0))
         n = int(np.ceil(T / (0.9 * dtmax)))
         E = cls(H, T / n)
-        ref = np.asarray(_ta(H, X0, 1e-19, np.longdouble).propagate_grid(np.array([0.0, T], dtype=np.longdouble))[-1][-1],
-                         dtype=float)
-        rows = lambda E=E, n=n: E.advance(X0, None, n, 1).X  # noqa: E731
-        end = lambda E=E, n=n: E.advance(X0, None, n, n).X  # noqa: E731
+        grid = np.array([0.0, T], dtype=np.longdouble)
+        ref = np.asarray(_ta(H, X0, 1e-19, np.longdouble).propagate_grid(grid)[-1][-1], dtype=float)
+        rows = lambda E=E, n=n, X0=X0: E.advance(X0, None, n, 1).X  # noqa: E731
+        end = lambda E=E, n=n, X0=X0: E.advance(X0, None, n, n).X  # noqa: E731
         e_exact = float(np.max(np.abs(end() - ref)))
         pick = None
         for tol in (1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15, 1e-16, 2.2e-16):
