@@ -21,11 +21,17 @@ make their weights free along the identity: each identity is one more free unkno
 rate 1); the elliptic family has none.  A family with a real period ``P`` (trigonometric ``π/γ``, elliptic
 ``2K``) keeps that rule while every ``ρ_j`` is within ``P/2`` of every site, and otherwise takes the real parts
 farthest from the sites and branch points within one period (:func:`_periodic_real_parts`: ``c R`` would wrap onto
-a site modulo the period).  So ``k = (matched integrals) − (rotation) − (identities)`` maps: ``M − 1``
-(rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.  The NumPy
-route only (adaptive quadrature of the weights, ~25 ms per evaluation: a solve costs 0.3–2 s per orbit).  The
-largest feasible step is smaller than a top's when the sites are close compared with ``R`` (the maps must then
-separate the sites' weights at a higher order in ``1/ρ``): ~0.02 for the Lagrange chain of the tests.
+a site modulo the period), and so does a family whose ``R`` is at its floor (one site and no computed branch points:
+the Clebsch top, whose ``λ_c ± cR`` sat on the site).  So ``k = (matched integrals) − (rotation) − (identities)`` maps:
+``M − 1`` (rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.
+
+**Solve and steps** (``docs/integrators.md`` §7).  The weights by a 64-point Gauss–Legendre rule with ``ν`` continued
+node by node (:class:`_Weights`; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
+without a solution raises :class:`~jetgaudin.StepTooLargeError` with its ``dt_max`` (bisection); ``substeps`` splits a
+step exactly.  The steps of every map run in one compiled loop (:mod:`jetgaudin._exact_chain_loop`), each row the
+unrotated orbit rotated once through its accumulated angle.  The largest feasible step is smaller than a top's when the
+sites are close compared with ``R`` (the maps must then separate the sites' weights at a higher order in ``1/ρ``):
+~0.1 for the Lagrange chain of the benchmark.
 """
 
 from __future__ import annotations
