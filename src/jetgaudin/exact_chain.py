@@ -348,8 +348,8 @@ class ChainExactFlow(Map):
         the last state.  The maps run unrotated (they commute with the rotation), and each row is rotated once
         through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row.  Maps with
         a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
-        each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s`` steps of each map
-        per call of its NumPy route (the maps commute)."""
+        each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s``
+        steps of each map per call of its NumPy route (the maps commute)."""
         eta, theta, nu = self._parameters(x)
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
