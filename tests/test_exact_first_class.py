@@ -45,7 +45,7 @@ def test_clebsch_top_dt_max_substeps_and_solve_never_raises():
         ChainExactFlow(H_CLEBSCH, 2.0)(X_CLEBSCH)
     dmax = exc.value.dt_max
     assert 0.1 < dmax < 2.0
-    ChainExactFlow(H_CLEBSCH, 0.999 * dmax)(X_CLEBSCH)
+    ChainExactFlow(H_CLEBSCH, dmax)(X_CLEBSCH)  # the largest feasible step is feasible (the bisection's lower end)
     with pytest.raises(jg.StepTooLargeError):
         ChainExactFlow(H_CLEBSCH, 1.01 * dmax)(X_CLEBSCH)
     tr = jg.solve(H_CLEBSCH, X_CLEBSCH, (0, 4), dt=2.0)
@@ -163,3 +163,38 @@ def test_translating_every_site_does_not_change_the_step(family):
         steps.append(ChainExactFlow(model.hamiltonian(w), 0.05)(X))
     assert np.max(np.abs(steps[0] - X)) > 1e-3
     assert np.max(np.abs(steps[0] - steps[1])) < 1e-12
+
+
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
+def test_substeps_of_the_top_on_every_route(backend):
+    """substeps = 3 on both of the top's routes and both stepping paths (rows every step: the one compiled loop;
+    rows 2 steps apart: k s steps per kernel call): every row is the flow (DOP853, 1e-12 over T <= 1)."""
+    E = jg.ExactFlow(H3, 0.25, substeps=3, backend=backend)
+    for every in (1, 2):
+        rows = E.advance(X3, None, 4, every).rows
+        for r, X in enumerate(rows):
+            assert np.max(np.abs(X - _dop(H3, X3, 0.25 * every * (r + 1)))) < 1e-12
+
+
+@pytest.mark.parametrize("case", ["lagrange", "trigonometric"])
+def test_chain_substeps_on_the_compiled_loop(case):
+    """A chain step beyond dt_max split into exact sub-steps (rational kernel; family kernel) is the flow: every row
+    of 3 steps vs DOP853 (1e-11: 3 s maps' round-off, amplified by the chain's larger weights)."""
+    if case == "lagrange":
+        model = jg.GaudinModel(1.0, ((0.0, 2), (1.0, 1)))
+        w = np.zeros(2 * model.M)
+        w[~model.casimir_mask()] = [0.5, 0.2, 0.3]
+        X0, dt = np.array([0.3, -0.2, 0.5, 0.1, 0.2, -0.1, 0.4, 0.1, 0.6]), 0.3
+    else:
+        model = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="trigonometric", gamma=0.5)
+        w = np.array([0.3, 0, -0.2, 0, 0.5, 0, 0.4])
+        X0, dt = np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6]), 0.4
+    H = model.hamiltonian(w)
+    dmax = float(ChainExactFlow(H, 1.0).max_dt(X0))
+    s = int(np.ceil(dt / dmax * 1.01))
+    assert s >= 2
+    rows = ChainExactFlow(H, dt, substeps=s).advance(X0, None, 3, 1).rows
+    for r, X in enumerate(rows):
+        assert np.max(np.abs(X - _dop(H, X0, dt * (r + 1)))) < 1e-11
+    B = np.stack([X0, 0.8 * X0])
+    assert np.array_equal(ChainExactFlow(H, dt, substeps=s).advance(B, None, 3, 1).rows[:, 0], rows)

@@ -21,11 +21,17 @@ make their weights free along the identity: each identity is one more free unkno
 rate 1); the elliptic family has none.  A family with a real period ``P`` (trigonometric ``π/γ``, elliptic
 ``2K``) keeps that rule while every ``ρ_j`` is within ``P/2`` of every site, and otherwise takes the real parts
 farthest from the sites and branch points within one period (:func:`_periodic_real_parts`: ``c R`` would wrap onto
-a site modulo the period).  So ``k = (matched integrals) − (rotation) − (identities)`` maps: ``M − 1``
-(rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.  The NumPy
-route only (adaptive quadrature of the weights, ~25 ms per evaluation: a solve costs 0.3–2 s per orbit).  The
-largest feasible step is smaller than a top's when the sites are close compared with ``R`` (the maps must then
-separate the sites' weights at a higher order in ``1/ρ``): ~0.02 for the Lagrange chain of the tests.
+a site modulo the period), and so does a family whose ``R`` is at its floor (one site and no computed branch points:
+the Clebsch top, whose ``λ_c ± cR`` sat on the site).  So ``k = (matched integrals) − (rotation) − (identities)`` maps:
+``M − 1`` (rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.
+
+**Solve and steps** (``docs/integrators.md`` §7).  The weights by a 64-point Gauss–Legendre rule with ``ν`` continued
+node by node (:class:`_Weights`; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
+without a solution raises :class:`~jetgaudin.StepTooLargeError` with its ``dt_max`` (bisection); ``substeps`` splits a
+step exactly.  The steps of every map run in one compiled loop (:mod:`jetgaudin._exact_chain_loop`), each row the
+unrotated orbit rotated once through its accumulated angle.  The largest feasible step is smaller than a top's when the
+sites are close compared with ``R`` (the maps must then separate the sites' weights at a higher order in ``1/ρ``):
+~0.1 for the Lagrange chain of the benchmark.
 """
 
 from __future__ import annotations
@@ -236,15 +242,16 @@ class ChainExactFlow(Map):
             return _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
         return None if R <= _R_FLOOR else rho
 
-    def _solve(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float] | None:
+    def _solve(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float, np.ndarray] | None:
         """``(η_1..η_k, θ)`` of the exact time-``dt`` step on the orbit ``x``, or ``None`` (no accepted solution:
-        Newton's method diverges, leaves the monotone branch, meets a branch point or a period's edge)."""
+        Newton's method diverges, leaves the monotone branch, meets a branch point or a period's edge); the third
+        entry is ``ν(η_j)`` on the maps' branch (checked against ``model.nu``), the maps' first ``ν1``."""
         try:
             return self._newton(x, dt)
         except (BranchPointError, InvalidParameterError, np.linalg.LinAlgError):
             return None
 
-    def _newton(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float] | None:
+    def _newton(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float, np.ndarray] | None:
         model = self.model
         keep, E, rate = self._design()
         target = dt * np.asarray(self.H.weights, dtype=float)[keep]
@@ -285,13 +292,17 @@ class ChainExactFlow(Map):
                 scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
                 eta = rho + 1j * u[:k]
                 if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and weights.branch_ok(eta):
-                    return eta, -rate * u[k] if rate else 0.0
+                    return eta, -rate * u[k] if rate else 0.0, weights.nu_end
                 return None
         return None
 
     def parameters(self, x: np.ndarray) -> tuple[np.ndarray, float]:
         """``(η_1..η_k, θ)`` of one sub-step (``dt/substeps``) for the orbit ``x`` ``(3M,)``: the maps and the
         rotation angle; :class:`~jetgaudin.StepTooLargeError` (with ``dt_max``) where Newton's method finds none."""
+        eta, theta, _ = self._parameters(x)
+        return eta, theta
+
+    def _parameters(self, x: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
         x = np.asarray(self.model.check_state(x), dtype=float)
         if x.ndim != 1:
             raise InvalidParameterError(f"parameters take one orbit (shape ({self.n_state},)), got {x.shape}")
@@ -337,14 +348,15 @@ class ChainExactFlow(Map):
         the last state.  The maps run unrotated (they commute with the rotation), and each row is rotated once
         through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row.  Maps with
         a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
-        each map's ``ν1`` from the compiled branch rule at ``x`` and then continued; else ``k s`` steps of each map
-        per call of its NumPy route (the maps commute)."""
-        eta, theta = self.parameters(x)
+        each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s``
+        steps of each map per call of its NumPy route (the maps commute)."""
+        eta, theta, nu = self._parameters(x)
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
-        maps = [self.model.two_point_backlund(e) for e in eta if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
+        used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
+        maps = [self.model.two_point_backlund(eta[j]) for j in used]
         if maps and all(mp.has_compiled for mp in maps):
-            return self._orbit_compiled(x, maps, theta, steps, save_every, rows)
+            return self._orbit_compiled(x, maps, nu[used], theta, steps, save_every, rows)
         z, done = x, 0
         while done < steps:
             n = min(save_every - done % save_every, steps - done)
@@ -355,14 +367,14 @@ class ChainExactFlow(Map):
                 rows[done // save_every - 1] = rotate_about_field(z, (done * s) * theta)
         return rotate_about_field(z, (steps * s) * theta)
 
-    def _orbit_compiled(self, x: np.ndarray, maps: list, theta: float, steps: int, save_every: int,
+    def _orbit_compiled(self, x: np.ndarray, maps: list, nu: np.ndarray, theta: float, steps: int, save_every: int,
                         rows: np.ndarray) -> np.ndarray:
         from .gaudin.maps import _orbit_constants
 
         L: Any = importlib.import_module("jetgaudin._exact_chain_loop")  # Numba dispatchers (untyped for mypy)
 
         x = np.ascontiguousarray(x, dtype=float)
-        nu = np.array([complex(mp._compiled_start(x[None])[0]) for mp in maps])
+        nu = np.array(nu, dtype=complex)  # the solve's ν(η_j) on the maps' branch (the kernels continue from it)
         consts = L.stack_constants([_orbit_constants(self.model, mp.eta) for mp in maps])
         out = np.empty((steps // save_every, x.size))
         final = np.empty(x.size)
