@@ -150,6 +150,9 @@ def main(argv: list[str] | None = None) -> int:
         ignore = shutil.ignore_patterns("__pycache__", ".hypothesis", "*.nbi", "*.nbc")
         shutil.copytree(ROOT / "src", work / "src", ignore=ignore)
         shutil.copytree(ROOT / "tests", work / "tests", ignore=ignore)
+        # some tests read the documentation (docs/chains.md's examples run in tests/test_gaudin.py)
+        shutil.copytree(ROOT / "docs", work / "docs",
+                        ignore=shutil.ignore_patterns("_build", "*.png", "*.gif", "*.mp4"))
         shutil.copy(ROOT / "pyproject.toml", work / "pyproject.toml")
         for module in modules:
             k = args.per_module if args.per_module is not None else PER_MODULE.get(module, DEFAULT_PER_MODULE)
