@@ -44,3 +44,12 @@ def test_one_point_map_refuses_a_residue_that_does_not_cancel(name, monkeypatch)
     monkeypatch.setattr(_one_point, "_continue", _off_spectrum)
     with pytest.raises(jg.SingularStepError, match="does not cancel"):
         P.step(X)
+
+
+def test_the_default_model_is_one_spin_at_zero():
+    """``GaudinModel(b)`` without sites: one site at 0 of order 1 (its docstring; a mutant moving the default site to
+    1 survived the sampled tests): the same integrals as the model written out."""
+    m = GaudinModel(0.5)
+    assert m.sites == ((0.0, 1),) and m.M == 1
+    Y = np.array([0.3, -0.2, 0.9])
+    assert np.array_equal(m.integrals(Y), GaudinModel(0.5, [(0.0, 1)]).integrals(Y))
