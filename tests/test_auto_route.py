@@ -114,3 +114,12 @@ def test_the_top_rule_stays_within_3x(n_state):
     X = np.zeros(n_state)
     X[2] = 1.0
     assert jg.TwoPointBacklund(1.0, 5 + 0.1j).resolved_backend(X, 10**6) is Backend.COMPILED
+
+
+def test_the_numpy_estimate_is_the_documented_formula():
+    """``steps · (F + B·G) · (M + 1)/4`` with the family's ``(F, G)`` (module docstring of ``gaudin._backend``): at
+    ``M = 3`` the factor is 1, at ``M = 7`` it is 2 (a mutant ``(M + 2)/4`` survived the decision tests)."""
+    fam = MODELS["trigonometric"].family
+    F, G = rule.NUMPY_STEP_S["trigonometric"]
+    assert rule.route_costs(fam, 3, 10, 100, "loaded").numpy == pytest.approx(100 * (F + 10 * G), rel=1e-12)
+    assert rule.route_costs(fam, 7, 10, 100, "loaded").numpy == pytest.approx(2 * 100 * (F + 10 * G), rel=1e-12)

@@ -81,3 +81,29 @@ def test_replace_backend_is_not_overridden_by_the_kernel_alias(name):
     assert dataclasses.replace(B, backend=Backend.COMPILED).resolved_backend(np.zeros(B.n_state), 1) \
         is Backend.COMPILED
     assert MODELS[name].two_point_backlund(0.2 + 0.05j, kernel="numpy").backend is Backend.NUMPY
+
+
+@pytest.mark.parametrize("name", ["rational", "elliptic"])
+def test_a_flagged_state_takes_the_numpy_rule_and_the_others_keep_theirs(name, monkeypatch):
+    """A batch with one state the compiled rule flags (here by wrapping it: the flag of state 1 forced) and one it
+    answers: the flagged state gets the NumPy rule's ν of *that* state, the other its compiled value (issue 33: a
+    mutant that gave the flagged states the NumPy rule of the unflagged ones survived the chain maps' tests)."""
+    model = MODELS[name]
+    B = model.two_point_backlund(0.2 + 0.05j, kernel="compiled")
+    X = _states(model, 3, seed=11)
+    real = _family_kernel.branch_rule
+
+    def flag_state_1(*args):
+        nu, ok = real(*args)
+        ok = ok.copy()
+        nu = nu.copy()
+        ok[1] = False
+        nu[1] = np.nan  # what a flagged state's compiled value may be: it must not be used
+        return nu, ok
+
+    monkeypatch.setattr(_family_kernel, "branch_rule", flag_state_1)
+    got = B._compiled_start(X)
+    want = B.start(X)
+    assert got[1] == want[1]  # the NumPy rule at state 1 itself, exactly (the same call)
+    ok_states = [0, 2]
+    assert np.max(np.abs(got[ok_states] - want[ok_states]) / np.abs(want[ok_states])) < 1e-9  # as the test above

@@ -44,3 +44,19 @@ def test_monic_series_is_the_series_of_one_over_det_K(rng):
             poly[k] = d0 * g[k] + (d1 * g[k - 1] if k >= 1 else 0) + (g[k - 2] if k >= 2 else 0)
         assert np.allclose(poly[0], 1, rtol=0, atol=1e-13) and np.allclose(poly[1:], 0, rtol=0, atol=1e-13)
         assert np.array_equal(Ka[0], K) and np.array_equal(Aa[0], A0 + lam * np.eye(2))
+
+
+@pytest.mark.parametrize("family, kw, b", [("rational", {}, 1.0), ("trigonometric", {"gamma": 1.0}, 1.0),
+                                          ("elliptic", {"modulus": 0.6}, 0.0)])
+def test_the_unnormalised_dressing_keeps_large_states_finite(family, kw, b):
+    """The dressing matrix is left unnormalised (above) but scaled by a power of two to size 1: states of size 1e60
+    (each product of the dressing would be ~|X|^5 ~ 1e300 unscaled) step to finite states on both routes, with the
+    integrals kept to 1e-12 relative over 5 steps (round-off: ~1e-15 per step) and the routes agreeing to 1e-10."""
+    m = GaudinModel(b, [(-0.5, 1), (0.4, 2)], family=family, **kw)
+    X = 1e60 * np.random.default_rng(8).normal(size=(2, 9))
+    rows = {r: m.two_point_backlund(ETA, kernel=r).iterate(X, 5) for r in ("numpy", "compiled")}
+    for r, orbit in rows.items():
+        assert np.all(np.isfinite(orbit)), r
+        I = m.integrals(orbit)
+        assert np.max(np.abs(I - I[0]) / np.abs(I[0])) < 1e-12, r
+    assert np.max(np.abs(rows["numpy"] - rows["compiled"])) <= 1e-10 * np.abs(rows["numpy"]).max()

@@ -26,6 +26,7 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 from __future__ import annotations
 
 import cmath
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -79,12 +80,25 @@ def _elliptic_coefficients(gk, a1, a2, c):
             c[3] = n3
         if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
             break
+    # scaled by a power of two (exact) to |c|² in [1/4, 1): unnormalised (the mantissas, hence the rounding of det D,
+    # vary from step to step) but of size 1 for states of any size
+    scale = math.ldexp(1.0, -((math.frexp(best)[1] + 1) // 2))
+    for r in range(4):
+        c[r] *= scale
 
 
 @njit(cache=True)
 def _coefficients(rule, gk, a1, a2, c):
     """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
     and 1: P = 6; a new family adds its rule here)."""
+    p = _abs2(a1)
+    q = _abs2(a2)
+    n = p + q
+    # the eigenvector scaled by a power of two (exact: the rounding is kept) to n in [1/4, 1): D unnormalised but of
+    # the size of its normalised form for states of any size
+    sc = math.ldexp(1.0, -((math.frexp(n)[1] + 1) // 2))
+    a1 = a1 * sc
+    a2 = a2 * sc
     p = _abs2(a1)
     q = _abs2(a2)
     n = p + q

@@ -19,6 +19,8 @@ of the NumPy route are not computed here; the orbits agree with the NumPy route 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -87,6 +89,12 @@ def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0,
     else:
         k1 = c1
         k2 = c2
+    n2 = _abs2(k1) + _abs2(k2)
+    # k scaled by a power of two (exact: the mantissas, hence the rounding, are kept) to |k|² in [1/4, 1), so that K
+    # below stays of the size of λ + M0 for states of any size
+    p2 = math.ldexp(1.0, -((math.frexp(n2)[1] + 1) // 2))
+    k1 = k1 * p2
+    k2 = k2 * p2
     n2 = _abs2(k1) + _abs2(k2)
     # K = n2 (λ + M0) (eq. (mm) times |k|², no division): the dressing does not depend on the factor, and with a
     # factor varying along the orbit the rounding of K and of 1/det K changes from step to step (a normalised K has

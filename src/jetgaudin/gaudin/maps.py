@@ -509,6 +509,8 @@ class ChainTwoPointBacklund(_ChainMap):
         if series is None:
             k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)  # |k|²: a factor varying per step
             kk = np.abs(k1) ** 2 + np.abs(k2) ** 2
+            m, e = np.frexp(kk)  # |k|² scaled by a power of two to [1/4, 1): its mantissa, K of size 1
+            kk = np.ldexp(m, e - 2 * ((e + 1) // 2))
             new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, M0, A0, kk))
         else:
             new = dress_sites(self.model, ell[..., 1:, :, :], series)

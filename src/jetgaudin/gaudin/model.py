@@ -140,7 +140,7 @@ class GaudinModel:
         Field strength (any real; ``b = 0`` is the magnet without field, see ``docs/chains.md``).
     sites : sequence of (float, int)
         Distinct real positions (modulo the family's period, ``π/γ`` for the trigonometric family) and integer
-        orders ``N_i ≥ 1``.
+        orders ``N_i ≥ 1`` (default: one site at 0 of order 1, a single spin in the field).
     family : {"rational", "trigonometric", "elliptic"} or jetgaudin.families.Family
         The family (default rational: the paper's chains).
     gamma : float, optional
