@@ -297,7 +297,7 @@ def fuzz_bombs(rng) -> dict:
     out: dict = {}
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
-        sites = ",".join(f"{i}:1" for i in range(2000))
+        sites = ",".join(f"{i + 0.5}:1" for i in range(2000))  # off Re(eta) = 5
         big_csv = d / "nul.csv"
         with open(big_csv, "wb") as f:
             f.truncate(int(1.9e9))  # sparse: 1.9 GB of NUL bytes, no disk used
