@@ -351,9 +351,8 @@ def fuzz_backend_resume(trials: int, rng) -> tuple[int, int]:
                                     program="jetgaudin ensemble"), out, progress=progress, max_chunk_steps=3)
             except rl.RunInterrupted:
                 pass
-            if rl.read_run(out)["status"] != "interrupted":
-                held += 1
-                continue
+            if rl.read_run(out)["status"] != "interrupted":  # not a trial of a resume
+                raise RuntimeError("the ensemble was not interrupted")
             other = "compiled" if rec == "numpy" else "numpy"
             before = snapshot(out)
             code, err, _ = _cli(["ensemble", "--resume", out, "--backend", other, "--no-progress"])
@@ -373,8 +372,8 @@ def fuzz_flow_t(trials: int, rng) -> tuple[int, int, dict]:
             out = Path(d) / "f"
             dt = float(rng.choice([0.05, -0.03, 0.1]))
             E = jg.ExactFlow(jg.physical_hamiltonian(3, 1.0), dt, backend="numpy")
-            steps = int(rng.integers(20, 60))
-            stop_at = int(rng.integers(5, steps - 5))
+            steps = int(rng.integers(300, 700))  # a flow is cut in fixed calls of 256 steps: stopped after one
+            stop_at = int(rng.integers(5, steps - 300))
 
             def progress(n, _t, at=stop_at):
                 if n >= at:
@@ -385,6 +384,8 @@ def fuzz_flow_t(trials: int, rng) -> tuple[int, int, dict]:
             except rl.RunInterrupted:
                 pass
             run = rl.read_run(out)
+            if run["status"] != "interrupted":  # not a trial of a resume
+                raise RuntimeError(f"the exact-flow run was not interrupted: {run['status']}")
             kind = str(rng.choice(["h5 t", "csv last t"]))
             if kind == "h5 t":
                 import h5py
