@@ -2,7 +2,8 @@
 
 * ``map_from_description`` with a missing key: :class:`jetgaudin.MapDescriptionError` naming it (before: a bare
   ``KeyError``);
-* ``solve`` and every ``iterate`` refuse an output past ``jetgaudin.maps.MAX_OUTPUT_BYTES`` before allocating it
+* ``solve`` and every ``iterate`` refuse an output past ``jetgaudin.maps.output_cap()`` (``MAX_OUTPUT_BYTES``, by
+  default half the physical memory) before allocating it
   (before: ``jg.solve(H, X0, (0, 1e9), dt=0.25)`` asked NumPy for hundreds of GiB), naming the size, the cap and
   the fix; the cap can be overridden;
 * ``Trajectory.from_hdf5`` / ``to_hdf5`` refuse FIFOs, devices and symlinks without opening them (before: a FIFO
@@ -49,7 +50,7 @@ def test_an_unknown_or_unhashable_kind_is_typed():
 def test_outputs_past_the_cap_are_refused_before_allocation(call):
     with pytest.raises(jg.OutputTooLargeError, match="save_every") as exc:
         call()
-    assert exc.value.nbytes > exc.value.cap == jmaps.MAX_OUTPUT_BYTES
+    assert exc.value.nbytes > exc.value.cap == jmaps.output_cap() >= 1 << 30
     assert f"{exc.value.cap:,}" in str(exc.value)
 
 

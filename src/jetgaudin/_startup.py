@@ -75,8 +75,12 @@ def _hook(exc_type: type[BaseException], exc: BaseException, tb: object) -> None
     text = " ".join(f"{exc_type.__name__}: {exc}".split())[:300]
     memory = out_of_memory(exc)
     line = f"cannot start: {memory}" if memory else f"cannot start: {text}"
+    jit_off = os.environ.get("NUMBA_DISABLE_JIT", "0").strip() not in ("", "0")
+    if jit_off and not memory:  # a setting, not a failure: refused as NUMBA_NUM_THREADS=0 is (exit 2)
+        line = (f"NUMBA_DISABLE_JIT={os.environ['NUMBA_DISABLE_JIT']} is not supported: jetgaudin's kernels are "
+                f"built with Numba's compiler ({text[:120]}); unset NUMBA_DISABLE_JIT")
     os.write(2, f"jetgaudin: error: {line}\n".encode(errors="replace"))
-    os._exit(1)
+    os._exit(2 if jit_off and not memory else 1)
 
 
 def install() -> None:

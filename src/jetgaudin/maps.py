@@ -46,6 +46,7 @@ import copy
 import dataclasses
 import importlib
 import math
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
@@ -66,6 +67,7 @@ __all__ = [
     "check_count",
     "check_output_size",
     "MAX_OUTPUT_BYTES",
+    "output_cap",
     "check_gpu",
     "map_from_description",
     "with_resolved_backend",
@@ -170,22 +172,36 @@ class Advance:
 _INT64_MAX = 2**63 - 1
 
 
-#: the largest array (bytes) that ``iterate``, ``iterate_ensemble`` and ``solve`` return: past it they refuse with
-#: :class:`jetgaudin.OutputTooLargeError` before allocating anything (before: ``jg.solve(H, X0, (0, 1e9),
-#: dt=0.25)`` asked NumPy for 268 GiB).  Override it (``jetgaudin.maps.MAX_OUTPUT_BYTES = ...``) to return more;
-#: a long orbit is better saved sparsely (``save_every``) or streamed to disk by the run layer (``jetgaudin.run``).
-MAX_OUTPUT_BYTES = 4 << 30
+#: the largest array (bytes) that ``iterate``, ``iterate_ensemble`` and ``solve`` return, or ``None`` (the default):
+#: half the machine's physical memory (:func:`output_cap`).  Past it they refuse with
+#: :class:`jetgaudin.OutputTooLargeError` before allocating anything (before: ``jg.solve(H, X0, (0, 1e9), dt=0.25)``
+#: asked NumPy for hundreds of GiB).  Override it (``jetgaudin.maps.MAX_OUTPUT_BYTES = ...``) to return more or
+#: less; a long orbit is better saved sparsely (``save_every``) or streamed to disk by the run layer
+#: (``jetgaudin.run``).
+MAX_OUTPUT_BYTES: int | None = None
+
+
+def output_cap() -> int:
+    """The cap in force: :data:`MAX_OUTPUT_BYTES`, or half the physical memory (at least 1 GiB) when it is ``None``."""
+    if MAX_OUTPUT_BYTES is not None:
+        return int(MAX_OUTPUT_BYTES)
+    try:
+        physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        physical = 8 << 30
+    return max(1 << 30, int(physical) // 2)
 
 
 def check_output_size(rows: int, row_bytes: int, what: str) -> None:
     """Refuse (:class:`jetgaudin.OutputTooLargeError`, naming the size, the cap and the fix) an output of ``rows``
-    rows of ``row_bytes`` bytes larger than :data:`MAX_OUTPUT_BYTES` (read at each call: overridable)."""
-    nbytes, cap = int(rows) * int(row_bytes), int(MAX_OUTPUT_BYTES)
+    rows of ``row_bytes`` bytes larger than :func:`output_cap` (read at each call: overridable)."""
+    nbytes, cap = int(rows) * int(row_bytes), output_cap()
     if nbytes > cap:
         raise OutputTooLargeError(
             f"{what} would return {rows:,} rows, {nbytes:,} bytes ({nbytes / 2**30:.3g} GiB), more than the cap of "
-            f"{cap:,} bytes (jetgaudin.maps.MAX_OUTPUT_BYTES); save fewer rows (a larger save_every), take a shorter "
-            "span, or stream the orbit to disk with the run layer (jetgaudin.run, `jetgaudin orbit`)", nbytes, cap)
+            f"{cap:,} bytes (jetgaudin.maps.MAX_OUTPUT_BYTES; default: half the physical memory); save fewer rows (a "
+            "larger save_every), take a shorter span, or stream the orbit to disk with the run layer (jetgaudin.run, "
+            "`jetgaudin orbit`)", nbytes, cap)
 
 
 def check_count(value: object, name: str, minimum: int = 0) -> int:

@@ -186,6 +186,9 @@ def entry() -> None:
     from .. import _startup
 
     _startup.release()  # from here on main() reports interrupts and errors itself
+    for stream in (sys.stdout, sys.stderr):  # an ASCII locale or PYTHONIOENCODING=ascii: η, ν printed as '?'
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="replace")  # type: ignore[union-attr]
     try:
         main()
         code: Any = 0

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from ._common import CliInputError, blame, complex_text, one_line, parse_b, to_float
+from ._common import MAX_N, CliInputError, blame, complex_text, one_line, parse_b, to_float
 
 SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer orders N_i >= 1), e.g. '
               '"-1:2,0.5:3,2:1"; --init then takes 3M numbers, M = N1 + N2 + ... [default: one site 0:N, '
@@ -124,7 +124,12 @@ def chain_model(sites: str, b: float, family: str = "rational", gamma: float | N
     if not str(sites).isascii() or "_" in str(sites):  # float() reads Unicode digits (١:3 was site 1.0) and 1_0
         raise CliInputError(f"--sites: {sites!r}: write the sites with ASCII digits, e.g. --sites -1:3,0.5:3")
     try:
-        return GaudinModel(b, tuple(parse_sites(sites)), family, gamma, modulus, algebra)
+        parsed = tuple(parse_sites(sites))
+        M = sum(int(N) for _, N in parsed)
+        if M > MAX_N:  # the chain's structure arrays grow as M^3 (2000 sites: 128 GiB asked for)
+            raise CliInputError(f"--sites: the orders sum to M = {M}; the command line accepts M <= {MAX_N} (the "
+                                "chain's arrays grow as M^3); use the library for larger chains")
+        return GaudinModel(b, parsed, family, gamma, modulus, algebra)
     except jg.JetGaudinError as exc:
         msg = one_line(exc)
         if "gamma" in msg and "sites" not in msg:

@@ -6,6 +6,7 @@ No mathematics here: everything numerical comes from the public API (``import je
 from __future__ import annotations
 
 import contextlib
+import errno
 import math
 import re
 import sys
@@ -357,6 +358,10 @@ def check_state_scale(X, b, option: str = "--init") -> None:
         )
 
 
+#: errnos of a failed write (the input was fine: exit 1): full disk, quota, file too large, I/O error
+_WRITE_FAILURES = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO}
+
+
 class reported_errors:  # noqa: N801 - used as a context manager: ``with reported_errors(): ...``
     """Turn expected failures into one-line messages and exit codes (never a traceback):
     bad input (:class:`CliInputError`, :class:`jetgaudin.JetGaudinError`) -> 2, ``OSError`` -> 2.
@@ -387,6 +392,10 @@ class reported_errors:  # noqa: N801 - used as a context manager: ``with reporte
             memory = out_of_memory(exc)
             if memory:
                 fail(memory, EXIT_FAILED)
+        if issubclass(exc_type, OSError) and getattr(exc, "errno", None) in _WRITE_FAILURES:  # e.g. stdout is /dev/full
+            from jetgaudin._fs import io_failure
+
+            fail(f"{io_failure(exc)} while writing the output", EXIT_FAILED)
         if issubclass(exc_type, OSError):
             fail(f"{exc.strerror or exc}" + (f": {exc.filename}" if getattr(exc, "filename", None) else ""), EXIT_INPUT)
         if issubclass(exc_type, (FloatingPointError, OverflowError, ZeroDivisionError, ValueError)):

@@ -90,6 +90,19 @@ class SignalFlag:
     def __exit__(self, *exc: Any) -> None:
         for s, h in self._old.items():
             signal.signal(s, h)
+        if self._xfsz is not None:
+            signal.signal(signal.SIGXFSZ, self._xfsz)
+            self._xfsz = None
+
+    #: SIGXFSZ's handler before the run: while a run writes, SIGXFSZ is ignored (whatever ``enabled`` says), so that
+    #: a write past ``RLIMIT_FSIZE`` fails with EFBIG (``failed: file size limit ...``) instead of killing the process
+    #: (its default action; the interpreter ignores it, a host process may not: the CSV is not covered by the HDF5
+    #: reservation)
+    _xfsz: Any = None
+
+    def ignore_sigxfsz(self) -> None:
+        if threading.current_thread() is threading.main_thread() and hasattr(signal, "SIGXFSZ"):
+            self._xfsz = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
 
 
 class RaiseOnSignal(SignalFlag):
@@ -220,6 +233,7 @@ class Driver:
         failure: str | None = None
         t_ck = time.monotonic()
         with SignalFlag(self.handle_signals) as sig:
+            sig.ignore_sigxfsz()
             try:
                 store.begin(self.fresh)
                 if self.first:
