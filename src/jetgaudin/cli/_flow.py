@@ -112,8 +112,8 @@ def flow(
         from ..flows import RTOL_FLOOR
 
         if not (RTOL_FLOOR <= rtol < 1):  # below the machine epsilon an adaptive method never meets it
-            raise cm.CliInputError(f"--rtol: must be in [{RTOL_FLOOR:.3g}, 1) (below, no double-precision step meets it), got "
-                                   f"{rtol}")
+            raise cm.CliInputError(f"--rtol: must be in [{RTOL_FLOOR:.3g}, 1) (below, no double-precision step "
+                                   f"meets it), got {rtol}")
         if compare and hamiltonian is not Hamiltonian.interpolating:
             raise cm.CliInputError("--compare compares the map with the flow of G_η: use --hamiltonian interpolating")
         if compare and dt != 1.0:
