@@ -154,3 +154,27 @@ def test_su2_algebra_is_todays_chain(capsys, tmp_path):
     a = run_cli(capsys, "info", "--sites", SITES, "--b", "0.5", "--init", init, "--json")
     b = run_cli(capsys, "info", "--sites", SITES, "--b", "0.5", "--init", init, "--json", "--algebra", "su2")
     assert a == b and a[0] == 0
+
+
+def test_exact_steps_are_refused_in_one_line(capsys, tmp_path):
+    """The su(n) exact step is a library function (gaudin/sun_exact.py), not a CLI map yet: one line, exit 2."""
+    code, _, err = run_cli(capsys, "flow", *BASE, "--method", "exact", "--dt", "0.5", "--steps", "2", "--out",
+                           tmp_path / "f")
+    assert one_line_error(code, err, "--dt", "su(3)", "docs/sun.md"), err
+    base = [a for a in BASE if a not in ("--eta", "0.4+0.1i")]
+    code, _, err = run_cli(capsys, "orbit", *base, "--dt", "0.5", "--hamiltonian", ",".join(["0.1"] * 10),
+                           "--out", tmp_path / "o")
+    assert one_line_error(code, err, "--dt", "su(3)"), err
+    assert not (tmp_path / "f").exists() and not (tmp_path / "o").exists()
+
+
+def test_flow_heyoka(capsys, tmp_path):
+    """flow --method heyoka of an su(3) chain = DOP853 (both at rtol 1e-12 over 2 units: 1e-9)."""
+    pytest.importorskip("heyoka")
+    for m in ("heyoka", "DOP853"):
+        code, _, err = run_cli(capsys, "flow", *BASE, "--method", m, "--dt", "1", "--steps", "2", "--out",
+                               tmp_path / m, "--no-plots")
+        assert code == 0, err
+    from jetgaudin import run as rl
+
+    assert np.abs(rl.load(tmp_path / "heyoka").X - rl.load(tmp_path / "DOP853").X).max() <= 1e-9
