@@ -12,11 +12,12 @@ from ._errors import InvalidParameterError, InvalidStateError
 E = TypeVar("E", bound=Enum)
 
 
-def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.ndarray, int]:
-    """Return ``(X, N)`` with ``X`` a float (or complex) array of shape ``(..., 3N)``.
+def as_state(X, *, allow_complex: bool = False, name: str = "X", block: int = 3) -> tuple[np.ndarray, int]:
+    """Return ``(X, N)`` with ``X`` a float (or complex) array of shape ``(..., block·N)`` (``block``: components
+    per site and order, 3; an su(n) chain's ``n² − 1``).
 
     Raises :class:`InvalidStateError` if the trailing axis is not a positive
-    multiple of 3 or if any entry is not finite.
+    multiple of ``block`` or if any entry is not finite.
     """
     try:
         arr = np.asarray(X)
@@ -29,15 +30,15 @@ def as_state(X, *, allow_complex: bool = False, name: str = "X") -> tuple[np.nda
             raise InvalidStateError(f"{name} must be real; pass a real state (complex given)")
         arr = arr.real
     arr = arr.astype(np.complex128 if arr.dtype.kind == "c" else np.float64, copy=False)
-    if arr.ndim == 0 or arr.shape[-1] == 0 or arr.shape[-1] % 3 != 0:
+    if arr.ndim == 0 or arr.shape[-1] == 0 or arr.shape[-1] % block != 0:
         n = "scalar" if arr.ndim == 0 else arr.shape[-1]
         raise InvalidStateError(
-            f"{name} must have shape (..., 3N) with N >= 1 (components y_0, ..., y_(N-1)); "
-            f"its last axis has length {n}, not a positive multiple of 3"
+            f"{name} must have shape (..., {block}N) with N >= 1 (components y_0, ..., y_(N-1)); "
+            f"its last axis has length {n}, not a positive multiple of {block}"
         )
     if not np.isfinite(arr).all():
         raise InvalidStateError(f"{name} has non-finite entries (NaN or inf); give finite numbers")
-    return arr, arr.shape[-1] // 3
+    return arr, arr.shape[-1] // block
 
 
 def check_N(N) -> int:

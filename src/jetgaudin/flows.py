@@ -311,13 +311,14 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
             ) from None
         if X0.ndim != 1:
             raise InvalidParameterError("method='heyoka' integrates one orbit: X0 must have shape (3N,)")
-        if not affine:
+        own = getattr(H, "heyoka_integrator", None)  # a Hamiltonian that builds its own equations (su(3) chains)
+        if not affine and not callable(own):
             raise InvalidParameterError(
                 "method='heyoka' needs an IntegralHamiltonian (its vector field is built symbolically)"
             )
         grid = t_eval if t_eval[0] == 0.0 else np.concatenate([[0.0], t_eval])  # heyoka's grid starts at t = 0
         try:
-            ta = _heyoka_integrator(H, 3 * N, rtol)
+            ta = own(rtol) if callable(own) else _heyoka_integrator(H, 3 * N, rtol)
             ta.state[:] = X0
             ta.time = 0.0
             res = ta.propagate_grid(grid)

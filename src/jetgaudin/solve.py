@@ -163,6 +163,8 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     if not isinstance(H, IntegralHamiltonian) and not chain:
         raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b)) or a chain "
                                     "Hamiltonian model.hamiltonian(weights)")
+    if chain and callable(getattr(H.model, "solve_methods", None)):  # an su(n) chain names its own (issue 32)
+        H.model.solve_methods(method.value)
     if chain:
         if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA, SolveMethod.KAHAN):
             raise InvalidParameterError(f"method={method.value!r} is for the tops; a chain Hamiltonian takes "

@@ -154,28 +154,31 @@ def check_chain_state(model, X: Any, option: str = "--init") -> np.ndarray:
 
 
 def chain_map(model, eta: complex, branch: str, kernel: str | None):
-    """The real two-point map of the chain (``kernel``: the ``--kernel`` value, ``None`` for auto)."""
+    """The real two-point map of the chain (``kernel``: the ``--kernel`` value, ``None`` for auto); an su(n) chain's
+    ``B^(r)_η`` with ``--branch r`` (``default`` = 0)."""
     import jetgaudin as jg
 
     try:
-        if isinstance(model, jg.SunGaudinModel):  # su(n): the map's rules for eta first, then the run layer's limit
-            jg.SunTwoPointBacklund(model, eta, 0)
-            refuse_sun_runs(model)
-        return jg.ChainTwoPointBacklund(model, eta, jg.Branch.parse(branch), jg.Backend.parse(kernel or "auto"))
+        if isinstance(model, jg.SunGaudinModel):
+            from jetgaudin.gaudin.sun_spectral import branch_index
+
+            r = branch_index(model, int(branch) if str(branch).isdigit() else branch)
+            return jg.SunTwoPointBacklund(model, eta, r, jg.Backend.parse(kernel or "auto"))
+        return jg.ChainTwoPointBacklund(model, eta, jg.Branch.parse(su2_branch(branch)),
+                                        jg.Backend.parse(kernel or "auto"))
     except jg.InvalidParameterError as exc:
-        option = "--sites" if "is a site" in str(exc) else "--eta"
+        option = "--sites" if "is a site" in str(exc) else "--branch" if "branch must" in str(exc) else "--eta"
         raise CliInputError(f"{option}: {one_line(exc)}") from None
 
 
-def refuse_sun_runs(model) -> None:
-    """One line for an su(n) model (n ≥ 3) where a run is asked: the run layer records 3N-component states."""
-    import jetgaudin as jg
-
-    if isinstance(model, jg.SunGaudinModel):
-        raise CliInputError(
-            f"--algebra: {model.algebra.name} runs (orbit, ensemble, flow) are not built yet: the run layer records "
-            "3N-component states; use `jetgaudin info --algebra` or the Python API "
-            "(model.two_point_backlund(eta, branch=r).iterate(X, steps), docs/sun.md)")
+def su2_branch(branch: str) -> str:
+    """``--branch`` of an su(2) model: ``0``, ``1`` are the default and opposite roots; one line for another r."""
+    if str(branch).isdigit():
+        if int(branch) > 1:
+            raise CliInputError(f"--branch: an su(2) model has the branches 0 (default) and 1 (opposite), got "
+                                f"{branch}; r = 2.. needs --algebra suN")
+        return ("default", "opposite")[int(branch)]
+    return str(branch)
 
 
 def chain_flow_map(H: Any, dt: float, method: str, rtol: float):
@@ -200,7 +203,8 @@ def sites_of(record: dict) -> str | None:
 def multi_site(model) -> bool:
     """Whether the chain figures replace the paper's (more than one site, one site not of order 3, or a family other
     than the rational one; the same rule as :func:`jetgaudin.plotting.open_run`)."""
-    return len(model.sites) > 1 or model.sites[0][1] != 3 or model.family.name != "rational"
+    return len(model.sites) > 1 or model.sites[0][1] != 3 or model.family.name != "rational" or \
+        model.n_state != 3 * model.M  # su(n)
 
 
 def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | None = None) -> None:

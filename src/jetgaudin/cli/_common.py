@@ -32,10 +32,12 @@ EXIT_FAILED = 1  # the run started but failed (singular step, health check)
 
 
 class Branch(StrEnum):
-    """``--branch``: the default root ν(η) of the branch rule, or the opposite one (the inverse map)."""
+    """``--branch``: the default root ν(η) of the branch rule, or the opposite one (the inverse map); an su(n) chain
+    (``--algebra``): ``r`` = 0..n−1, the r-th largest eigenvalue μ_r (su(2): 0 = default, 1 = opposite)."""
 
     default = "default"
     opposite = "opposite"
+    r0, r1, r2, r3, r4, r5, r6, r7 = "0", "1", "2", "3", "4", "5", "6", "7"
 
 
 # Options shared by every command that writes a run directory: one definition, one help text.

@@ -252,6 +252,9 @@ def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, mode
         if method is Method.midpoint:
             raise cm.CliInputError("--method midpoint: the implicit midpoint rule is the tops'; a chain: DOP853, "
                                    "heyoka or exact")
+        if method is Method.heyoka and getattr(model, "n", 2) > 3:
+            raise cm.CliInputError(f"--method heyoka: built for su(2) and su(3) chains, not {model.algebra.name}; "
+                                   "use --method DOP853")
         return _chains.chain_flow_map(H, dt, method.value, rtol)
     if method is Method.midpoint:
         from ..midpoint import ImplicitMidpoint
@@ -263,6 +266,9 @@ def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, mode
 def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto"):
     """:class:`jetgaudin.ExactFlow` (a top) or :class:`jetgaudin.ChainExactFlow` (``model``: a chain) of ``H``
     over ``dt``, solved once on ``X0`` so that an infeasible ``dt`` is one line before the run."""
+    if isinstance(model, jg.SunGaudinModel):  # issue 32: the su(n) exact step is not a map of the CLI yet
+        raise cm.CliInputError(f"--dt: an exact time step of an {model.algebra.name} chain is not built for the "
+                               "command line (docs/sun.md §5); use --method DOP853 or heyoka, or `orbit --eta`")
     if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
         raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
     fm: jg.ExactFlow | jg.ChainExactFlow

@@ -131,7 +131,8 @@ def orbit(
     branch: Annotated[
         Branch | None,
         typer.Option(
-            "--branch", help="root ν1 = +ν(η) ('default') or −ν(η) ('opposite': the inverse map) [default: default]"
+            "--branch", help="root ν1 = +ν(η) ('default') or −ν(η) ('opposite': the inverse map); --algebra suN: "
+            "r = 0..n-1, the r-th largest eigenvalue branch [default: default]"
         ),
     ] = None,
     out: Annotated[str | None, typer.Option("--out", help="output directory [default: ./jetgaudin-orbit]")] = None,
@@ -311,7 +312,8 @@ def orbit(
                     data = runlayer.load(out_dir)
                     m = res.spec.map.describe()
                     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
-                    title = (f"chain (λ:N) = {sites_text}; b = {m['b']:g}; η = {m['eta'][0]:g}{m['eta'][1]:+g}i; "
+                    bt = m['b'] if isinstance(m['b'], list) else format(m['b'], 'g')  # su(n): a vector field
+                    title = (f"chain (λ:N) = {sites_text}; b = {bt}; η = {m['eta'][0]:g}{m['eta'][1]:+g}i; "
                              f"{res.spec.steps} steps")
                     written = plotting.save_chain_figures(out_dir, data.n, data.X, model, title=title)
                 else:
@@ -367,7 +369,7 @@ def _exact(timed: tuple[float, str, int], X0: np.ndarray, b: float, model, kerne
 def _two_point(b: float, eta: complex, branch: str, kernel):
     import jetgaudin as jg
 
-    return jg.TwoPointBacklund(b, eta, jg.Branch.parse(branch), jg.Backend.parse("auto" if kernel is None else
-                                                                                kernel.value))
+    br = jg.Branch.parse(_chains.su2_branch(branch))
+    return jg.TwoPointBacklund(b, eta, br, jg.Backend.parse("auto" if kernel is None else kernel.value))
 
 

@@ -135,7 +135,8 @@ def ensemble_command(
     chunk_size: Annotated[str | None, typer.Option("--chunk-size", metavar="INTEGER",
             help="orbits per Dask task")] = None,
     branch: Annotated[
-        Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map [default: default]")
+        Branch | None, typer.Option("--branch", help="'opposite' gives the inverse map; --algebra suN: r = 0..n-1 "
+                                      "[default: default]")
     ] = None,
     show: Annotated[int, typer.Option("--show", help="orbits listed in the drift report")] = 10,
     sites: Annotated[str | None, typer.Option("--sites", help=_chains.SITES_HELP + "; states from --input, "
@@ -247,7 +248,7 @@ def ensemble_command(
                         X0 = ens.sample_on_energy_shell(n, bb, energy, n_orbits, seed=s_seed, scale=scale)
             with blame("--input" if input is not None else "--init-from" if init_from_dir is not None else "--eta"):
                 spec = er.EnsembleSpec(X0, bb, ee, expect.get("steps", 100), expect.get("save_every", 1),
-                                       expect.get("branch", "default"))
+                                       _chains.su2_branch(expect.get("branch", "default")))
             out_dir = out_path(out, "jetgaudin-ensemble")
             res = run_with_progress("ensemble", progress, lambda bar: er.run_ensemble(
                 spec, out_dir, overwrite=overwrite, progress=bar, notify=compile_message, **common))
@@ -275,7 +276,6 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
     bb = _chains.parse_chain_b(b)
     ee = parse_eta(eta, pole_at_zero=False)
     model = _chains.chain_model(sites, bb, **(fam or {}))
-    _chains.refuse_sun_runs(model)
     if input is not None:
         X0, b_file, eta_file = _read_input(input)
         if b_file is not None or eta_file is not None:
@@ -288,13 +288,16 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         n_orbits = parse_count(d.get("orbits", "100"), "--orbits", 1)
         s_seed = parse_count(d.get("seed", "0"), "--seed", 0)
         c = None if d.get("casimirs") is None else _floats(d["casimirs"], "--casimirs")
-        if c is not None and len(c) != model.M:
+        if model.n_state != 3 * model.M:  # su(n): no leaf sampler; Gaussian states
+            X0 = _sun_states(model, d, n_orbits, s_seed)
+        elif c is not None and len(c) != model.M:
             raise CliInputError(f"--casimirs: the sites need M = {model.M} numbers, site by site C_1..C_N_i "
                                 f"(orders {list(model.orders)}), got {len(c)}")
-        with blame("--orbits"):
-            _check_memory(n_orbits, model.n_state)
-        with blame("--casimirs"):
-            X0 = ens.sample_chain_on_leaf(model, c, n_orbits, seed=s_seed, scale=d.get("scale", 1.0))
+        if model.n_state == 3 * model.M:
+            with blame("--orbits"):
+                _check_memory(n_orbits, model.n_state)
+            with blame("--casimirs"):
+                X0 = ens.sample_chain_on_leaf(model, c, n_orbits, seed=s_seed, scale=d.get("scale", 1.0))
     where = "--input" if input is not None else "--init-from" if init_from_dir is not None else "--casimirs"
     X0 = _chains.check_chain_state(model, X0, where)
     m = _chains.chain_map(model, ee, expect.get("branch", "default"), common.pop("backend", None))
@@ -312,6 +315,18 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
     finally:
         if client is not None and client is not scheduler:
             client.close()
+
+
+def _sun_states(model, d: dict, n_orbits: int, seed: int) -> np.ndarray:
+    """``--algebra suN`` without ``--input``: ``n_orbits`` states ``0.5 · scale · N(0, 1)`` per component (``--seed``);
+    su(n) leaves have no sampler (``--casimirs`` is refused in one line)."""
+    if d.get("casimirs") is not None:
+        raise CliInputError(f"--casimirs: the leaf sampler draws su(2) sites; an {model.algebra.name} ensemble draws "
+                            "Gaussian states (--orbits, --seed, --scale) or reads --input FILE")
+    with blame("--orbits"):
+        _check_memory(n_orbits, model.n_state)
+    scale = float(d.get("scale", 1.0))
+    return 0.5 * scale * np.random.default_rng(seed).normal(size=(n_orbits, model.n_state))
 
 
 def _check_memory(orbits: int, n_state: int) -> None:

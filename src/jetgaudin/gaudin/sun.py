@@ -139,11 +139,8 @@ class SunGaudinModel(GaudinModel):
 
     def check_state(self, X, *, allow_complex: bool = False) -> np.ndarray:
         arr = np.asarray(X)
-        pad = (-arr.shape[-1]) % 3 if arr.ndim and arr.shape[-1] and arr.dtype.kind in "biufc" else 0
-        if pad:  # as_state (dtype, reality, finiteness) wants 3N components: pad with zeros, then drop them
-            arr = np.concatenate([arr, np.zeros(arr.shape[:-1] + (pad,), arr.dtype)], axis=-1)
-        X = as_state(arr, allow_complex=allow_complex)[0]
-        X = X[..., : X.shape[-1] - pad]
+        block = self.dim if arr.ndim and arr.shape[-1] and arr.shape[-1] % self.dim == 0 else 1
+        X = as_state(arr, allow_complex=allow_complex, block=block)[0]  # dtype, reality, finiteness
         if X.shape[-1] != self.n_state:
             raise InvalidStateError(
                 f"a state of the {self.algebra.name} chain with sites {list(self.sites)} has (n^2-1) M = "
@@ -335,6 +332,13 @@ class SunGaudinModel(GaudinModel):
         """``Σ ω_I(X) h_I``: its flow from ``X`` is the flow of ``G^{(r)}_η`` (the ``ω`` are constant on it)."""
         return SunHamiltonian(self, self.interpolating_weights(X, eta, branch))
 
+    def solve_methods(self, method: str) -> None:
+        """Refuse a method of :func:`jetgaudin.solve` that does not apply here, naming those that do
+        (:mod:`jetgaudin.gaudin.sun_solve`)."""
+        from .sun_solve import check_solve_method
+
+        check_solve_method(self, method)
+
     def hamiltonian(self, weights) -> SunHamiltonian:
         """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""
         return SunHamiltonian(self, weights)
@@ -375,3 +379,9 @@ class SunHamiltonian(ChainHamiltonian):
 
     def check_state(self, X) -> np.ndarray:
         return self.model.check_state(X)
+
+    def heyoka_integrator(self, rtol: float):
+        """heyoka's integrator of the flow (``n ≤ 3``; :mod:`jetgaudin.gaudin.sun_solve`)."""
+        from .sun_solve import heyoka_integrator
+
+        return heyoka_integrator(self, rtol)

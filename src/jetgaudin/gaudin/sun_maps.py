@@ -114,6 +114,12 @@ class SunTwoPointBacklund(Map):
     def n_state(self) -> int:
         return self.model.n_state
 
+    @property
+    def b(self) -> float:
+        """The field's ``λ_3`` component ``b³`` (a float field is all of it; the whole field is in
+        :meth:`describe`): the number an ensemble run records per orbit next to ``η``."""
+        return float(self.model.field_vector[2])
+
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return self.model.integrals(X)
 

@@ -37,7 +37,7 @@ def _site_name(model, i: int) -> str:
 def site_y0(model, X) -> np.ndarray:
     """``y_0`` of every site along the orbit ``X`` ``(T, 3M)``: shape ``(T, n_sites, 3)``."""
     X = model.check_state(X)
-    y = X.reshape(X.shape[:-1] + (model.M, 3))
+    y = X.reshape(X.shape[:-1] + (model.M, getattr(model, "dim", 3)))  # su(n): n² − 1 components
     return y[..., list(model.offsets), :]
 
 
@@ -86,14 +86,15 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
         cb.ax.tick_params(labelsize=6)
         cb.formatter = FuncFormatter(lambda v, _pos: count_text(v))
         cb.update_ticks()
-        for a in range(3):
-            ax_t.plot(n, P[:, a], linewidth=0.9, color=comp_colors[a], label=f"y_0^{a + 1}")
+        for a in range(P.shape[-1]):  # su(n): all n² − 1 components
+            ax_t.plot(n, P[:, a], linewidth=0.9, color=comp_colors[a] if a < 3 else colormaps["tab10"](a % 10),
+                      label=f"y_0^{a + 1}")
         ax_t.set_ylabel("component", fontsize=8)
         ax_t.tick_params(labelsize=7)
         ax_t.grid(True, alpha=0.3)
         step_axis(ax_t)
         if i == 0:
-            ax_t.legend(fontsize=7, ncol=3, loc="upper right")
+            ax_t.legend(fontsize=7, ncol=min(P.shape[-1], 4), loc="upper right")
             ax.legend(fontsize=7, loc="upper left")
     axes[-1, 1].set_xlabel("step n", fontsize=8)
     more = f" (first {S} of {Y.shape[1]} sites)" if Y.shape[1] > S else ""
@@ -101,6 +102,14 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
     fig.tight_layout()
     mark_dimensionless(fig)
     return fig
+
+
+def _integral_label(name: str) -> str:
+    """``h1,2`` → ``$h_{1,2}$``; an su(n) integral ``t3_h1,2`` (of ``tr ℓ³/3``) → ``$h^{(3)}_{1,2}$``."""
+    if name.startswith("t") and "_h" in name:
+        k, rest = name[1:].split("_h", 1)
+        return f"$h^{{({k})}}_{{{rest}}}$"
+    return f"$h_{{{name[1:]}}}$"
 
 
 def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "step n"):
@@ -118,7 +127,7 @@ def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "
     for k, name in enumerate(names):
         mask = d[:, k] > 0
         ax.semilogy(n[mask], d[mask, k], "x" if cas[k] else ".", markersize=3 if cas[k] else 2, color=colors(k % 20),
-                    label=f"$h_{{{name[1:]}}}$" + (" (Casimir)" if cas[k] else ""))
+                    label=_integral_label(name) + (" (Casimir)" if cas[k] else ""))
     ax.set_xlabel(xlabel)
     step_axis(ax)
     ax.set_ylabel(r"$|h_{i,m}(n) - h_{i,m}(0)|$")

@@ -93,6 +93,12 @@ def thinned_rows(run: RunRows, max_points: int) -> tuple[np.ndarray, np.ndarray]
     return idx, X
 
 
+def _field(b) -> float:
+    """The recorded field ``b`` as a number: itself, or for an su(n) field of ``n² − 1`` components its ``λ_3``
+    component (the whole field stays in the map's description)."""
+    return float(b[2]) if isinstance(b, list) and len(b) >= 3 else float(b)
+
+
 def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) -> RunRows:
     """Open the run in ``run_dir`` for reading in slices: an orbit, ensemble or flow run (the one place that reads
     run directories for plotting; the run layer's file names and ``run.json`` fields are used here only).
@@ -126,15 +132,17 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
     safe = int(run.get("checkpoint", {}).get("rows", 0))
     # the map's own description (run layer) names b and eta; runs written before it keep them in "inputs"
     described: dict = run["map"] if isinstance(run.get("map"), dict) else {}
-    chain = described if str(described.get("kind", "")).startswith("chain_") else None
-    if chain is not None and len(chain["sites"]) == 1 and chain["sites"][0][1] == 3 and "family" not in chain:
+    sun = described.get("algebra", "su(2)") != "su(2)"  # an su(n) chain (issue 32): always the chain figures
+    chain = described if str(described.get("kind", "")).startswith("chain_") or sun else None
+    if chain is not None and len(chain["sites"]) == 1 and chain["sites"][0][1] == 3 and "family" not in chain \
+            and not sun:
         chain = None  # one rational site of order 3 is the paper's top: its figures (as `orbit --sites` draws it)
     common = dict(run_dir=run_dir, status=status, inputs=inp, chain=chain)
     if program == "jetgaudin orbit":
         if orbit not in (None, 0):
             raise RecordingError(f"{run_dir} is an orbit run: --orbit must be 0 or omitted, got {orbit}")
         try:
-            b_run = float(described.get("b", inp.get("b")))
+            b_run = _field(described.get("b", inp.get("b")))
             # an exact-flow run (orbit --dt) has a time step and no eta
             eta = None if "dt" in described else complex(*described.get("eta", inp.get("eta")))
         except (TypeError, ValueError):
@@ -170,6 +178,10 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
         except (OSError, KeyError) as exc:
             raise RecordingError(f"cannot read {path}: {exc}") from None
         eta_flow = complex(*inp["eta"]) if inp.get("hamiltonian") == "interpolating" else None
+        try:  # a chain flow records its field in the map's description only
+            b_flow = _field(described.get("b", inp.get("b")))
+        except (TypeError, ValueError):
+            raise RecordingError(f"{run_dir}/run.json names no field b; cannot draw it") from None
         return RunRows(kind="map" if map_of_flow else "flow", path=path, dataset="X", index_name=index_name,
-                       rows=rows, N=int(inp["N"]), b=float(inp["b"]), eta=eta_flow, orbit=None, **common)
+                       rows=rows, N=int(inp["N"]), b=b_flow, eta=eta_flow, orbit=None, **common)
     raise RecordingError(f"{run_dir}/run.json was written by {program!r}, not by jetgaudin orbit, ensemble or flow")

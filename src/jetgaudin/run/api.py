@@ -30,7 +30,7 @@ from .files import (
 )
 from .health import Health
 from .replay import replay
-from .spec import HealthLimits, Layout, RunSpec, RunStatus
+from .spec import HealthLimits, Layout, RunSpec, RunStatus, block_size
 from .store import EnsembleStore, OrbitStore, Store, now, read_checkpoint_npz
 
 __all__ = ["RunResult", "start", "resume"]
@@ -105,7 +105,8 @@ def _orbit_inputs(spec: RunSpec) -> dict:
     inputs.update(steps=spec.steps, init=spec.X0.tolist())
     if d.get("kind") == "two_point":
         inputs["branch"] = d["branch"]
-    inputs.update(N=spec.n_state // 3, save_every=spec.save_every, csv=bool(spec.csv), kernel=spec.map.backend.value,
+    inputs.update(N=spec.n_state // block_size(spec.map),
+                  save_every=spec.save_every, csv=bool(spec.csv), kernel=spec.map.backend.value,
                   max_drift=spec.limits.max_drift, max_imag=spec.limits.max_imag)
     if _time_step(spec.map) is not None and spec.stem != "flow":
         inputs["stem"] = spec.stem  # a timed map recorded as an orbit (orbit.h5 with n and t)
@@ -117,7 +118,7 @@ def _batch_params(m: Map, B: int) -> tuple[np.ndarray, np.ndarray, str]:
         params: Any = m
         b = np.broadcast_to(np.asarray(params.b, dtype=np.float64), (B,)).copy()
         eta = np.broadcast_to(np.asarray(params.eta, dtype=np.complex128), (B,)).copy()
-        return b, eta, str(params.branch.value)
+        return b, eta, str(getattr(params.branch, "value", params.branch))
     except AttributeError:
         raise InvalidParameterError("an ensemble run needs a Bäcklund map (fields b, eta, branch)") from None
 
@@ -132,7 +133,8 @@ def inputs_digest(X0: np.ndarray, b: np.ndarray, eta: np.ndarray) -> str:
 
 def _ensemble_inputs(spec: RunSpec) -> dict:
     b, eta, branch = _batch_params(spec.map, spec.B)
-    return {"B": spec.B, "N": spec.n_state // 3, "steps": spec.steps, "save_every": spec.save_every, "branch": branch,
+    return {"B": spec.B, "N": spec.n_state // block_size(spec.map), "steps": spec.steps, "save_every": spec.save_every,
+            "branch": branch,
             "inputs_sha256": inputs_digest(spec.X0, b, eta), "max_drift": spec.limits.max_drift,
             "backend": _route(spec.map).value}
 
@@ -145,7 +147,7 @@ def _route(m: Any) -> Backend:
 
 def _summary(spec: RunSpec) -> Callable[[Health, float], dict]:
     if spec.layout is Layout.ORBIT:
-        N = spec.n_state // 3
+        N = spec.n_state // block_size(spec.map)
 
         def orbit(h: Health, elapsed: float) -> dict:
             return dict(
@@ -460,7 +462,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
         spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
         if "file" not in ck and int(ck["rows"]) == 0 and int(ck["step"]) == 0:  # stopped before its first slot
             d: dict[str, np.ndarray] = {"step": np.array(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
-                 "drift": np.zeros((X0.shape[0], 2 * (X0.shape[1] // 3)))}
+                 "drift": np.zeros((X0.shape[0], np.shape(spec.map.integrals(X0[:1]))[-1]))}
         else:
             d = read_checkpoint_npz(out_dir, ck, X0.shape)
         n0, X = int(d["step"]), d["X"]

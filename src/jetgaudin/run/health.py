@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..maps import Map
-from .spec import HealthLimits, integral_names
+from .spec import HealthLimits, block_size, integral_names
 
 
 @dataclass
@@ -29,7 +29,8 @@ class Health:
         self.I0 = np.asarray(map_.integrals(X0), dtype=float) if I0 is None else np.asarray(I0, dtype=float)
         self.scale = np.maximum(1.0, np.abs(self.I0))
         self.drift = np.zeros_like(self.I0)
-        self.r0 = np.linalg.norm(np.asarray(X0)[..., -3:], axis=-1)
+        self.d = block_size(map_)  # the last block y_{N-1} (3 components; su(n): n² − 1)
+        self.r0 = np.linalg.norm(np.asarray(X0)[..., -self.d:], axis=-1)
         self.sphere = 0.0
         self.imag = 0.0
         k = self.I0.shape[-1]
@@ -50,7 +51,7 @@ class Health:
         S = np.asarray(S)
         with np.errstate(all="ignore"):
             d = np.abs(self.map.integrals(S) - self.I0)
-            sph = np.abs(np.linalg.norm(S[..., -3:], axis=-1) - self.r0)
+            sph = np.abs(np.linalg.norm(S[..., -self.d:], axis=-1) - self.r0)
         rel = d / self.scale
         rows = rel.reshape(len(steps), -1)
         bad_row = ~np.all(np.isfinite(rows), axis=1) | np.any(rows > self.limits.max_drift, axis=1)

@@ -71,6 +71,15 @@ class Layout(StrEnum):
     ENSEMBLE = "ensemble"
 
 
+def block_size(m: object) -> int:
+    """Components per site and jet order of the states of the map ``m`` (or of the inner map of a wrapper): the
+    model's ``dim`` (an su(n) chain: ``n² − 1``), else 3 (the tops and the su(2) chains).  The run layer's one
+    source of the state layout: ``n_state // block_size(m)`` blocks ``y_k``."""
+    inner = getattr(m, "inner", None)
+    d = getattr(getattr(inner if isinstance(inner, Map) else m, "model", None), "dim", None)
+    return d if isinstance(d, int) and not isinstance(d, bool) and d > 0 else 3
+
+
 def integral_names(N: int) -> list[str]:
     """``["H_1", …, "H_N", "C_1", …, "C_N"]``, the order of :func:`jetgaudin.integrals`."""
     return [f"H_{k}" for k in range(1, N + 1)] + [f"C_{k}" for k in range(1, N + 1)]
@@ -124,7 +133,7 @@ class RunSpec:
                 f"{type(self.map).__name__} maps real states to complex ones; a run directory records real orbits "
                 "only (iterate a complex map in memory with its iterate() method)"
             )
-        X0, _ = as_state(self.X0, name="the initial state")
+        X0, _ = as_state(self.X0, name="the initial state", block=block_size(self.map))
         if X0.ndim not in (1, 2):
             raise InvalidParameterError(f"X0 must be one state (n,) or a batch (B, n), got shape {X0.shape}")
         if self.map.n_state is not None and X0.shape[-1] != self.map.n_state:
