@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import jetgaudin as jg
-from jetgaudin.gaudin.sun_exact import SunExactStep, match_weights, step_weights
+from jetgaudin.gaudin.sun_exact import SunExactStep, _dmu_dh, exact_parameters, match_weights, step_weights
 
 MODEL = jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su3")  # 6 non-Casimir integrals: 3 maps
 X0 = 0.5 * np.random.default_rng(2).normal(size=MODEL.n_state)
@@ -54,3 +54,73 @@ def test_refusals():
         match_weights(MODEL, X0, np.ones(10), DT, ETAS[:2], BRANCHES[:2])
     with pytest.raises(jg.StepTooLargeError):
         match_weights(MODEL, X0, 50 * np.ones(10), DT, ETAS, BRANCHES, max_iter=2)
+
+
+# ---- jg.solve(..., method="exact") for su(3) -------------------------------------------------------------------
+
+W_ANY = np.random.default_rng(3).normal(size=MODEL.n_integrals)  # arbitrary weights, Casimirs included
+
+
+def test_small_im_eta_limit_of_the_weights():
+    """ω^(r)(a + iε) = −2ε Re ∂μ_r/∂h(a) + O(ε³) (_dmu_dh: the characteristic polynomial μ³ − τ₂μ − τ₃; the
+    weights: quadrature of the Vandermonde route, sun_spectral): measured 5.3e-9 at ε = 1e-3 and 5.3e-12 at 1e-4
+    (the ε³ law); asserted 1e-7 and 1e-10.  And ∂ω/∂ε = −2 Re ∂μ_r/∂h(a + iε) at finite ε (Newton's Jacobian)
+    against a central difference of the quadrature weights (step 1e-5: error ~1e-10; asserted 1e-8)."""
+    for r in range(3):
+        for eps, tol in ((1e-3, 1e-7), (1e-4, 1e-10)):
+            w = MODEL.interpolating_weights(X0, 0.4 + 1j * eps, r)
+            assert np.abs(w + 2 * eps * _dmu_dh(MODEL, X0, 0.4 + 0j, r).real).max() <= tol
+        h = 1e-5
+        fd = (MODEL.interpolating_weights(X0, 0.4 + 0.2j + 1j * h, r)
+              - MODEL.interpolating_weights(X0, 0.4 + 0.2j - 1j * h, r)) / (2 * h)
+        assert np.abs(fd + 2 * _dmu_dh(MODEL, X0, 0.4 + 0.2j, r).real).max() <= 1e-8
+
+
+def test_branch_gradients_at_one_point_span_two_directions():
+    """Why exact_parameters takes 2M points: three points give rank 5 < 6 whatever the branches (the branches at
+    a point span (u(a), 0), (0, v(a)) only); the 2M = 4 points it takes give 6 (singular values: the smallest
+    is ~1e-17 vs ~0.2 -- asserted below 1e-12 and above 1e-3)."""
+    mask = ~MODEL.casimir_mask()
+
+    def smallest(pts, brs):
+        J = np.stack([_dmu_dh(MODEL, X0, complex(a), r).real[mask] for a, r in zip(pts, brs, strict=True)], axis=1)
+        return np.linalg.svd(J, compute_uv=False)[-1]
+
+    three = [-0.7, -0.7, -0.7, 0.4, 0.4, 0.4, 1.6, 1.6, 1.6]
+    assert smallest(three, [0, 1, 2] * 3) <= 1e-12
+    etas, branches = exact_parameters(MODEL, X0, W_ANY, 0.05)
+    assert smallest([e.real for e in etas], branches) >= 1e-3
+
+
+def test_solve_exact_against_dop853():
+    """jg.solve(H, method="exact") for arbitrary weights against DOP853 (rtol = atol = 1e-13): three steps of 0.2,
+    measured 1.1e-13, and twenty steps of 0.25 (T = 5), measured 8.8e-13; asserted 1e-11 and 1e-10 (DOP853's
+    global error at 1e-13, the quadrature of the weights at round-off; the orbit moves by O(1), and a wrong
+    weight, branch or sign is off by > 1e-3)."""
+    H = MODEL.hamiltonian(W_ANY)
+    for T, dt, tol in ((0.6, 0.2, 1e-11), (5.0, 0.25, 1e-10)):
+        ex = jg.solve(H, X0, (0.0, T), dt=dt, method="exact")
+        ref = jg.solve(H, X0, (0.0, T), dt=dt, method="dop853", rtol=1e-13, atol=1e-13)
+        assert ex.info["substeps"] == 1
+        assert np.abs(ex.X - ref.X).max() <= tol
+        assert np.abs(ex.X[-1] - X0).max() > 0.5  # it moved
+        assert ex.drift.max() <= 1e-12  # integrals kept (measured 8e-15)
+
+
+@pytest.mark.parametrize("sites", [[(0.0, 1), (1.0, 1)], [(0.3, 2)]])
+def test_solve_exact_substeps_and_dense(sites):
+    """dt = 1 is past what Newton reaches from the small-Im(eta) guess here: solve splits it into exact sub-steps
+    (info["substeps"] = 3) and still meets DOP853 (measured 2.8e-13 / 3.5e-13, asserted 1e-10), as does the
+    dense output at off-grid times (measured 2e-13 / 4e-13); substeps=1 raises StepTooLargeError."""
+    m = jg.GaudinModel(0.5, sites, algebra="su3")
+    x0 = 0.5 * np.random.default_rng(2).normal(size=m.n_state)
+    H = m.hamiltonian(np.random.default_rng(3).normal(size=m.n_integrals))
+    ex = jg.solve(H, x0, (0.0, 2.0), dt=1.0, method="exact")
+    ref = jg.solve(H, x0, (0.0, 2.0), dt=1.0, method="dop853", rtol=1e-13, atol=1e-13)
+    assert ex.info["substeps"] > 1
+    assert np.abs(ex.X - ref.X).max() <= 1e-10
+    dense = jg.solve(H, x0, (0.0, 2.0), t_eval=[0.3, 1.7], method="dop853", rtol=1e-13, atol=1e-13)
+    assert np.abs(ex.at([0.3, 1.7]) - dense.X).max() <= 1e-10
+    with pytest.raises(jg.StepTooLargeError) as exc:
+        jg.solve(H, x0, (0.0, 2.0), dt=1.0, method="exact", substeps=1)
+    assert exc.value.dt_max is not None and 0 < exc.value.dt_max < 1.0

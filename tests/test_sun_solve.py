@@ -45,7 +45,6 @@ def test_heyoka_and_dop853_agree():
     ("kahan", ["'kahan'", "quadratic", "'dop853', 'heyoka'"]),
     ("midpoint", ["'midpoint'", "'dop853', 'heyoka'"]),
     ("bt", ["'bt'", "'dop853', 'heyoka'"]),
-    ("exact", ["'exact'", "docs/sun.md"]),
 ])
 def test_refused_methods_are_named(method, words):
     with pytest.raises(jg.InvalidParameterError) as exc:
@@ -58,3 +57,11 @@ def test_heyoka_refused_past_n3():
     with pytest.raises(jg.InvalidParameterError, match="n <= 3.*'dop853'"):
         jg.solve(m.hamiltonian(np.ones(len(m.integral_labels()))), np.full(m.n_state, 0.1), (0.0, 1.0),
                  method="heyoka")
+
+
+def test_exact_refused_past_n3():
+    """The exact step is built for su(3) (docs/sun.md §5): su(4) is refused naming it and the methods that work."""
+    m = jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su4")
+    with pytest.raises(jg.InvalidParameterError, match=r"'exact'.*su\(3\).*'dop853'"):
+        jg.solve(m.hamiltonian(np.ones(len(m.integral_labels()))), np.full(m.n_state, 0.1), (0.0, 1.0), dt=0.5,
+                 method="exact")

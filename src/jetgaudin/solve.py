@@ -73,6 +73,8 @@ def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
         from .kahan import KahanMap
 
         return KahanMap(H, dt, Backend.parse(backend))
+    if callable(getattr(getattr(H, "model", None), "exact_flow", None)):  # an su(3) chain (issue 32)
+        return H.model.exact_flow(H, dt, substeps)
     if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
         from .exact_chain import ChainExactFlow
 
@@ -117,6 +119,8 @@ def _exact_dense(H: Any, chain: bool, substeps: int, t_grid: np.ndarray, X_grid:
             ds = float(tt - ts[kk])
             if ds == 0.0:
                 out[r] = Xs[kk]
+            elif callable(getattr(getattr(H, "model", None), "exact_flow", None)):  # an su(3) chain (issue 32)
+                out[r] = H.model.exact_flow(H, ds, substeps)(Xs[kk])
             elif chain:
                 from .exact_chain import ChainExactFlow
 
@@ -133,7 +137,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
           backend: str = "auto", t_eval=None) -> Trajectory:
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
     ``model.hamiltonian(weights)`` (methods ``"exact"``: :class:`jetgaudin.ChainExactFlow`, ``"dop853"``,
-    ``"heyoka"``) from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
+    ``"heyoka"``; an su(n) chain: ``"dop853"``, ``"heyoka"`` for ``n ≤ 3``, ``"exact"`` for ``n = 3`` and any weights,
+    sub-steps where needed, ``docs/sun.md`` §5; other ``n`` refused with :class:`jetgaudin.InvalidParameterError`)
+    from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
     over ``t_span = (t0, t1)`` (either direction), sampled every ``save_every`` steps of ``dt`` (module doc).
 
     ``dt``: the time step (required by ``"exact"``, ``"bt"``, ``"midpoint"``; for ``"dop853"``/``"heyoka"`` the

@@ -2,10 +2,11 @@ r"""Integrating the flows of an su(n) chain Hamiltonian ``H = Σ_I w_I h_I`` (is
 :func:`jetgaudin.solve` apply, and heyoka's equations for ``n = 3``.
 
 **Methods.**  ``"dop853"`` (any ``n``: the generic right-hand side ``Π(X)∇H``); ``"heyoka"`` for ``n ≤ 3`` (its
-equations are built symbolically, below).  Refused with :class:`jetgaudin.InvalidParameterError` naming these:
-``"kahan"`` (Kahan–Hirota–Kimura is built for quadratic vector fields on 3-component blocks; for ``n ≥ 3`` the
-integrals ``h^{(k)}``, ``k ≥ 3``, are of degree ``k`` and the blocks have ``n² − 1`` components), ``"midpoint"``
-and ``"bt"`` (the tops' fixed-step maps).
+equations are built symbolically, below); ``"exact"`` for ``n = 3``
+(:class:`jetgaudin.gaudin.sun_exact.SunExactFlow`).  Refused with :class:`jetgaudin.InvalidParameterError`
+naming those: ``"kahan"`` (Kahan–Hirota–Kimura is built for quadratic vector fields on 3-component blocks; for
+``n ≥ 3`` the integrals ``h^{(k)}``, ``k ≥ 3``, are of degree ``k`` and the blocks have ``n² − 1``
+components), ``"midpoint"`` and ``"bt"`` (the tops' fixed-step maps), ``"exact"`` for ``n ≠ 3``.
 
 **heyoka's equations (n = 3).**  ``Ẋ_I = Σ_{J,K} c_{IJK} X_K g_J(X)`` with ``c`` the chain's structure constants
 and ``g = ∇H``; the ``h^{(2)}`` are quadratic and the ``h^{(3)}`` cubic in ``X`` (``τ_k`` is a polynomial of degree
@@ -37,10 +38,10 @@ SOLVE_METHODS = ("dop853", "heyoka")
 def check_solve_method(model, method: str) -> None:
     """Refuse a method of :func:`jetgaudin.solve` that does not apply to the su(n) chain ``model`` (module
     docstring), naming those that do."""
-    ok = [m for m in SOLVE_METHODS if m != "heyoka" or model.n <= 3]
+    ok = [m for m in SOLVE_METHODS if m != "heyoka" or model.n <= 3] + (["exact"] if model.n == 3 else [])
     if method not in ok:
         why = {"kahan": "Kahan's map is built for quadratic vector fields on 3-component blocks",
-               "exact": "its exact time step is not built: docs/sun.md says what it needs",
+               "exact": f"its exact time step is built for su(3) (docs/sun.md §5), not {model.algebra.name}",
                "heyoka": f"heyoka's equations are built for n <= 3 (the gradient of h^(k), k <= 3), not {model.n}"}
         raise InvalidParameterError(
             f"method={method!r} does not apply to an {model.algebra.name} chain ("
