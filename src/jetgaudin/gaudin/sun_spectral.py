@@ -102,14 +102,18 @@ def continue_branch(model, X, eta: complex, r: int, t_nodes: np.ndarray):
                            "(eigenvalues collide on or near it); move eta")
 
 
-def eigenvalue_branch(model, X, eta, branch=0) -> np.ndarray:
-    """``μ_r(η)`` by the branch rule (module docstring), shape ``(...)``; ``η`` real: ``μ_r(Re η)``."""
+def _checked(model, X, eta, branch):
+    """``(η, r, batch shape, states (B, n))`` after the checks every branch quantity makes."""
     eta = spectral_parameter(eta)
     r = branch_index(model, branch)
     check_start(model, eta)
     X = model.check_state(X)
-    shape = X.shape[:-1]
-    Xb = X.reshape(-1, X.shape[-1])
+    return eta, r, X.shape[:-1], X.reshape(-1, X.shape[-1])
+
+
+def eigenvalue_branch(model, X, eta, branch=0) -> np.ndarray:
+    """``μ_r(η)`` by the branch rule (module docstring), shape ``(...)``; ``η`` real: ``μ_r(Re η)``."""
+    eta, r, shape, Xb = _checked(model, X, eta, branch)
     if eta.imag == 0:
         return _start_values(model, Xb, eta.real, r).astype(complex).reshape(shape)
     return continue_branch(model, Xb, eta, r, np.array([1.0]))[0][:, 0].reshape(shape)
@@ -125,12 +129,7 @@ def _gauss(panels: int = 16, order: int = 16):
 
 def interpolating(model, X, eta, branch=0):
     """``(G^{(r)}_η, ω)`` of shapes ``(...)`` and ``(..., n_integrals)`` (module docstring)."""
-    eta = spectral_parameter(eta)
-    r = branch_index(model, branch)
-    check_start(model, eta)
-    X = model.check_state(X)
-    shape = X.shape[:-1]
-    Xb = X.reshape(-1, X.shape[-1])
+    eta, r, shape, Xb = _checked(model, X, eta, branch)
     if eta.imag == 0:
         return np.zeros(shape), np.zeros(shape + (model.n_integrals,))
     t, wt = _gauss()
