@@ -21,6 +21,8 @@ round-off (``tests/test_sun_kernel.py``).  ``run_batch`` runs orbits on all core
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, prange
 
@@ -94,7 +96,7 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc
         nrm = c0.real**2 + c0.imag**2 + c1.real**2 + c1.imag**2 + c2.real**2 + c2.imag**2
         if nrm > best:
             best, v0, v1, v2 = nrm, c0, c1, c2
-    nv = np.sqrt(best)
+    nv = math.sqrt(best)  # math, not np: NumPy ufuncs do not compile for the CUDA target
     u[0], u[1], u[2] = v0 / nv, v1 / nv, v2 / nv
     eb = eta.conjugate()
     d0, d1 = 0j, eb - eta
