@@ -140,3 +140,25 @@ def test_a_planted_bug_is_caught(monkeypatch):
         _kernels.sun_kernel.cache_clear()
     with pytest.raises(AssertionError):
         same(g, B.iterate(X, 3, backend="compiled"), 3)
+
+
+def test_cli_su3_ensemble_on_the_gpu(tmp_path):
+    """``ensemble --algebra su3 --backend gpu`` runs through the run layer, records the route, and saves the compiled
+    route's states (bit for bit under the simulator)."""
+    import h5py
+    from typer.testing import CliRunner
+
+    import jetgaudin.run
+    from jetgaudin.cli import app
+
+    base = ["ensemble", "--sites", "0:1,1:1", "--algebra", "su3", "--b", "0.5", "--eta", "0.4+0.1i", "--orbits", "2",
+            "--steps", "4", "--save-every", "2"]
+    states = {}
+    for route in ("gpu", "compiled"):
+        r = CliRunner().invoke(app, [*base, "--backend", route, "--out", str(tmp_path / route)])
+        assert r.exit_code == 0, r.output
+        assert jetgaudin.run.read_run(tmp_path / route)["inputs"]["backend"] == route
+        with h5py.File(tmp_path / route / "ensemble.h5") as f:
+            states[route] = f["states"][()]
+    assert states["gpu"].shape == (3, 2, 16)
+    same(states["gpu"], states["compiled"], 4)
