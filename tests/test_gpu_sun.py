@@ -10,38 +10,21 @@ the simulator is slow.
 
 from __future__ import annotations
 
-import os
+# the GPU tests' set-up (the simulator switched on before numba.cuda is imported; skipped without numba-cuda or a GPU
+# route) and their tolerance rule ``same``: equal bits under the simulator, 1e-14 per step on a real GPU
+from test_gpu import REAL, same  # isort: skip
 
-REAL = os.environ.get("JETGAUDIN_TEST_REAL_GPU", "0") == "1"
-if not REAL:
-    os.environ["NUMBA_ENABLE_CUDASIM"] = "1"  # before numba.cuda is imported (jetgaudin imports it only here)
+import numpy as np
+import pytest
 
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-
-import jetgaudin as jg  # noqa: E402
-
-pytest.importorskip("numba_cuda", reason="the GPU route's tests need numba-cuda (pip install 'jetgaudin[gpu]')")
-
-from jetgaudin import gpu  # noqa: E402
-from jetgaudin.gaudin import _sun_kernel  # noqa: E402
-from jetgaudin.gpu import _kernels  # noqa: E402
-from jetgaudin.maps import Backend  # noqa: E402
-
-if not gpu.available():  # pragma: no cover - numba.cuda imported earlier in this process without the simulator
-    pytest.skip(f"no GPU route here: {gpu.probe()[1]}", allow_module_level=True)
+import jetgaudin as jg
+from jetgaudin import gpu
+from jetgaudin.gaudin import _sun_kernel
+from jetgaudin.gpu import _kernels
+from jetgaudin.maps import Backend
 
 FIELD = [0.3, -0.1, 0.5, 0.2, 0.0, -0.2, 0.1, 0.4]
 ETA = 0.4 + 0.1j
-
-
-def same(a, b, steps: int = 1) -> None:
-    """Equal bit for bit under the simulator; on a real GPU to 1e-14 relative per step (module docstring)."""
-    a, b = np.asarray(a), np.asarray(b)
-    if not REAL:
-        np.testing.assert_array_equal(a, b)
-    else:  # pragma: no cover - run on a lent GPU
-        np.testing.assert_allclose(a, b, rtol=0, atol=1e-14 * max(1, steps) * (1 + np.max(np.abs(b))))
 
 
 def model(sites=((0.0, 1), (1.0, 2))):
