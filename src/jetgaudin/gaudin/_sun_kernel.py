@@ -21,6 +21,8 @@ round-off (``tests/test_sun_kernel.py``).  ``run_batch`` runs orbits on all core
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, prange
 
@@ -94,7 +96,7 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc
         nrm = c0.real**2 + c0.imag**2 + c1.real**2 + c1.imag**2 + c2.real**2 + c2.imag**2
         if nrm > best:
             best, v0, v1, v2 = nrm, c0, c1, c2
-    nv = np.sqrt(best)
+    nv = math.sqrt(best)  # math, not np: NumPy ufuncs do not compile for the CUDA target
     u[0], u[1], u[2] = v0 / nv, v1 / nv, v2 / nv
     eb = eta.conjugate()
     d0, d1 = 0j, eb - eta
@@ -132,27 +134,39 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc
 
 
 @njit(cache=True)
-def run_orbit(x0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
-    """``steps`` steps from ``x0`` (8M,): ``(rows (steps // save_every, 8M), final, μ)``."""
-    n = x0.shape[0]
-    rows = np.empty((steps // save_every, n))
-    x = x0.copy()
-    out = np.empty(n)
-    xi = np.empty(8, dtype=np.complex128)
-    L = np.empty((3, 3), dtype=np.complex128)
-    u = np.empty(3, dtype=np.complex128)
-    w = np.empty(3, dtype=np.complex128)
-    Y = np.empty((3, 3), dtype=np.complex128)
-    acc = np.empty((3, 3), dtype=np.complex128)
-    ac = np.empty(max(1, np.max(site_n)), dtype=np.complex128)
-    gc = np.empty(max(1, np.max(site_n)), dtype=np.complex128)
-    mu = mu0
+def orbit_loop(x, out, rows, final, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc, steps,
+               save_every):
+    """The stepping loop of :func:`run_orbit` on caller-given scratch, without allocations (the GPU kernel of
+    :mod:`jetgaudin.gpu` calls it for one orbit per thread, compiled for the device, with thread-local scratch):
+    ``x`` (8M,) holds the start state and ``out`` (8M,) is scratch (both overwritten), ``rows[j − 1] =
+    x_{j·save_every}``, ``final`` the last state; ``xi`` (8,), ``u, w`` (3,), ``L, Y, acc`` (3, 3), ``ac, gc``
+    (at least the largest site order,) complex.  Returns the last ``μ_r(η)``."""
+    n = x.shape[0]
     for t in range(steps):
         mu = _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc)
         x, out = out, x
         if (t + 1) % save_every == 0:
-            rows[(t + 1) // save_every - 1] = x
-    return rows, x, mu
+            j = (t + 1) // save_every - 1
+            for i in range(n):
+                rows[j, i] = x[i]
+    for i in range(n):
+        final[i] = x[i]
+    return mu
+
+
+@njit(cache=True)
+def run_orbit(x0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
+    """``steps`` steps from ``x0`` (8M,): ``(rows (steps // save_every, 8M), final, μ)`` (:func:`orbit_loop`)."""
+    n = x0.shape[0]
+    rows = np.empty((steps // save_every, n))
+    final = np.empty(n)
+    m = max(1, np.max(site_n))
+    mu = orbit_loop(x0.copy(), np.empty(n), rows, final, b, mu0, f, site_pos, site_off, site_n, eta,
+                    np.empty(8, dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
+                    np.empty(3, dtype=np.complex128), np.empty(3, dtype=np.complex128),
+                    np.empty((3, 3), dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
+                    np.empty(m, dtype=np.complex128), np.empty(m, dtype=np.complex128), steps, save_every)
+    return rows, final, mu
 
 
 @njit(cache=True, parallel=True)

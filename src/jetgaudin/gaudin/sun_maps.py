@@ -34,7 +34,7 @@ import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
-from ..maps import Advance, Backend, Map, MapProperties, register_map
+from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .sun import SunGaudinModel
 from .sun_spectral import _GAP_TOL, branch_index, check_start, eigenvalue_branch
 
@@ -76,9 +76,11 @@ class SunTwoPointBacklund(Map):
     branch : int
         ``r = 0..n−1``: the ``r``-th largest eigenvalue of ``ℓ(Re η)`` continued to ``η`` (``"default"`` = 0; for
         ``n = 2`` ``"opposite"`` = 1).
-    backend, kernel : {"auto", "numpy", "compiled"}
+    backend, kernel : {"auto", "numpy", "compiled", "gpu"}
         ``"compiled"``: the Numba kernel of :mod:`jetgaudin.gaudin._sun_kernel` (``n = 3`` only); ``"auto"`` takes
-        it from ``AUTO_MIN_WORK`` orbit-steps on.
+        it from ``AUTO_MIN_WORK`` orbit-steps on.  ``"gpu"`` (``n = 3``): the same orbit loop, one thread per orbit
+        (:mod:`jetgaudin.gpu`; a :class:`jetgaudin.gpu.GPUUnavailableError` where no GPU can run); ``"auto"`` takes
+        it only where :func:`jetgaudin.gpu.auto_uses_gpu` says so.
 
     Raises
     ------
@@ -172,6 +174,19 @@ class SunTwoPointBacklund(Map):
         """su(3) has a compiled route (:mod:`jetgaudin.gaudin._sun_kernel`); other ``n`` the NumPy one."""
         return self.model.n == 3
 
+    @property
+    def has_gpu(self) -> bool:
+        """su(3) has a GPU route: the compiled route's orbit loop, one thread per orbit (:mod:`jetgaudin.gpu`)."""
+        return self.model.n == 3
+
+    def advance(self, X, carry, steps: int, save_every: int = 1) -> Advance:
+        """:meth:`jetgaudin.maps.Map.advance`, with the GPU route where :meth:`resolved_backend` says so."""
+        X = np.asarray(X)
+        if X.size and self.has_gpu and self.resolved_backend(X, steps) is Backend.GPU:
+            return self._compiled_advance(X, carry, check_count(steps, "steps"),
+                                          check_count(save_every, "save_every", 1), gpu=True)
+        return super().advance(X, carry, steps, save_every)
+
     def _auto_backend(self, X, steps) -> Backend:
         """Compiled from :data:`jetgaudin.gaudin._backend.AUTO_MIN_WORK` orbit-steps on (compiling costs seconds)."""
         from ._backend import AUTO_MIN_WORK
@@ -179,9 +194,11 @@ class SunTwoPointBacklund(Map):
         work = int(steps) * max(1, int(np.prod(np.shape(X)[:-1])))
         return Backend.COMPILED if work >= AUTO_MIN_WORK else Backend.NUMPY
 
-    def _compiled_advance(self, X, carry, steps, save_every) -> Advance:
-        """The Numba kernel (one orbit, or a batch on all cores); ``μ_r`` at ``X`` by the NumPy branch rule; no
-        imaginary residue (zeros)."""
+    def _compiled_advance(self, X, carry, steps, save_every, gpu: bool = False) -> Advance:
+        """The Numba kernel (one orbit, or a batch on all cores; ``gpu``: its orbit loop on the GPU, one thread per
+        orbit, :func:`jetgaudin.gpu.run_sun_batch`); ``μ_r`` at ``X`` by the NumPy branch rule; no imaginary
+        residue (zeros).  :class:`SingularStepError` for an orbit that went non-finite (the GPU route names the
+        first such orbit)."""
         from . import _sun_kernel as K
 
         X = self.model.check_state(X)
@@ -192,7 +209,16 @@ class SunTwoPointBacklund(Map):
         c = K.orbit_constants(self.model, self.eta)
         run_orbit: Any = K.run_orbit  # Numba dispatchers
         run_batch: Any = K.run_batch
-        if Xb.shape[0] == 1:
+        if gpu:
+            from ..gpu import run_sun_batch
+
+            fb, f, pos, off, orders = c
+            rows, final, last, status = run_sun_batch(Xb, fb, mu, f, pos, off, orders, self.eta, steps, save_every)
+            if np.any(status):
+                raise SingularStepError(
+                    f"orbit {int(np.flatnonzero(status)[0])} of the su(3) GPU route went non-finite (eta at a branch "
+                    "point?); change eta")
+        elif Xb.shape[0] == 1:
             r, xf, m = run_orbit(Xb[0], c[0], complex(mu[0]), *c[1:], self.eta, steps, save_every)
             rows, final, last = r[:, None], xf[None], np.array([m])
         else:

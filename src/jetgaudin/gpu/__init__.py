@@ -1,12 +1,14 @@
 r"""The GPU route of the maps: ``backend="gpu"`` (issue 28; ``docs/performance.md``, the GPU section).
 
 One thread per orbit runs the CPU route's own orbit loop, compiled for the GPU by Numba's CUDA target
-(:mod:`jetgaudin.gpu._kernels`): the top's real two-point map (the real N = 3 form and the generic route, any
-N <= 16) and the chains' two-point map of every family.  The same contract as the compiled CPU route -- ``save_every``,
-the branch rule (``ν1`` at the start by the compiled rule on the host, continued by Newton steps on the device), the
-status and failing step of every orbit, per-orbit ``b`` and ``η``, a split run equal to the unsplit one bit for bit
-on the same device -- and the same orbits to round-off (NVVM's contraction of products and sums into fused operations
-is the only difference; measured per step in ``docs/performance.md``).
+(:mod:`jetgaudin.gpu._kernels`): the top's real two-point map (the real N = 3 form and the generic route, any N <=
+16), the chains' two-point map of every family and the su(3) chains' map ``B^{(r)}_η`` (issue 32). The same contract
+as the compiled CPU route -- ``save_every``, the branch rule (``ν1`` at the start by the compiled rule on the host,
+continued by Newton steps on the device), the status and failing step of every orbit, per-orbit ``b`` and ``η``, a
+split run equal to the unsplit one bit for bit on the same device -- and the same orbits to round-off (NVVM's
+contraction of products and sums into fused operations is the only difference; measured per step in
+``docs/performance.md``).  The su(3) route reports a status per orbit (non-finite at the end) without the failing
+step, and has run on the simulator only: its difference from the CPU route on a device is not measured.
 
 Needs the optional ``numba-cuda`` (``pip install 'jetgaudin[gpu]'``) and an NVIDIA GPU; without them
 ``backend="gpu"`` is a :class:`GPUUnavailableError` naming what is missing, and ``backend="auto"`` never picks the GPU.
@@ -20,10 +22,10 @@ True
 from __future__ import annotations
 
 from ._device import GPUUnavailableError, available, probe, require
-from ._drivers import GPUReport, iterate_batch, last_timing, prepare, run_batch, run_chain
+from ._drivers import GPUReport, iterate_batch, last_timing, prepare, run_batch, run_chain, run_sun_batch
 
 __all__ = ["GPUUnavailableError", "GPUReport", "available", "probe", "require", "iterate_batch", "run_batch",
-           "run_chain", "prepare", "last_timing", "GPU_MIN_WORK", "GPU_MIN_ORBITS", "auto_uses_gpu"]
+           "run_chain", "run_sun_batch", "prepare", "last_timing", "GPU_MIN_WORK", "GPU_MIN_ORBITS", "auto_uses_gpu"]
 
 #: ``backend="auto"`` takes the GPU (where one is present) from this many orbit-steps in one call on.  Measured on an
 #: H200 beside its host's 16 Xeon cores (``docs/performance.md``, the GPU section): with the copies, the GPU is

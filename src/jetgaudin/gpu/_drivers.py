@@ -2,7 +2,8 @@
 
 :func:`run_batch` has the arguments and returns of the CPU route's
 :func:`jetgaudin.backlund.kernels._drivers.run_batch`, so the maps and the ensemble driver swap one for the other;
-:func:`run_chain_batch` those of :func:`jetgaudin.gaudin._family_kernel.run_batch`.  The branch rule (``ν1`` at
+:func:`run_chain_batch` those of :func:`jetgaudin.gaudin._family_kernel.run_batch`, :func:`run_sun_batch` those of
+:func:`jetgaudin.gaudin._sun_kernel.run_batch` (and a per-orbit status).  The branch rule (``ν1`` at
 the start) stays on the host, compiled on all cores, and so gives the CPU route's bits; the drift pass runs on the
 host too (NumPy, over the rows copied back).
 """
@@ -18,8 +19,8 @@ import numpy as np
 from .._errors import InvalidParameterError, InvalidStateError
 from ._device import require
 
-__all__ = ["run_batch", "iterate_batch", "run_chain_batch", "run_chain", "prepare", "GPUReport", "Timing",
-           "last_timing"]
+__all__ = ["run_batch", "iterate_batch", "run_chain_batch", "run_chain", "run_sun_batch", "prepare", "GPUReport",
+           "Timing", "last_timing"]
 
 
 @dataclass
@@ -172,6 +173,37 @@ def run_chain_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n,
     final, last = d_final.copy_to_host(), d_last.copy_to_host()
     _record(tk, time.perf_counter() - t0, B, int(steps))
     return rows, final, last
+
+
+def run_sun_batch(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
+    """The su(3) chains' map on a batch on the GPU: the arguments and returns of
+    :func:`jetgaudin.gaudin._sun_kernel.run_batch` -- ``(rows (steps//save_every, B, 8M) without the start states,
+    final (B, 8M), last μ_r (B,))`` -- and ``status (B,)`` (1 where the orbit ended non-finite, else 0)."""
+    c = require()
+    from ._kernels import MAX_ORDER, MAX_SUN_STATE, sun_kernel
+
+    X0 = np.ascontiguousarray(X0, dtype=np.float64)
+    B, n = X0.shape
+    order = int(np.max(site_n)) if len(site_n) else 0
+    if n > MAX_SUN_STATE or order > MAX_ORDER:
+        raise InvalidParameterError(
+            f"the su(3) GPU route takes states of up to {MAX_SUN_STATE} components and site orders up to "
+            f"{MAX_ORDER}; this model has {n} and {order}: use backend 'compiled'")
+    S = int(steps) // int(save_every)
+    _check_fits(c, 8 * B * (n * (S + 1) + 4), f"a call of {B} orbits with {S} saved rows")
+    t0 = time.perf_counter()
+    args = [c.to_device(np.ascontiguousarray(a)) for a in (X0, np.asarray(b, dtype=np.float64),
+                                                            np.asarray(mu0, dtype=np.complex128), f, site_pos,
+                                                            site_off, site_n)]
+    d_rows = c.device_array((S, B, n))
+    d_final = c.device_array((B, n))
+    d_mu = c.device_array(B, np.complex128)
+    d_status = c.device_array(B, np.int64)
+    tk = _launch(sun_kernel(), B, (*args, complex(eta), np.int64(steps), np.int64(save_every), d_rows, d_final, d_mu,
+                                   d_status))
+    rows, final, mu, status = (a.copy_to_host() for a in (d_rows, d_final, d_mu, d_status))
+    _record(tk, time.perf_counter() - t0, B, int(steps))
+    return rows, final, mu, status
 
 
 def _record(kernel_s: float, total_s: float, orbits: int, steps: int) -> None:

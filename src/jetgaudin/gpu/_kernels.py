@@ -3,11 +3,13 @@ r"""The CUDA kernels of the GPU route: one thread per orbit, calling the CPU ker
 Nothing of the mathematics is written here.  Each kernel is a few lines that pick the thread's orbit and call the
 allocation-free loop the CPU route runs for one orbit -- :func:`jetgaudin.backlund.kernels._n3.orbit3` (the real
 N = 3 form, 351 flops a step), :func:`jetgaudin.backlund.kernels._generic.orbit_generic` (any N) and
-:func:`jetgaudin.gaudin._family_kernel.orbit_loop` (chains of every family) -- which Numba's CUDA target compiles
+:func:`jetgaudin.gaudin._family_kernel.orbit_loop` (chains of every family) and
+:func:`jetgaudin.gaudin._sun_kernel.orbit_loop` (su(3) chains) -- which Numba's CUDA target compiles
 as device functions, with the blocks they inline (complex arithmetic written out, explicit fused multiply-adds:
 an LLVM intrinsic, which NVVM lowers to the GPU's ``fma.rn.f64``).  Scratch arrays are thread-local
 (``cuda.local.array``), of a size fixed at compile time: :data:`MAX_N` for the top's generic route,
-:data:`MAX_CHAIN_STATE`, :data:`MAX_ORDER` and :data:`MAX_BASIS` for chains.
+:data:`MAX_CHAIN_STATE`, :data:`MAX_ORDER` and :data:`MAX_BASIS` for chains, :data:`MAX_SUN_STATE` and
+:data:`MAX_ORDER` for su(3) chains.
 
 The state, the per-orbit constants and the carried ``ν1`` stay in registers (or local memory) for the whole run;
 global memory is touched at the start, at every saved row and at the end.  The arithmetic differs from the CPU
@@ -32,13 +34,16 @@ import numpy as np
 from ._device import cuda as _import_cuda
 from ._device import simulator
 
-__all__ = ["MAX_N", "MAX_CHAIN_STATE", "MAX_ORDER", "MAX_BASIS", "THREADS", "top_kernels", "chain_kernel"]
+__all__ = ["MAX_N", "MAX_CHAIN_STATE", "MAX_SUN_STATE", "MAX_ORDER", "MAX_BASIS", "THREADS", "top_kernels",
+           "chain_kernel", "sun_kernel"]
 
 #: largest N of the top's generic GPU kernel (thread-local scratch of fixed size)
 MAX_N = 16
 #: largest chain state (3M coordinates) of the chain GPU kernel
 MAX_CHAIN_STATE = 96
-#: largest site order of the chain GPU kernel
+#: largest su(3) chain state (8M coordinates) of the su(3) GPU kernel
+MAX_SUN_STATE = 128
+#: largest site order of the chain GPU kernels
 MAX_ORDER = 8
 #: largest number of dressing coefficients of a family (rational and trigonometric 6, elliptic 4)
 MAX_BASIS = 8
@@ -160,5 +165,48 @@ def chain_kernel() -> Any:
                 x[k] = X0[i, k]
             last[i] = loop(x[:n], y[:n], rows[:, i], final[i], b, nu0[i], f, rule, gk, T, pidx, site_off, site_n,
                            cf, Dt, At, det, g, P, steps, save_every)
+
+    return kernel
+
+
+@functools.cache
+def sun_kernel() -> Any:
+    """The su(3) chains' real two-point map ``B^{(r)}_η``, one thread per orbit, compiled at first use.
+
+    Takes ``(X0 (B, 8M), b (8,), mu0 (B,), f, site_pos, site_off, site_n, eta, steps, save_every, rows
+    (steps//save_every, B, 8M), final (B, 8M), mu_last (B,), status (B,))`` with the per-``(model, η)`` constants of
+    :func:`jetgaudin.gaudin._sun_kernel.orbit_constants`; ``status[i] = 1`` where orbit ``i`` ended non-finite
+    (``η`` at a branch point, an overflow: NaN stays NaN, so a failed step shows in the final state), else 0."""
+    from ..gaudin import _sun_kernel
+
+    _bind()
+    loop = _host(_sun_kernel.orbit_loop)
+
+    @cuda.jit
+    def kernel(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every, rows, final, mu_last,
+               status):  # pragma: no cover
+        i = cuda.grid(1)
+        if i < X0.shape[0]:
+            n = X0.shape[1]
+            x = cuda.local.array(MAX_SUN_STATE, _F8)
+            y = cuda.local.array(MAX_SUN_STATE, _F8)
+            xi = cuda.local.array(8, _C16)
+            L = cuda.local.array((3, 3), _C16)
+            u = cuda.local.array(3, _C16)
+            w = cuda.local.array(3, _C16)
+            Y = cuda.local.array((3, 3), _C16)
+            acc = cuda.local.array((3, 3), _C16)
+            ac = cuda.local.array(MAX_ORDER, _C16)
+            gc = cuda.local.array(MAX_ORDER, _C16)
+            for k in range(n):
+                x[k] = X0[i, k]
+            mu = loop(x[:n], y[:n], rows[:, i], final[i], b, mu0[i], f, site_pos, site_off, site_n, eta, xi, L, u, w,
+                      Y, acc, ac, gc, steps, save_every)
+            mu_last[i] = mu
+            ok = 1 if (mu.real - mu.real == 0.0 and mu.imag - mu.imag == 0.0) else 0  # finite: x - x is 0, else NaN
+            for k in range(n):
+                if final[i, k] - final[i, k] != 0.0:
+                    ok = 0
+            status[i] = 1 - ok
 
     return kernel
