@@ -248,19 +248,14 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
     if as_json:
         typer.echo(json.dumps(d, indent=1))
         return
-    from rich.table import Table
 
     con = console()
     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
     expansion = "b² + Σ h_(i,m) (λ − λ_i)^(−m)" if model.family.name == "rational" else (
         f"c0 + Σ h_(i,m) ψ_m(λ − λ_i), elliptic, k = {model.modulus:g}" if model.family.name == "elliptic" else
         f"b² − γ²J² + Σ h_(i,m) ψ_m(λ − λ_i), {model.family.name}, γ = {model.gamma:g}")
-    t = Table(title=f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals of ν² = {expansion}",
-              title_justify="left")
-    for col in ("integral", "kind", "value"):
-        t.add_column(col, justify="right" if col == "value" else "left")
-    for row in d["integrals"]:
-        t.add_row(row["name"], row["kind"], f"{row['value']:.17g}")
+    t = _integrals_table(f"chain (λ:N) = {sites_text} (M = {model.M}), b = {bb:g}: integrals of ν² = {expansion}",
+                         d["integrals"])
     eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
     for key, label in (("nu_default", f"ν({eta_s}), default root"), ("nu_opposite", f"ν({eta_s}), opposite root")):
         t.add_row(label, "", f"{d[key][0]:.17g} {d[key][1]:+.17g} i" if d[key] is not None else
@@ -269,6 +264,18 @@ def info(sites: str, b: Any, eta: str, init: str, as_json: bool, fam: dict | Non
               f"undefined: {d['G_eta_note']}")
     con.print(t)
     con.print("branch points (zeros of ν²): " + ", ".join(complex_text(complex(x, y)) for x, y in d["branch_points"]))
+
+
+def _integrals_table(title: str, integrals: list[dict]):
+    """The rich table of ``info``'s integrals (name, kind, value to 17 digits), to which callers add rows."""
+    from rich.table import Table
+
+    t = Table(title=title, title_justify="left")
+    for col in ("integral", "kind", "value"):
+        t.add_column(col, justify="right" if col == "value" else "left")
+    for row in integrals:
+        t.add_row(row["name"], row["kind"], f"{row['value']:.17g}")
+    return t
 
 
 def _sun_info(model, X, eta_c: complex, as_json: bool) -> None:
@@ -305,15 +312,9 @@ def _sun_info(model, X, eta_c: complex, as_json: bool) -> None:
     if as_json:
         typer.echo(json.dumps(d, indent=1))
         return
-    from rich.table import Table
-
     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
-    t = Table(title=f"{model.algebra.name} chain (λ:N) = {sites_text} (M = {model.M}): principal parts of tr ℓ^k/k",
-              title_justify="left")
-    for col in ("integral", "kind", "value"):
-        t.add_column(col, justify="right" if col == "value" else "left")
-    for row in d["integrals"]:
-        t.add_row(row["name"], row["kind"], f"{row['value']:.17g}")
+    t = _integrals_table(f"{model.algebra.name} chain (λ:N) = {sites_text} (M = {model.M}): principal parts of "
+                         "tr ℓ^k/k", d["integrals"])
     eta_s = f"{eta_c.real:g}{eta_c.imag:+g}i"
     for row in d["branches"]:
         r = row["r"]
