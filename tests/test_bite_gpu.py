@@ -25,9 +25,8 @@ import jetgaudin as jg
 from jetgaudin import gpu
 from jetgaudin.backlund.kernels import _drivers as C
 from jetgaudin.backlund.kernels._status import STATUS_RESIDUAL
+from jetgaudin.ensemble import sample_on_leaf
 from jetgaudin.gpu import _kernels
-
-pytestmark = pytest.mark.skipif(REAL, reason="plants a failure through the simulator's Python kernels")
 
 
 @pytest.fixture
@@ -59,6 +58,7 @@ def failing_loop(monkeypatch):
     _kernels.top_kernels.cache_clear()
 
 
+@pytest.mark.skipif(REAL, reason="plants a failure through the simulator's Python kernels")
 @pytest.mark.parametrize(("N", "specialise"), [(3, True), (4, True)])  # the real N = 3 kernel; the generic one
 @pytest.mark.parametrize("k", [5, 6])  # off the save grid of 3, between rows 1 and 2; off it again
 def test_an_orbit_failing_off_the_save_grid(failing_loop, N, specialise, k):
@@ -90,3 +90,76 @@ def test_an_orbit_failing_off_the_save_grid(failing_loop, N, specialise, k):
             np.testing.assert_array_equal(got[i], want[i])
     with pytest.raises(jg.SingularStepError, match=f"at step {k} of orbit 2"):
         gpu.iterate_batch(X, b, eta, nu0, False, 12, 3, specialise=specialise)
+
+
+def test_compute_capability_below_6_is_refused_and_6_is_taken(monkeypatch):
+    """``probe`` (a fake CUDA module: not the simulator, one device) refuses compute capability 5.x in one line
+    naming it and what is needed, and takes 6.0 (the double-precision atomics and the FMA the kernels rely on)."""
+    from jetgaudin.gpu import _device
+
+    def fake(cc):
+        dev = types.SimpleNamespace(name=b"Fake GPU", compute_capability=cc)
+        return types.SimpleNamespace(is_available=lambda: True, get_current_device=lambda: dev)
+
+    monkeypatch.setattr(_device, "simulator", lambda: False)
+    try:
+        for cc, ok in (((5, 2), False), ((5, 0), False), ((6, 0), True), ((9, 0), True)):
+            monkeypatch.setattr(_device, "cuda", lambda cc=cc: fake(cc))
+            _device.probe.cache_clear()
+            usable, what = _device.probe()
+            assert usable is ok, (cc, what)
+            assert ("needs 6.0 or newer" in what) is not ok and f"{cc[0]}.{cc[1]}" in what and "Fake GPU" in what
+    finally:
+        _device.probe.cache_clear()  # the next caller probes the simulator again
+
+
+def test_a_top_beyond_the_kernels_scratch_is_refused():
+    """N = 17 > MAX_N = 16 (the generic kernel's thread-local scratch is of fixed size): one typed line naming the
+    bound and the CPU route, before anything is copied; N = 16 runs."""
+    X = sample_on_leaf(17, list(np.linspace(0.5, 1.0, 17)), 2, seed=1)
+    with pytest.raises(jg.InvalidStateError, match="N <= 16 .* got N = 17; use backend 'compiled'"):
+        gpu.run_batch(X, 1.0, 5 + 0.1j, 1 + 0j, False, 1, 1)
+    X16 = sample_on_leaf(16, list(np.linspace(0.5, 1.0, 16)), 1, seed=1)
+    nu = C.nu_default(X16, np.ones(1), np.full(1, 5 + 0.1j), 1)
+    assert gpu.run_batch(X16, 1.0, 5 + 0.1j, nu, False, 1, 1)[4][0] == 0
+
+
+def test_the_refusal_of_a_call_too_large_for_the_gpu_names_its_size(monkeypatch):
+    """The size named in the refusal is the call's device arrays in GiB: at least the saved rows (B S 3N doubles),
+    at most 10 % more (the start and final states and per-orbit scalars); the free memory is the faked 1 MiB."""
+    import re
+
+    import jetgaudin.gpu._drivers as drv
+
+    monkeypatch.setattr(drv, "_free_bytes", lambda c: float(2**20))
+    X, b, eta, nu0 = batch(B=200)
+    with pytest.raises(jg.InvalidParameterError) as e:
+        gpu.run_batch(X, b, eta, nu0, False, 100, 1)
+    need, free = map(float, re.search(r"needs (\S+) GiB on the GPU, which has (\S+) GiB free", str(e.value)).groups())
+    rows = 200 * 101 * 9 * 8 / 2**30
+    assert rows <= need <= 1.1 * rows and free == pytest.approx(2**20 / 2**30, rel=1e-3)  # printed to 3 digits
+
+
+def test_the_timing_of_every_driver_is_a_duration_within_the_call():
+    """``last_timing()`` after each driver (the top's, the chains', su(3)'s): ``0 <= kernel <= total <=`` the
+    call's wall time (the kernel's own seconds only on a real GPU), and the orbits and steps of the call."""
+    import time
+
+    X, b, eta, nu0 = batch(B=3)
+    m = jg.GaudinModel(0.8, [(0.0, 1), (0.9, 1)], family="trigonometric")
+    Xc = 0.5 * np.random.default_rng(2).normal(size=(3, m.n_state))
+    ms = jg.GaudinModel([0.3, -0.1, 0.5, 0.2, 0.0, -0.2, 0.1, 0.4], [(0.0, 1), (1.0, 1)], algebra="su3")
+    Xs = 0.5 * np.random.default_rng(1).normal(size=(3, ms.n_state))
+    Ts = ms.two_point_backlund(0.4 + 0.1j, backend="gpu")
+    calls = [lambda: gpu.run_batch(X, b, eta, nu0, False, 4, 2),
+             lambda: m.two_point_backlund(0.4 + 0.05j, backend="gpu").advance(Xc, None, 4),
+             lambda: Ts.advance(Xs, None, 4)]
+    for call in calls:
+        t0 = time.perf_counter()
+        call()
+        wall = time.perf_counter() - t0
+        t = gpu.last_timing()
+        assert 0.0 < t.total <= wall, (t, wall)
+        if REAL:  # pragma: no cover - the simulator's CUDA events time nothing (elapsed_time gives -1 ms)
+            assert 0.0 <= t.kernel <= t.total
+        assert (t.orbits, t.steps) == (3, 4)
