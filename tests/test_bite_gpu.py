@@ -163,3 +163,20 @@ def test_the_timing_of_every_driver_is_a_duration_within_the_call():
         if REAL:  # pragma: no cover - the simulator's CUDA events time nothing (elapsed_time gives -1 ms)
             assert 0.0 <= t.kernel <= t.total
         assert (t.orbits, t.steps) == (3, 4)
+
+
+@pytest.mark.skipif(REAL, reason="the shim is the simulator's")
+def test_unwrap_gives_the_numpy_array_behind_a_simulator_array():
+    """``_unwrap`` (the simulator's shim around the CPU loops) gives the NumPy array behind a device array, the same
+    memory (a loop's writes land in it), and anything else unchanged.  Written for the mutant that swapped its two
+    branches: inside a kernel both reach the array, on a device array itself the swapped one gave ``None``."""
+    from jetgaudin.gpu import _device
+
+    c = _device.require()
+    x = np.arange(6.0)
+    d = c.to_device(x)
+    a = _kernels._unwrap(d)
+    assert isinstance(a, np.ndarray)
+    a[0] = 7.0
+    assert d.copy_to_host()[0] == 7.0
+    assert _kernels._unwrap(x) is x and _kernels._unwrap(3) == 3
