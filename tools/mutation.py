@@ -42,7 +42,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "backlund/kernels/_generic.py": ("tests/test_routes.py", "tests/test_kernels.py"),
     "backlund/kernels/_branch.py": ("tests/test_branch_rule.py", "tests/test_kernels.py"),
     # added since the last sample (issue 33): families, gaudin, exact steps, events, solve, the run layer, disk
-    "families/trigonometric.py": ("tests/test_trigonometric.py",),
+    "families/trigonometric.py": ("tests/test_trigonometric.py", "tests/test_trig_one_point.py"),
     "families/elliptic.py": ("tests/test_elliptic.py",),
     "families/_jacobi.py": ("tests/test_jacobi.py",),
     "gaudin/model.py": ("tests/test_gaudin.py",),
@@ -51,18 +51,18 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gaudin/_backend.py": ("tests/test_auto_route.py",),
     "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py"),
     "exact.py": ("tests/test_exact.py", "tests/test_exact_first_class.py"),
-    "exact_chain.py": ("tests/test_exact_chain.py", "tests/test_exact_first_class.py"),
+    "exact_chain.py": ("tests/test_exact_chain.py", "tests/test_exact_first_class.py", "tests/test_bite_exact.py"),
     "events.py": ("tests/test_solve.py", "tests/test_bite_events.py"),
     "solve.py": ("tests/test_solve.py", "tests/test_exact_first_class.py"),
-    "run/driver.py": ("tests/test_run.py",),
-    "run/health.py": ("tests/test_run.py",),
-    "run/store.py": ("tests/test_run.py", "tests/test_data_safety_io.py"),
-    "_fs.py": ("tests/test_fs.py",),
+    "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
+    "run/health.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
+    "run/store.py": ("tests/test_run.py", "tests/test_data_safety_io.py", "tests/test_reliability_runlayer.py"),
+    "_fs.py": ("tests/test_fs.py", "tests/test_bite_disk.py"),
     # the GPU drivers, tested on Numba's CUDA simulator (tests/test_gpu.py sets NUMBA_ENABLE_CUDASIM=1 before
     # numba.cuda is imported: the kernels run as Python, so a mutated kernel needs no compiler and no GPU)
-    "gpu/_device.py": ("tests/test_gpu.py",),
-    "gpu/_drivers.py": ("tests/test_gpu.py",),
-    "gpu/_kernels.py": ("tests/test_gpu.py", "tests/test_gpu_sun.py"),
+    "gpu/_device.py": ("tests/test_gpu.py", "tests/test_bite_gpu.py"),
+    "gpu/_drivers.py": ("tests/test_gpu.py", "tests/test_bite_gpu.py"),
+    "gpu/_kernels.py": ("tests/test_gpu.py", "tests/test_gpu_sun.py", "tests/test_bite_gpu.py"),
     "gpu/_resident.py": ("tests/test_gpu.py",),
 }
 
