@@ -37,6 +37,10 @@ def test_the_mutation_job_selects_plausible_operators_and_existing_tests():
         assert (ROOT / "src" / "jetgaudin" / module).is_file(), module
         for t in tests:
             assert (ROOT / t).is_file(), t
+    # every module is in exactly one area (the per-area kill rates of docs/mutation.md add up to the whole sample)
+    in_areas = [m for members in mod.AREAS.values() for m in members]
+    assert sorted(in_areas) == sorted(mod.GROUPS), set(in_areas) ^ set(mod.GROUPS)
+    assert all(mod.PER_MODULE.get(m, mod.DEFAULT_PER_MODULE) >= 1 for m in mod.GROUPS)
     assert mod.plausible("core/ReplaceBinaryOperator_Mul_Div")
     assert mod.plausible("core/ReplaceComparisonOperator_Lt_GtE")
     assert mod.plausible("core/NumberReplacer") and mod.plausible("core/ReplaceUnaryOperator_USub_UAdd")
