@@ -30,7 +30,7 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from math import comb
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -479,6 +479,8 @@ class ChainHamiltonian:
 
     model: GaudinModel
     weights: np.ndarray
+    #: its rows of the route table of :func:`jetgaudin.solve` (:class:`jetgaudin.hamiltonians.SolveHamiltonian`)
+    route_kind: ClassVar[str] = "chain"
 
     def __post_init__(self):
         if np.iscomplexobj(self.weights):
@@ -501,6 +503,15 @@ class ChainHamiltonian:
     @property
     def b(self) -> float:
         return self.model.b
+
+    @property
+    def n_state(self) -> int:
+        """``3M`` (the model's state length)."""
+        return int(self.model.n_state)
+
+    def check_state(self, X) -> np.ndarray:
+        """``X`` as a float array ``(..., 3M)`` (``model.check_state``)."""
+        return np.asarray(self.model.check_state(X), dtype=float)
 
     @property
     def structure_constants(self) -> np.ndarray:
