@@ -77,3 +77,16 @@ def test_auto_names_the_slow_route_on_stderr(tmp_path, capsys, monkeypatch):
     assert code == 0, err
     notes = [ln for ln in err.splitlines() if "backend auto" in ln]
     assert len(notes) == 1 and "NumPy route" in notes[0] and "--backend compiled" in notes[0]
+
+
+def test_the_clebsch_orbit_of_the_issue_accepts_its_five_weights_and_draws_its_figures(tmp_path, capsys):
+    """The command of issue 33 (``orbit --sites 0:2 --modulus 0.6 --b 0 --dt 0.05 --hamiltonian`` with 5 weights):
+    the weights are accepted (they were parsed as a 3N-state), the run completes, and the figures are drawn (the
+    chain figures' title read the map's ``eta``, which an exact time step has not: a KeyError, exit code 1)."""
+    out = tmp_path / "o"
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2", "--modulus", "0.6", "--b", "0", "--dt", "0.05",
+                           "--hamiltonian", "0.0,0.7,0.0,0.0,1.0", "--init", INIT, "--steps", "3", "--out", out)
+    assert code == 0, err
+    run = json.loads((out / "run.json").read_text())
+    assert run["map"]["weights"] == [0.0, 0.7, 0.0, 0.0, 1.0] and run["map"]["dt"] == 0.05
+    assert (out / "chain_y0.png").stat().st_size > 0 and (out / "chain_integrals.png").stat().st_size > 0
