@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -47,13 +46,7 @@ from ._common import (
     run_with_progress,
     timing_text,
 )
-from ._flow import WEIGHTS_HELP
-
-
-class Kernel(StrEnum):
-    auto = "auto"
-    compiled = "compiled"
-    numpy = "numpy"
+from ._flow import WEIGHTS_HELP, Kernel
 
 
 def figure_title(b, eta, steps, init) -> str:
