@@ -111,6 +111,21 @@ class IntegralHamiltonian:
         """The integrals ``(H_1..H_N, C_1..C_N)`` at ``X`` (with this Hamiltonian's ``b`` and ``c``), ``(..., 2N)``."""
         return np.asarray(integrals(self._check(X), self.b, self.c), dtype=float)
 
+    def as_model(self):
+        """The same Hamiltonian on the one-site model ``GaudinModel(b, [(0, N)])`` (a
+        :class:`jetgaudin.ChainHamiltonian` with the same weights: ``h_m = H_m``, ``h_{N+k} = C_k``; integrals,
+        vector field and maps equal to round-off, ``tests/test_top_as_model.py``).  Needs the reduction (lax2)
+        (``c = None``) and a field along ``e_3``; otherwise :class:`InvalidParameterError` naming which."""
+        if self.c is not None:
+            raise InvalidParameterError("as_model: the jet constants c of eq. (lax) are not a site option of "
+                                        "GaudinModel; only the reduction (lax2), c = None, is a one-site model")
+        bv = field_vector(self.b)
+        if bv[0] != 0.0 or bv[1] != 0.0:
+            raise InvalidParameterError(f"as_model: a model's field is b e_3; this Hamiltonian's is {bv.tolist()}")
+        from .gaudin.model import GaudinModel
+
+        return GaudinModel(float(bv[2]), [(0.0, self.N)]).hamiltonian(self.weights)
+
     def _check(self, X):
         X, N = as_state(X)
         if N != self.N:

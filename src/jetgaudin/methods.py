@@ -27,6 +27,11 @@ map per step with its ``H_2`` weight matched (and the ``H_1`` rotation undone). 
 (:class:`~jetgaudin.ChainExactFlow`) needs ``k = (matched integrals) − (rotation) − (identities)`` maps; where
 ``k = 1`` the matched map *is* that step (one map and a rotation), and where ``k > 1`` one map cannot match the
 chain's ``k + 1`` commuting weights: ``"bt"`` is refused naming ``k`` and pointing to ``"exact"``.
+
+**The top as a one-site model.**  A chain that is a top (``GaudinModel.is_top``: one rational site at 0, ``b ≠ 0``;
+order ``N ≥ 2``) takes the top's rows for ``"exact"`` and ``"bt"``: its ``H.as_top()`` with
+:class:`~jetgaudin.ExactFlow` / :class:`~jetgaudin.exact.MatchedBacklund` and their hand-tuned kernels (the same
+flow to round-off as :class:`~jetgaudin.ChainExactFlow`, ``tests/test_top_as_model.py``).
 """
 
 from __future__ import annotations
@@ -77,10 +82,24 @@ def _kahan(H, dt, substeps, backend):
     return KahanMap(H, dt, backend)
 
 
+def _top_view(H):
+    """The top's Hamiltonian where the chain is a top (one rational site at 0, ``b ≠ 0``, order ``N ≥ 2``: the
+    hand-tuned top route, ``GaudinModel.is_top``), else ``None``."""
+    return H.as_top() if H.model.is_top and H.model.M >= 2 and H.weights.ndim == 1 else None
+
+
 def _exact_chain(H, dt, substeps, backend):
+    top = _top_view(H)
+    if top is not None:  # the route table's top entry: the top's ExactFlow and its kernels
+        return _exact_top(top, dt, substeps, backend)
     from .exact_chain import ChainExactFlow
 
     return ChainExactFlow(H, dt, substeps=substeps)
+
+
+def _bt_chain(H, dt, substeps, backend):
+    top = _top_view(H)
+    return _bt_top(top, dt, substeps, backend) if top is not None else _exact_chain(H, dt, substeps, backend)
 
 
 def chain_maps_per_step(H) -> int:
@@ -92,6 +111,8 @@ def chain_maps_per_step(H) -> int:
 
 
 def _check_bt_chain(H) -> None:
+    if _top_view(H) is not None:
+        return
     k = chain_maps_per_step(H)
     if k != 1:
         raise InvalidParameterError(
@@ -123,7 +144,7 @@ ROUTES: dict[tuple[str, str], Route] = {
     ("top", "dop853"): Route(),
     ("top", "heyoka"): Route(),
     ("chain", "exact"): Route(_exact_chain),
-    ("chain", "bt"): Route(_exact_chain, _check_bt_chain),
+    ("chain", "bt"): Route(_bt_chain, _check_bt_chain),
     ("chain", "midpoint"): Route(_midpoint),
     ("chain", "kahan"): Route(_kahan),
     ("chain", "dop853"): Route(),
