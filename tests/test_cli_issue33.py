@@ -77,3 +77,47 @@ def test_auto_names_the_slow_route_on_stderr(tmp_path, capsys, monkeypatch):
     assert code == 0, err
     notes = [ln for ln in err.splitlines() if "backend auto" in ln]
     assert len(notes) == 1 and "NumPy route" in notes[0] and "--backend compiled" in notes[0]
+
+
+def test_the_clebsch_orbit_of_the_issue_accepts_its_five_weights_and_draws_its_figures(tmp_path, capsys):
+    """The command of issue 33 (``orbit --sites 0:2 --modulus 0.6 --b 0 --dt 0.05 --hamiltonian`` with 5 weights):
+    the weights are accepted (they were parsed as a 3N-state), the run completes, and the figures are drawn (the
+    chain figures' title read the map's ``eta``, which an exact time step has not: a KeyError, exit code 1)."""
+    out = tmp_path / "o"
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2", "--modulus", "0.6", "--b", "0", "--dt", "0.05",
+                           "--hamiltonian", "0.0,0.7,0.0,0.0,1.0", "--init", INIT, "--steps", "3", "--out", out)
+    assert code == 0, err
+    run = json.loads((out / "run.json").read_text())
+    assert run["map"]["weights"] == [0.0, 0.7, 0.0, 0.0, 1.0] and run["map"]["dt"] == 0.05
+    assert (out / "chain_y0.png").stat().st_size > 0 and (out / "chain_integrals.png").stat().st_size > 0
+
+
+def test_flow_takes_backend_and_its_alias_kernel(tmp_path, capsys):
+    """``flow`` has a route too (``--method exact`` on a top): ``--backend`` and ``--kernel`` name it with the same
+    effect (the map recorded in run.json), and an adaptive method refuses ``compiled`` in one line."""
+    maps = []
+    for name in ("--backend", "--kernel"):
+        out = tmp_path / name.strip("-")
+        code, _, err = run_cli(capsys, "flow", "--hamiltonian", "physical", "--method", "exact", "--dt", "0.1",
+                               "--steps", "2", name, "numpy", "--no-plots", "--out", out)
+        assert code == 0, err
+        maps.append(json.loads((out / "run.json").read_text())["map"])
+    assert maps[0] == maps[1] and maps[0]["backend"] == "numpy"
+    code, _, err = run_cli(capsys, "flow", "--backend", "compiled", "--steps", "2", "--no-plots",
+                           "--out", tmp_path / "d")
+    assert one_line_error(code, err, "--backend", "no compiled route"), err
+    code, out, _ = run_cli(capsys, "flow", "--help")
+    assert "--backend" in out and "--kernel" in out
+
+
+def test_flow_midpoint_runs_on_a_chain(tmp_path, capsys):
+    """``flow --method midpoint`` was the tops' only; through the route table it runs on a chain (the Clebsch top),
+    keeping its integrals (all quadratic: 1e-12, Newton at round-off)."""
+    out = tmp_path / "m"
+    code, _, err = run_cli(capsys, "flow", "--sites", "0:2", "--modulus", "0.6", "--b", "0", "--method", "midpoint",
+                           "--dt", "0.05", "--hamiltonian", "0.0,0.7,0.0,0.0,1.0", "--init", INIT, "--steps", "4",
+                           "--no-plots", "--out", out)
+    assert code == 0, err
+    run = json.loads((out / "run.json").read_text())
+    assert run["map"]["kind"] == "midpoint" and run["map"]["model"]["family"] == "elliptic"
+    assert max(run["max_drift_abs"]) < 1e-12

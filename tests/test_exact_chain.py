@@ -64,7 +64,7 @@ def test_chain_step_too_large_and_description():
 
 def test_solve_takes_a_chain_hamiltonian():
     """jg.solve(chain H, method="exact") returns the trajectory of ChainExactFlow with the chain's integrals, equal to
-    DOP853 at the end (1e-12, T = 0.1: five exact steps); the top-only methods are refused for a chain."""
+    DOP853 at the end (1e-12, T = 0.1: five exact steps).  (Other methods on a chain: tests/test_solve_models.py.)"""
     model, w, _ = CASES["magnet"]
     H = model.hamiltonian(np.array(w, dtype=float))
     X = _state(model)
@@ -72,8 +72,6 @@ def test_solve_takes_a_chain_hamiltonian():
     assert tr.X.shape == (6, model.n_state) and tr.integrals.shape == (6, 2 * model.M)
     assert tr.drift.max() < 1e-13
     assert np.max(np.abs(tr.X[-1] - jg.solve(H, X, (0.0, 0.1), method="dop853", rtol=1e-13, atol=1e-13).X[-1])) < 1e-12
-    with pytest.raises(jg.InvalidParameterError, match="for the tops"):
-        jg.solve(H, X, (0.0, 0.1), dt=0.02, method="midpoint")
 
 
 FAMILIES = {  # (model, weights of the matched integrals (non-Casimirs, extras last), dt): three spins, M = 3

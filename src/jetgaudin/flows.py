@@ -268,8 +268,8 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     >>> bool(tr.drift.max() < 1e-11)
     True
     """
-    check = getattr(H, "check_state", None)  # a Hamiltonian on its own state space (an su(n) chain: (n²−1)M)
-    X0, N = (check(X0), 0) if callable(check) else as_state(X0)
+    check = getattr(H, "check_state", None)  # the protocol of jetgaudin.hamiltonians.SolveHamiltonian
+    X0 = np.asarray(check(X0), dtype=float) if callable(check) else as_state(X0)[0]
     T, t_eval = _check_times(T, t_eval)
     rtol = _check_tol("rtol", rtol, True, RTOL_FLOOR)
     atol = _check_tol("atol", atol, False)
@@ -318,7 +318,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
             )
         grid = t_eval if t_eval[0] == 0.0 else np.concatenate([[0.0], t_eval])  # heyoka's grid starts at t = 0
         try:
-            ta = own(rtol) if callable(own) else _heyoka_integrator(H, 3 * N, rtol)
+            ta = own(rtol) if callable(own) else _heyoka_integrator(H, X0.shape[-1], rtol)
             ta.state[:] = X0
             ta.time = 0.0
             res = ta.propagate_grid(grid)

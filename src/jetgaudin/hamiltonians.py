@@ -21,6 +21,7 @@ Which is which:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from .algebra import hamiltonian_vector_field
 from .spectral import _nu_from_kappa, _roots, curve_coefficients, integral_gradients, integrals
 
 __all__ = [
+    "SolveHamiltonian",
     "IntegralHamiltonian",
     "physical_hamiltonian",
     "interpolating_hamiltonian",
@@ -37,6 +39,34 @@ __all__ = [
     "interpolating_flow_hamiltonian",
     "interpolating_vector_field",
 ]
+
+
+@runtime_checkable
+class SolveHamiltonian(Protocol):
+    r"""What :func:`jetgaudin.solve` needs of a Hamiltonian ``H`` of any model (issue 33: one protocol, no top/chain
+    branch): the top's :class:`IntegralHamiltonian`, a chain's :class:`jetgaudin.ChainHamiltonian`
+    (``model.hamiltonian(weights)``, every family) and an su(n) chain's :class:`jetgaudin.gaudin.sun.SunHamiltonian`.
+
+    * ``route_kind`` -- the key of the Hamiltonian's rows in the route table :data:`jetgaudin.methods.ROUTES`
+      (``"top"``, ``"chain"``, ``"sun"``): which map each method of ``solve`` builds (``docs/architecture.md``);
+    * ``n_state`` -- the length of a state;
+    * ``check_state(X)`` -- ``X`` as a float array ``(..., n_state)``, or :class:`jetgaudin.InvalidStateError`;
+    * ``record_integrals(X)`` -- the integrals a trajectory records (and its ``drift`` compares);
+    * ``gradient(X)``, ``vector_field(X)`` -- ``∇H`` and ``Ẋ = Π(X)∇H`` (eq. (LP); a chain: its block bracket).
+    """
+
+    route_kind: ClassVar[str]
+
+    @property
+    def n_state(self) -> int: ...
+
+    def check_state(self, X) -> np.ndarray: ...
+
+    def record_integrals(self, X) -> np.ndarray: ...
+
+    def gradient(self, X) -> np.ndarray: ...
+
+    def vector_field(self, X) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -60,9 +90,41 @@ class IntegralHamiltonian:
         object.__setattr__(self, "weights", w)
         field_vector(self.b)
 
+    #: its rows of the route table of :func:`jetgaudin.solve` (:class:`SolveHamiltonian`)
+    route_kind: ClassVar[str] = "top"
+
     @property
     def N(self) -> int:
         return self.weights.shape[-1] // 2
+
+    @property
+    def n_state(self) -> int:
+        """``3N``, the length of a state."""
+        return 3 * self.N
+
+    def check_state(self, X) -> np.ndarray:
+        """``X`` as a float array ``(..., 3N)`` (:class:`InvalidStateError` for another length; the protocol of
+        :class:`SolveHamiltonian`)."""
+        return self._check(X)
+
+    def record_integrals(self, X) -> np.ndarray:
+        """The integrals ``(H_1..H_N, C_1..C_N)`` at ``X`` (with this Hamiltonian's ``b`` and ``c``), ``(..., 2N)``."""
+        return np.asarray(integrals(self._check(X), self.b, self.c), dtype=float)
+
+    def as_model(self):
+        """The same Hamiltonian on the one-site model ``GaudinModel(b, [(0, N)])`` (a
+        :class:`jetgaudin.ChainHamiltonian` with the same weights: ``h_m = H_m``, ``h_{N+k} = C_k``; integrals,
+        vector field and maps equal to round-off, ``tests/test_top_as_model.py``).  Needs the reduction (lax2)
+        (``c = None``) and a field along ``e_3``; otherwise :class:`InvalidParameterError` naming which."""
+        if self.c is not None:
+            raise InvalidParameterError("as_model: the jet constants c of eq. (lax) are not a site option of "
+                                        "GaudinModel; only the reduction (lax2), c = None, is a one-site model")
+        bv = field_vector(self.b)
+        if bv[0] != 0.0 or bv[1] != 0.0:
+            raise InvalidParameterError(f"as_model: a model's field is b e_3; this Hamiltonian's is {bv.tolist()}")
+        from .gaudin.model import GaudinModel
+
+        return GaudinModel(float(bv[2]), [(0.0, self.N)]).hamiltonian(self.weights)
 
     def _check(self, X):
         X, N = as_state(X)

@@ -1,16 +1,21 @@
-r"""One entry point for the flow of an integral Hamiltonian: ``jg.solve(H, X0, t_span, dt=…, method=…)``.
+r"""One entry point for the flow of any model's Hamiltonian: ``jg.solve(H, X0, t_span, dt=…, method=…)``.
 
-Methods (``docs/integrators.md``):
+``H`` follows the protocol :class:`jetgaudin.hamiltonians.SolveHamiltonian` (a top's ``IntegralHamiltonian``, a
+chain's ``model.hamiltonian(w)`` of every family, an su(n) chain's); which map each method builds for it is one
+route table, :data:`jetgaudin.methods.ROUTES` (no top/chain branch here).  Methods (``docs/integrators.md``):
 
-* ``"exact"`` -- :class:`jetgaudin.ExactFlow`: every step is the exact time-``dt`` flow (commuting Bäcklund maps and
-  a rotation); ``substeps="auto"`` splits a step the leaf cannot take in one into exact sub-steps, recorded in
-  ``Trajectory.info["substeps"]`` (an exact composition, not an approximation);
-* ``"bt"`` -- :class:`jetgaudin.exact.MatchedBacklund`: the plain Bäcklund map (one map per step, H_2 weight and
-  rotation matched; exact for N = 2, the exact flow of a *modified* Hamiltonian for N ≥ 3);
+* ``"exact"`` -- the exact time-``dt`` flow (:class:`jetgaudin.ExactFlow`, :class:`jetgaudin.ChainExactFlow`, the
+  su(3) ``SunExactFlow``: commuting Bäcklund maps and a rotation); ``substeps="auto"`` splits a step the leaf cannot
+  take in one into exact sub-steps, recorded in ``Trajectory.info["substeps"]`` (an exact composition, not an
+  approximation);
+* ``"bt"`` -- the matched two-point map: a top's :class:`jetgaudin.exact.MatchedBacklund` (one map per step, H_2
+  weight and rotation matched; exact for N = 2, the exact flow of a *modified* Hamiltonian for N ≥ 3); a chain's
+  exact step where that is one map and a rotation; refused, naming why, where no such map exists;
 * ``"dop853"`` -- SciPy's DOP853 (adaptive; ``dt`` only sets the output grid), tolerances ``rtol``/``atol``;
 * ``"heyoka"`` -- heyoka's Taylor method (adaptive; tolerance ``rtol``), extra ``jetgaudin[heyoka]``;
-* ``"midpoint"`` -- :class:`jetgaudin.midpoint.ImplicitMidpoint`, order 2, fixed step;
-* ``"kahan"`` -- :class:`jetgaudin.kahan.KahanMap`, Kahan's map: order 2, one linear solve per step (tops and chains).
+* ``"midpoint"`` -- :class:`jetgaudin.midpoint.ImplicitMidpoint`, order 2, fixed step (every model);
+* ``"kahan"`` -- :class:`jetgaudin.kahan.KahanMap`, Kahan's map: order 2, one linear solve per step (tops and su(2)
+  chains: quadratic fields).
 
 The fixed-step methods take ``n = ⌈|t1 − t0|/|dt|⌉`` steps of ``(t1 − t0)/n`` (so the grid ends at ``t1``; the step
 used is ``info["dt"]``).  The result is a :class:`jetgaudin.Trajectory` (``t``, ``X``, the integrals and their drift).
@@ -26,13 +31,10 @@ from typing import Any
 import numpy as np
 
 from ._errors import InvalidParameterError, StepTooLargeError
-from ._validate import as_state, parse_choice, real_number
-from .exact import ExactFlow, MatchedBacklund
+from ._validate import parse_choice, real_number
 from .flows import Method, Trajectory, integrate
-from .hamiltonians import IntegralHamiltonian
-from .maps import Backend, check_count, check_output_size
-from .midpoint import ImplicitMidpoint
-from .spectral import integrals
+from .maps import check_count, check_output_size
+from .methods import check_method, method_map
 
 __all__ = ["SolveMethod", "solve", "time_grid"]
 
@@ -68,23 +70,6 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
     return t0, T / n, n
 
 
-def _map(method: SolveMethod, H: Any, dt: float, substeps: int, backend: str):
-    if method is SolveMethod.KAHAN:
-        from .kahan import KahanMap
-
-        return KahanMap(H, dt, Backend.parse(backend))
-    if callable(getattr(getattr(H, "model", None), "exact_flow", None)):  # an su(3) chain (issue 32)
-        return H.model.exact_flow(H, dt, substeps)
-    if not isinstance(H, IntegralHamiltonian):  # a chain (solve checked the method)
-        from .exact_chain import ChainExactFlow
-
-        return ChainExactFlow(H, dt, substeps=substeps)
-    if method is SolveMethod.MIDPOINT:
-        return ImplicitMidpoint(H, dt)
-    cls = ExactFlow if method is SolveMethod.EXACT else MatchedBacklund
-    return cls(H, dt, substeps, Backend.parse(backend))
-
-
 def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarray]:
     """``(steps, states)``: the states after ``0, every, 2 every, …`` steps and after ``n``."""
     adv = m.advance(X0, None, n, every)
@@ -96,7 +81,7 @@ def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarra
     return np.array(idx), np.concatenate(rows, axis=0)
 
 
-def _exact_dense(H: Any, chain: bool, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
+def _exact_dense(H: Any, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
     """``dense(t)``: the state at times ``t`` by one exact step from the nearest saved state (issue 34)."""
     up = t_grid[-1] >= t_grid[0]
     ts, Xs = (t_grid, X_grid) if up else (t_grid[::-1], X_grid[::-1])
@@ -117,16 +102,7 @@ def _exact_dense(H: Any, chain: bool, substeps: int, t_grid: np.ndarray, X_grid:
         out = np.empty((len(flat),) + Xs.shape[1:])
         for r, (kk, tt) in enumerate(zip(k, flat, strict=True)):
             ds = float(tt - ts[kk])
-            if ds == 0.0:
-                out[r] = Xs[kk]
-            elif callable(getattr(getattr(H, "model", None), "exact_flow", None)):  # an su(3) chain (issue 32)
-                out[r] = H.model.exact_flow(H, ds, substeps)(Xs[kk])
-            elif chain:
-                from .exact_chain import ChainExactFlow
-
-                out[r] = ChainExactFlow(H, ds)(Xs[kk])
-            else:
-                out[r] = ExactFlow(H, ds, substeps)(Xs[kk])
+            out[r] = Xs[kk] if ds == 0.0 else method_map(H, "exact", ds, substeps)(Xs[kk])
         return out.reshape(t.shape + Xs.shape[1:])
 
     return dense
@@ -136,10 +112,11 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
           rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
           backend: str = "auto", t_eval=None) -> Trajectory:
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
-    ``model.hamiltonian(weights)`` (methods ``"exact"``: :class:`jetgaudin.ChainExactFlow`, ``"dop853"``,
-    ``"heyoka"``; an su(n) chain: ``"dop853"``, ``"heyoka"`` for ``n ≤ 3``, ``"exact"`` for ``n = 3`` and any weights,
-    sub-steps where needed, ``docs/sun.md`` §5; other ``n`` refused with :class:`jetgaudin.InvalidParameterError`)
-    from ``X0`` ``(3N,)`` (or a batch ``(..., 3N)`` for the map methods)
+    ``model.hamiltonian(weights)`` of any family or algebra (every method for every model where the route table
+    :data:`jetgaudin.methods.ROUTES` has a map; elsewhere :class:`jetgaudin.InvalidParameterError` naming why and the
+    methods that apply: ``"bt"`` where no matched two-point map exists, ``"kahan"`` and ``"heyoka"`` past su(3),
+    ``"exact"`` of su(n) for ``n ≠ 3``; ``docs/sun.md`` §5) from ``X0`` ``(n_state,)`` (or a batch
+    ``(..., n_state)`` for the map methods)
     over ``t_span = (t0, t1)`` (either direction), sampled every ``save_every`` steps of ``dt`` (module doc).
 
     ``dt``: the time step (required by ``"exact"``, ``"bt"``, ``"midpoint"``; for ``"dop853"``/``"heyoka"`` the
@@ -165,20 +142,8 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         return solve_physical(H, X0, t_span, dt=dt, method=method, rtol=rtol, atol=atol, save_every=save_every,
                               substeps=substeps, backend=backend, t_eval=t_eval)
     method = SolveMethod.parse(method)
-    chain = getattr(H, "model", None) is not None and callable(getattr(H, "record_integrals", None))
-    if not isinstance(H, IntegralHamiltonian) and not chain:
-        raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b)) or a chain "
-                                    "Hamiltonian model.hamiltonian(weights)")
-    if chain and callable(getattr(H.model, "solve_methods", None)):  # an su(n) chain names its own (issue 32)
-        H.model.solve_methods(method.value)
-    if chain:
-        if method not in (SolveMethod.EXACT, SolveMethod.DOP853, SolveMethod.HEYOKA, SolveMethod.KAHAN):
-            raise InvalidParameterError(f"method={method.value!r} is for the tops; a chain Hamiltonian takes "
-                                        "'exact', 'dop853', 'heyoka' or 'kahan'")
-        X0 = np.asarray(H.model.check_state(X0), dtype=float)
-    else:
-        X0, _ = as_state(X0)
-        H._check(X0)
+    check_method(H, method.value)  # the route table (jetgaudin.methods): a typed refusal where no route exists
+    X0 = np.asarray(H.check_state(X0), dtype=float)
     every = check_count(save_every, "save_every", 1)
     if dt is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
         n_out = time_grid(t_span, dt)[2] // every + 2
@@ -204,7 +169,7 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     s = 1 if auto else check_count(substeps, "substeps", 1)
     info: dict = {"dt": h, "steps": n}
     while True:
-        m = _map(method, H, h, s, backend)
+        m = method_map(H, method.value, h, s, backend)
         try:
             idx, Xs = _orbit(m, X0, n, every)
             break
@@ -214,15 +179,14 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
             s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
     if method not in (SolveMethod.MIDPOINT, SolveMethod.KAHAN):
         info["substeps"] = s
-    recorded = H.record_integrals(Xs) if chain else integrals(Xs, H.b, H.c)
-    tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
-    if method is SolveMethod.EXACT and (X0.ndim == 1 or not chain):
-        tr = replace(tr, dense=_exact_dense(H, chain, s, tr.t, Xs))
+    tr = Trajectory(t0 + idx * h, Xs, np.asarray(H.record_integrals(Xs), dtype=float), method.value, info)
+    if method is SolveMethod.EXACT:
+        tr = replace(tr, dense=_exact_dense(H, s, tr.t, Xs))
     if t_eval is not None:  # the exact flow's dense output at the requested times
         if tr.dense is None:
             raise InvalidParameterError(f"t_eval needs dense output: method='exact', 'dop853' or 'heyoka', not "
                                         f"{method.value!r} (a fixed-step map has states on its grid only)")
         Xe = tr.at(t_eval)
-        rec = H.record_integrals(Xe) if chain else integrals(Xe, H.b, H.c)
-        tr = replace(tr, t=np.asarray(t_eval, dtype=float), X=Xe, integrals=np.asarray(rec, dtype=float))
+        tr = replace(tr, t=np.asarray(t_eval, dtype=float), X=Xe, integrals=np.asarray(H.record_integrals(Xe),
+                                                                                        dtype=float))
     return tr

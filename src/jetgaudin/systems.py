@@ -36,6 +36,22 @@ class GaudinTop:
         object.__setattr__(self, "b", nonzero_field(self.b))
 
     @property
+    def model(self):
+        """This top as the one-site model ``GaudinModel(b, [(0, N)])`` (rational; issue 33): the same integrals
+        (``h_m = H_m``, ``h_{N+k} = C_k``), bracket, Hamiltonian vector fields and maps to round-off
+        (``tests/test_top_as_model.py``); the model's maps take this top's hand-tuned kernels as a route
+        (``model.is_top``, ``docs/architecture.md``).  ``GaudinTop`` stays as this thin view.  One difference of
+        names: for ``N = 1`` :attr:`hamiltonian` is ``H_1/2`` while ``model.physical_hamiltonian()`` is the model's
+        rule ``½ h_{1,2}`` (a Casimir there); for ``N ≥ 2`` both are ``H_2/2``."""
+        return self.as_model()
+
+    def as_model(self):
+        """:attr:`model` (a fresh :class:`jetgaudin.GaudinModel`)."""
+        from .gaudin.model import GaudinModel
+
+        return GaudinModel(self.b, [(0.0, self.N)])
+
+    @property
     def hamiltonian(self) -> IntegralHamiltonian:
         """``H = H_2/2`` (eq. (H)); ``H_1/2`` for ``N = 1``."""
         return physical_hamiltonian(self.N, self.b)

@@ -25,6 +25,14 @@ class Hamiltonian(StrEnum):
     physical = "physical"
 
 
+class Kernel(StrEnum):
+    """The values of ``--backend`` (alias ``--kernel``) on every command with a route (orbit, ensemble, flow)."""
+
+    auto = "auto"
+    compiled = "compiled"
+    numpy = "numpy"
+
+
 class Method(StrEnum):
     DOP853 = "DOP853"
     heyoka = "heyoka"
@@ -54,7 +62,8 @@ def flow(
     dt: Annotated[float, typer.Option("--dt", help="time between samples (1 = one step of the map for G_η)")] = 1.0,
     method: Annotated[
         Method, typer.Option("--method", help="integrator: DOP853 (SciPy), heyoka (Taylor), exact (every step the "
-                             "exact time-dt flow: jg.ExactFlow) or midpoint (implicit midpoint rule)")
+                             "exact time-dt flow: jg.ExactFlow, jg.ChainExactFlow) or midpoint (implicit midpoint "
+                             "rule, every model)")
     ] = Method.DOP853,
     substeps: Annotated[int, typer.Option("--substeps", help="--method exact: exact sub-steps per step (for a dt "
                                                              "larger than the leaf's largest feasible step)")] = 1,
@@ -79,6 +88,12 @@ def flow(
     gamma: Annotated[str | None, typer.Option("--gamma", help=_chains.GAMMA_HELP)] = None,
     modulus: Annotated[str | None, typer.Option("--modulus", help=_chains.MODULUS_HELP)] = None,
     algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
+    kernel: Annotated[
+        Kernel, typer.Option("--backend", "--kernel",
+                             help="the route of --method exact on a top: 'compiled' (Numba kernels), 'numpy' "
+                             "(reference) or 'auto' (compiled); the other methods have one route (NumPy/SciPy, "
+                             "heyoka) and refuse 'compiled'; --kernel is an alias")
+    ] = Kernel.auto,
 ) -> None:
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
@@ -129,7 +144,7 @@ def flow(
                     weights = jg.interpolating_flow_hamiltonian(X0, bf, eta_c).weights
         H = integral_hamiltonian(weights, N, bf, model)
         with cm.blame("--dt"):
-            fm = _flow_map(H, dt, method, rtol, substeps, X0, model)
+            fm = _flow_map(H, dt, method, rtol, substeps, X0, model, kernel.value)
         with cm.blame("--init"):
             spec = runlayer.RunSpec(fm, X0, n_steps, 1, runlayer.HealthLimits(float("inf"), float("inf")),
                                     program="jetgaudin flow")
@@ -243,23 +258,25 @@ def integral_hamiltonian(weights, N: int, b: float, model=None):
 
 
 def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, model=None, kernel: str = "auto"):
-    """The run's map: the adaptive integrators' FlowMap, or a fixed-step map (ExactFlow, ImplicitMidpoint), whose
+    """The run's map: the adaptive integrators' FlowMap, or a fixed-step map of the route table
+    (:data:`jetgaudin.methods.ROUTES`: ExactFlow / ChainExactFlow, ImplicitMidpoint for every model), whose
     feasibility is checked on X0 before the run (an exact step too large for the leaf names the largest dt and
     the --substeps that makes it feasible; ``jetgaudin orbit --dt`` shares this)."""
     if method is Method.exact:
         return exact_map(H, dt, substeps, X0, model, kernel)
+    if method is Method.midpoint:
+        from ..methods import method_map
+
+        with cm.blame("--backend"):
+            return method_map(H, "midpoint", dt, backend=kernel)
+    if kernel == "compiled":
+        raise cm.CliInputError(f"--backend compiled: --method {method.value} has no compiled route (an adaptive "
+                               "integrator); give --backend auto or numpy, or --method exact")
     if model is not None:
-        if method is Method.midpoint:
-            raise cm.CliInputError("--method midpoint: the implicit midpoint rule is the tops'; a chain: DOP853, "
-                                   "heyoka or exact")
         if method is Method.heyoka and getattr(model, "n", 2) > 3:
             raise cm.CliInputError(f"--method heyoka: built for su(2) and su(3) chains, not {model.algebra.name}; "
                                    "use --method DOP853")
         return _chains.chain_flow_map(H, dt, method.value, rtol)
-    if method is Method.midpoint:
-        from ..midpoint import ImplicitMidpoint
-
-        return ImplicitMidpoint(H, dt)
     return FlowMap(H, dt, FlowMethod.parse(method.value), rtol, rtol)
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -47,13 +46,7 @@ from ._common import (
     run_with_progress,
     timing_text,
 )
-from ._flow import WEIGHTS_HELP
-
-
-class Kernel(StrEnum):
-    auto = "auto"
-    compiled = "compiled"
-    numpy = "numpy"
+from ._flow import WEIGHTS_HELP, Kernel
 
 
 def figure_title(b, eta, steps, init) -> str:
@@ -313,8 +306,8 @@ def orbit(
                     m = res.spec.map.describe()
                     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
                     bt = m['b'] if isinstance(m['b'], list) else format(m['b'], 'g')  # su(n): a vector field
-                    title = (f"chain (λ:N) = {sites_text}; b = {bt}; η = {m['eta'][0]:g}{m['eta'][1]:+g}i; "
-                             f"{res.spec.steps} steps")
+                    step = f"η = {m['eta'][0]:g}{m['eta'][1]:+g}i" if "eta" in m else f"dt = {m['dt']:g}"  # --dt
+                    title = f"chain (λ:N) = {sites_text}; b = {bt}; {step}; {res.spec.steps} steps"
                     written = plotting.save_chain_figures(out_dir, data.n, data.X, model, title=title)
                 else:
                     written = plotting.save_run_figures(out_dir)  # streamed from orbit.h5: constant memory

@@ -389,6 +389,8 @@ class ChainTwoPointBacklund(_ChainMap):
             return prepare(self.model.n_state, notify, self)
         if route is not Backend.COMPILED or np.size(X) == 0:
             return None
+        if self.model.is_top and self.model.M >= 2:  # the top's kernels (the route of advance)
+            return self._top_map().prepare_kernels(X, steps, notify)
         from ..backlund._compiled import kernels
 
         x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[:1]
@@ -414,6 +416,8 @@ class ChainTwoPointBacklund(_ChainMap):
         route = self.resolved_backend(X, steps)
         if route not in (Backend.COMPILED, Backend.GPU) or X.size == 0:
             return step_loop(self, X, carry, steps, save_every)
+        if route is Backend.COMPILED and self.model.is_top and self.model.M >= 2:
+            return self._top_map().advance(X, carry, steps, save_every)  # the top's kernels: a route-table entry
         shape = X.shape
         Xb = X.reshape(-1, shape[-1])
         nu = self._compiled_start(Xb) if carry is None else np.reshape(carry, -1)
@@ -437,6 +441,14 @@ class ChainTwoPointBacklund(_ChainMap):
             out, final[n], last[n] = run_orbit(np.ascontiguousarray(Xb[n]), complex(nu[n]), steps, save_every)
             rows[:, n] = out[1:]
         return self._finish(rows, final, last, shape)
+
+    def _top_map(self):
+        """The top's compiled two-point map of this one-site model (``model.is_top``, order ``N ≥ 2``): the route
+        table's entry that takes the top's hand-tuned kernels (``docs/architecture.md``; same orbits to round-off,
+        ``tests/test_top_as_model.py``)."""
+        from ..backlund.maps import TwoPointBacklund
+
+        return TwoPointBacklund(self.model.b, self.eta, self.branch, Backend.COMPILED)
 
     def _compiled_start(self, Xb: np.ndarray) -> np.ndarray:
         """``ν1`` at the states ``Xb`` ``(B, 3M)`` by the compiled branch rule

@@ -30,7 +30,7 @@ import re
 from dataclasses import dataclass, field
 from functools import cached_property
 from math import comb
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -451,6 +451,26 @@ class GaudinModel:
         """``Σ ω_{i,m}(X) h_{i,m}``: its flow from ``X`` is the flow of ``G_η`` (the ``ω`` are constant on it)."""
         return ChainHamiltonian(self, self.interpolating_weights(X, eta))
 
+    # ---- the top as a one-site model (issue 33) ------------------------------------------------
+
+    @property
+    def is_top(self) -> bool:
+        """One rational site at ``λ = 0`` in a nonzero field: the ``N``-th top of the paper
+        (:class:`jetgaudin.GaudinTop` ``(N, b)``, Lax matrix (lax2)), whose integrals, bracket and maps this model's
+        equal to round-off, and whose hand-tuned kernels are a route of its maps (``docs/architecture.md``)."""
+        return self.family.name == "rational" and len(self.sites) == 1 and self.sites[0][0] == 0.0 and self.b != 0.0
+
+    def as_top(self):
+        """The top this one-site model is (:class:`jetgaudin.GaudinTop`); :class:`InvalidParameterError` for any
+        other model (naming why: the top is one rational site at 0 with ``b ≠ 0``)."""
+        if not self.is_top:
+            raise InvalidParameterError(
+                f"this model is not a top: a top is one rational site at 0 in a nonzero field b, this one has "
+                f"{self.family.name} sites {list(self.sites)} and b = {self.b:g}")
+        from ..systems import GaudinTop
+
+        return GaudinTop(self.orders[0], self.b)
+
     # ---- maps ---------------------------------------------------------------------------------
 
     def two_point_backlund(self, eta, branch: Branch | str = "default", backend: Backend | str = "auto",
@@ -479,6 +499,8 @@ class ChainHamiltonian:
 
     model: GaudinModel
     weights: np.ndarray
+    #: its rows of the route table of :func:`jetgaudin.solve` (:class:`jetgaudin.hamiltonians.SolveHamiltonian`)
+    route_kind: ClassVar[str] = "chain"
 
     def __post_init__(self):
         if np.iscomplexobj(self.weights):
@@ -503,6 +525,15 @@ class ChainHamiltonian:
         return self.model.b
 
     @property
+    def n_state(self) -> int:
+        """``3M`` (the model's state length)."""
+        return int(self.model.n_state)
+
+    def check_state(self, X) -> np.ndarray:
+        """``X`` as a float array ``(..., 3M)`` (``model.check_state``)."""
+        return np.asarray(self.model.check_state(X), dtype=float)
+
+    @property
     def structure_constants(self) -> np.ndarray:
         """The chain's structure constants (lets :func:`jetgaudin.integrate` use its fast and heyoka routes)."""
         return self.model.structure_constants
@@ -520,6 +551,14 @@ class ChainHamiltonian:
     def record_integrals(self, X) -> np.ndarray:
         """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``)."""
         return self.model.integrals(X)
+
+    def as_top(self):
+        """The top's :class:`jetgaudin.IntegralHamiltonian` ``Σ w_m κ_m`` (the same weights: one site at 0 has
+        ``h_m = H_m``, ``h_{N+k} = C_k``) where :attr:`GaudinModel.is_top`; :class:`InvalidParameterError` otherwise."""
+        self.model.as_top()
+        from ..hamiltonians import IntegralHamiltonian
+
+        return IntegralHamiltonian(self.model.b, self.weights)
 
 
 def _uniform(b, positions, N, name):

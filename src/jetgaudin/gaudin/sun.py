@@ -32,6 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 
@@ -378,6 +379,8 @@ class SunHamiltonian(ChainHamiltonian):
     """``H = Σ_I w_I h_I`` on an su(n) chain.  For ``n ≥ 3`` the integrals are not quadratic, so it declares no
     structure constants (:func:`jetgaudin.integrate` then takes the generic right-hand side :meth:`vector_field`,
     not the affine-gradient one; heyoka's symbolic route refuses it), and it checks states of length ``(n²−1)M``."""
+
+    route_kind: ClassVar[str] = "sun"  # its rows of the route table of jetgaudin.solve (jetgaudin.methods.ROUTES)
 
     @property
     def structure_constants(self):  # type: ignore[override]

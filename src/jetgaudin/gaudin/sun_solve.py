@@ -1,12 +1,15 @@
 r"""Integrating the flows of an su(n) chain Hamiltonian ``H = Σ_I w_I h_I`` (issue 32): which methods of
 :func:`jetgaudin.solve` apply, and heyoka's equations for ``n = 3``.
 
-**Methods.**  ``"dop853"`` (any ``n``: the generic right-hand side ``Π(X)∇H``); ``"heyoka"`` for ``n ≤ 3`` (its
+**Methods** (the rows ``"sun"`` of :data:`jetgaudin.methods.ROUTES`).  ``"dop853"`` and ``"midpoint"`` (any ``n``:
+the generic right-hand side ``Π(X)∇H``); ``"heyoka"`` for ``n ≤ 3`` (its
 equations are built symbolically, below); ``"exact"`` for ``n = 3``
 (:class:`jetgaudin.gaudin.sun_exact.SunExactFlow`).  Refused with :class:`jetgaudin.InvalidParameterError`
 naming those: ``"kahan"`` (Kahan–Hirota–Kimura is built for quadratic vector fields on 3-component blocks; for
 ``n ≥ 3`` the integrals ``h^{(k)}``, ``k ≥ 3``, are of degree ``k`` and the blocks have ``n² − 1``
-components), ``"midpoint"`` and ``"bt"`` (the tops' fixed-step maps), ``"exact"`` for ``n ≠ 3``.
+components), ``"bt"`` (no two-point map ``B^(r)`` is matched to a time step), ``"exact"`` for ``n ≠ 3``.
+``"midpoint"`` applies (:class:`jetgaudin.midpoint.ImplicitMidpoint` on the generic field; it keeps the quadratic
+integrals only).
 
 **heyoka's equations (n = 3).**  ``Ẋ_I = Σ_{J,K} c_{IJK} X_K g_J(X)`` with ``c`` the chain's structure constants
 and ``g = ∇H``; the ``h^{(2)}`` are quadratic and the ``h^{(3)}`` cubic in ``X`` (``τ_k`` is a polynomial of degree
@@ -32,7 +35,7 @@ from .._errors import InvalidParameterError
 __all__ = ["SOLVE_METHODS", "check_solve_method", "gradient_polynomial", "heyoka_integrator"]
 
 #: the methods of :func:`jetgaudin.solve` for an su(n) chain (``"heyoka"`` for ``n ≤ 3``)
-SOLVE_METHODS = ("dop853", "heyoka")
+SOLVE_METHODS = ("dop853", "heyoka", "midpoint")
 
 
 def check_solve_method(model, method: str) -> None:
@@ -42,7 +45,8 @@ def check_solve_method(model, method: str) -> None:
     if method not in ok:
         why = {"kahan": "Kahan's map is built for quadratic vector fields on 3-component blocks",
                "exact": f"its exact time step is built for su(3) (docs/sun.md §5), not {model.algebra.name}",
-               "heyoka": f"heyoka's equations are built for n <= 3 (the gradient of h^(k), k <= 3), not {model.n}"}
+               "heyoka": f"heyoka's equations are built for n <= 3 (the gradient of h^(k), k <= 3), not {model.n}",
+               "bt": "no two-point map B^(r) of an su(n) chain is matched to a time step of H"}
         raise InvalidParameterError(
             f"method={method!r} does not apply to an {model.algebra.name} chain ("
             f"{why.get(method, 'a fixed-step method of the tops')}); use one of {', '.join(map(repr, ok))}")
