@@ -156,16 +156,89 @@ def test_su2_algebra_is_todays_chain(capsys, tmp_path):
     assert a == b and a[0] == 0
 
 
-def test_exact_steps_are_refused_in_one_line(capsys, tmp_path):
-    """The su(n) exact step is a library function (gaudin/sun_exact.py), not a CLI map yet: one line, exit 2."""
-    code, _, err = run_cli(capsys, "flow", *BASE, "--method", "exact", "--dt", "0.5", "--steps", "2", "--out",
-                           tmp_path / "f")
-    assert one_line_error(code, err, "--dt", "su(3)", "docs/sun.md"), err
-    base = [a for a in BASE if a not in ("--eta", "0.4+0.1i")]
-    code, _, err = run_cli(capsys, "orbit", *base, "--dt", "0.5", "--hamiltonian", ",".join(["0.1"] * 10),
-                           "--out", tmp_path / "o")
-    assert one_line_error(code, err, "--dt", "su(3)"), err
-    assert not (tmp_path / "f").exists() and not (tmp_path / "o").exists()
+W = np.round(np.random.default_rng(3).normal(size=MODEL.n_integrals), 3)  # weights of the 10 h^(k)_(j,m)
+WEIGHTS = ",".join(repr(float(v)) for v in W)
+EXACT = [a for a in BASE if a not in ("--eta", "0.4+0.1i")] + ["--hamiltonian", WEIGHTS]
+
+
+def test_exact_steps_round_trip(capsys, tmp_path):
+    """`orbit --dt` and `flow --method exact` of an su(3) chain run the library's SunExactFlow: the same rows, bit
+    for bit, as its `iterate` (one chunk: the run layer cuts a non-invariant map every 256 steps), and the flow of
+    H = Σ w h against DOP853 at rtol = atol = 1e-13 over t = 2: measured 3e-13, asserted 1e-10 (DOP853's global
+    error; the orbit moves by O(1)).  The run records the map ('sun_exact') and a t column."""
+    from jetgaudin.gaudin import SunExactFlow
+
+    code, _, err = run_cli(capsys, "orbit", *EXACT, "--dt", "0.2", "--steps", "10", "--out", tmp_path / "o")
+    assert code == 0, err
+    code, _, err = run_cli(capsys, "flow", *BASE, "--method", "exact", "--hamiltonian", WEIGHTS, "--dt", "0.2",
+                           "--steps", "10", "--out", tmp_path / "f", "--no-plots")
+    assert code == 0, err
+    from jetgaudin import run as rl
+
+    d, f = rl.load(tmp_path / "o"), rl.load(tmp_path / "f")
+    H = MODEL.hamiltonian(W)
+    assert np.array_equal(d.X, SunExactFlow(H, 0.2, backend="numpy").iterate(X0, 10))
+    assert np.array_equal(f.X, d.X)
+    ref = jg.solve(H, X0, (0.0, 2.0), dt=0.2, method="dop853", rtol=1e-13, atol=1e-13).X
+    assert np.abs(d.X - ref).max() <= 1e-10 and np.abs(d.X[-1] - X0).max() > 0.1
+    run = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert run["map"]["kind"] == "sun_exact" and run["map"]["weights"] == W.tolist() and run["map"]["dt"] == 0.2
+    lines = (tmp_path / "o" / "orbit.csv").read_text().splitlines()
+    assert lines[0].split(",")[:3] == ["n", "t", "s1_y0^1"] and float(lines[-1].split(",")[1]) == 10 * 0.2
+    assert (tmp_path / "o" / "chain_y0.png").stat().st_size > 0  # the chain figures, titled by dt
+
+
+def test_exact_orbit_resumes_bit_for_bit(capsys, tmp_path, monkeypatch):
+    """An `orbit --dt` run of an su(3) chain (compiled route, 600 steps: three chunks of 256, 256, 88) stopped by a
+    SIGINT in its second chunk ends, after `orbit --resume`, with the bytes of one uninterrupted run."""
+    import os
+    import signal
+
+    from jetgaudin.gaudin import SunExactFlow
+
+    args = ("orbit", *EXACT, "--dt", "0.05", "--steps", "600", "--no-plots", "--checkpoint-seconds", "0",
+            "--backend", "compiled")
+    code, _, err = run_cli(capsys, *args, "--out", tmp_path / "full")
+    assert code == 0, err
+    calls = {"n": 0}
+    advance = SunExactFlow.advance
+
+    def interrupted(self, *a, **k):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            os.kill(os.getpid(), signal.SIGINT)
+        return advance(self, *a, **k)
+
+    monkeypatch.setattr(SunExactFlow, "advance", interrupted)
+    code, _, err = run_cli(capsys, *args, "--out", tmp_path / "cut")
+    assert code != 0 and json.loads((tmp_path / "cut" / "run.json").read_text())["status"] == "interrupted"
+    monkeypatch.setattr(SunExactFlow, "advance", advance)
+    code, _, err = run_cli(capsys, "orbit", "--resume", tmp_path / "cut")
+    assert code == 0, err
+    assert (tmp_path / "cut" / "orbit.csv").read_bytes() == (tmp_path / "full" / "orbit.csv").read_bytes()
+    assert json.loads((tmp_path / "cut" / "run.json").read_text())["map"]["backend"] == "compiled"
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--algebra", "su4", "--init", ",".join(["0.1"] * 30), "--hamiltonian", ",".join(["0.1"] * 18)],
+     ["--dt", "su(3)"]),
+    (["--dt", "5"], ["--dt", "--substeps"]),
+    (["--hamiltonian", "physical"], ["--hamiltonian"]),
+    (["--hamiltonian", "1,2,3"], ["--hamiltonian", "10 weights"]),
+    (["--branch", "1"], ["--branch"]),
+])
+def test_exact_refusals_in_one_line(capsys, tmp_path, args, words):
+    """Exact steps of an su(n) chain: n != 3, a dt past the orbit's largest solvable step (naming the --substeps that
+    fix it), no weights, a wrong count, --branch: one line, exit 2, nothing written."""
+    argv = list(EXACT) + ["--dt", "0.2"]
+    for i in range(0, len(args), 2):
+        if args[i] in argv:
+            argv[argv.index(args[i]) + 1] = args[i + 1]
+        else:
+            argv += [args[i], args[i + 1]]
+    code, _, err = run_cli(capsys, "orbit", *argv, "--steps", "2", "--out", tmp_path / "o")
+    assert one_line_error(code, err, *words), err
+    assert not (tmp_path / "o").exists()
 
 
 def test_flow_heyoka(capsys, tmp_path):

@@ -77,7 +77,8 @@ def test_per_orbit_status():
     c = _sun_kernel.orbit_constants(m, B.eta)
     rows, final, last, status = gpu.run_sun_batch(X, c[0], mu, *c[1:], B.eta, 3, 1)
     np.testing.assert_array_equal(status, [0, 1, 0])
-    ref = _sun_kernel.run_batch(X[[0, 2]], c[0], mu[[0, 2]], *c[1:], B.eta, 3, 1)
+    ref = _sun_kernel.run_batch(X[[0, 2]], c[0], mu[[0, 2], None], np.repeat(c[1][None, None], 2, axis=0), *c[2:],
+                                np.full((2, 1), B.eta), 3, 1, 1)  # one map (k = 1) per orbit
     same(rows[:, [0, 2]], ref[0], 3)
     same(final[[0, 2]], ref[1], 3)
     with pytest.raises(jg.SingularStepError, match="orbit 1 of the su"):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -283,14 +283,16 @@ def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, mode
 def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto"):
     """:class:`jetgaudin.ExactFlow` (a top) or :class:`jetgaudin.ChainExactFlow` (``model``: a chain) of ``H``
     over ``dt``, solved once on ``X0`` so that an infeasible ``dt`` is one line before the run."""
-    if isinstance(model, jg.SunGaudinModel):  # issue 32: the su(n) exact step is not a map of the CLI yet
-        raise cm.CliInputError(f"--dt: an exact time step of an {model.algebra.name} chain is not built for the "
-                               "command line (docs/sun.md §5); use --method DOP853 or heyoka, or `orbit --eta`")
+    if isinstance(model, jg.SunGaudinModel) and model.n != 3:  # issue 32: the exact step is built for su(3)
+        raise cm.CliInputError(f"--dt: an exact time step of an {model.algebra.name} chain is built for su(3) only "
+                               "(docs/sun.md §5); use --method DOP853, or `orbit --eta`")
     if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
         raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
-    fm: jg.ExactFlow | jg.ChainExactFlow
+    fm: jg.ExactFlow | jg.ChainExactFlow | Any
     with cm.blame("--dt"):
-        if model is not None:
+        if isinstance(model, jg.SunGaudinModel):  # su(3): SunExactFlow (gaudin/sun_exact.py)
+            fm = model.exact_flow(H, dt, substeps, jg.Backend.parse(kernel))
+        elif model is not None:
             fm = jg.ChainExactFlow(H, dt, substeps=substeps)
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))

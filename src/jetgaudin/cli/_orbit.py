@@ -306,7 +306,8 @@ def orbit(
                     m = res.spec.map.describe()
                     sites_text = ", ".join(f"{p:g}:{N}" for p, N in model.sites)
                     bt = m['b'] if isinstance(m['b'], list) else format(m['b'], 'g')  # su(n): a vector field
-                    step = f"η = {m['eta'][0]:g}{m['eta'][1]:+g}i" if "eta" in m else f"dt = {m['dt']:g}"  # --dt
+                    step = (f"η = {m['eta'][0]:g}{m['eta'][1]:+g}i" if "eta" in m  # an exact flow (--dt): its dt
+                            else f"dt = {m['dt']:g}")
                     title = f"chain (λ:N) = {sites_text}; b = {bt}; {step}; {res.spec.steps} steps"
                     written = plotting.save_chain_figures(out_dir, data.n, data.X, model, title=title)
                 else:

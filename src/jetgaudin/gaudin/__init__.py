@@ -9,6 +9,7 @@ from .flow import ChainFlowMap
 from .maps import ChainTwoPointBacklund
 from .model import ChainHamiltonian, GaudinModel, clebsch_top, gaudin_magnet, lagrange_chain, parse_sites, twisted_chain
 from .sun import SunGaudinModel
+from .sun_exact import SunExactFlow
 from .sun_maps import SunTwoPointBacklund
 
 __all__ = [
@@ -24,4 +25,5 @@ __all__ = [
     "twisted_chain",
     "SunGaudinModel",
     "SunTwoPointBacklund",
+    "SunExactFlow",
 ]

@@ -135,49 +135,55 @@ def _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc
 
 @njit(cache=True)
 def orbit_loop(x, out, rows, final, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc, steps,
-               save_every):
+               save_every, substeps):
     """The stepping loop of :func:`run_orbit` on caller-given scratch, without allocations (the GPU kernel of
-    :mod:`jetgaudin.gpu` calls it for one orbit per thread, compiled for the device, with thread-local scratch):
+    :mod:`jetgaudin.gpu` calls it for one orbit per thread, compiled for the device, with thread-local scratch).
+    One step is ``substeps`` times the composition of the ``k`` maps ``η_j`` (``eta`` (k,), their weights ``f``
+    (k, C), carries ``mu`` (k,), updated in place) in turn: ``k = substeps = 1`` is the map ``B^{(r)}_η``, ``k``
+    maps the exact step of :class:`jetgaudin.gaudin.sun_exact.SunExactFlow` (``B_{η_k} ∘ … ∘ B_{η_1}``).
     ``x`` (8M,) holds the start state and ``out`` (8M,) is scratch (both overwritten), ``rows[j − 1] =
     x_{j·save_every}``, ``final`` the last state; ``xi`` (8,), ``u, w`` (3,), ``L, Y, acc`` (3, 3), ``ac, gc``
-    (at least the largest site order,) complex.  Returns the last ``μ_r(η)``."""
+    (at least the largest site order,) complex."""
     n = x.shape[0]
     for t in range(steps):
-        mu = _step(x, out, b, mu, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc, ac, gc)
-        x, out = out, x
+        for _ in range(substeps):
+            for j in range(eta.shape[0]):
+                mu[j] = _step(x, out, b, mu[j], f[j], site_pos, site_off, site_n, eta[j], xi, L, u, w, Y, acc, ac, gc)
+                x, out = out, x
         if (t + 1) % save_every == 0:
-            j = (t + 1) // save_every - 1
             for i in range(n):
-                rows[j, i] = x[i]
+                rows[(t + 1) // save_every - 1, i] = x[i]
     for i in range(n):
         final[i] = x[i]
-    return mu
 
 
 @njit(cache=True)
-def run_orbit(x0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
-    """``steps`` steps from ``x0`` (8M,): ``(rows (steps // save_every, 8M), final, μ)`` (:func:`orbit_loop`)."""
+def run_orbit(x0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every, substeps):
+    """``steps`` steps from ``x0`` (8M,) of the maps ``eta`` (k,) with ``f`` (k, C) and first carries ``mu0`` (k,)
+    (:func:`orbit_loop`): ``(rows (steps // save_every, 8M), final, μ (k,))``."""
     n = x0.shape[0]
     rows = np.empty((steps // save_every, n))
     final = np.empty(n)
     m = max(1, np.max(site_n))
-    mu = orbit_loop(x0.copy(), np.empty(n), rows, final, b, mu0, f, site_pos, site_off, site_n, eta,
-                    np.empty(8, dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
-                    np.empty(3, dtype=np.complex128), np.empty(3, dtype=np.complex128),
-                    np.empty((3, 3), dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
-                    np.empty(m, dtype=np.complex128), np.empty(m, dtype=np.complex128), steps, save_every)
+    mu = mu0.copy()
+    orbit_loop(x0.copy(), np.empty(n), rows, final, b, mu, f, site_pos, site_off, site_n, eta,
+               np.empty(8, dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
+               np.empty(3, dtype=np.complex128), np.empty(3, dtype=np.complex128),
+               np.empty((3, 3), dtype=np.complex128), np.empty((3, 3), dtype=np.complex128),
+               np.empty(m, dtype=np.complex128), np.empty(m, dtype=np.complex128), steps, save_every, substeps)
     return rows, final, mu
 
 
 @njit(cache=True, parallel=True)
-def run_batch(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
-    """:func:`run_orbit` for each row of ``X0`` (B, 8M) on all cores: ``(rows (k, B, 8M), final (B, 8M), μ (B,))``."""
+def run_batch(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every, substeps):
+    """:func:`run_orbit` for each row of ``X0`` (B, 8M) on all cores, orbit ``i`` with its own maps ``eta[i]`` (k,),
+    ``f[i]`` (k, C), ``mu0[i]`` (k,): ``(rows (S, B, 8M), final (B, 8M), μ (B, k))``."""
     B, n = X0.shape
     rows = np.empty((steps // save_every, B, n))
     final = np.empty((B, n))
-    mus = np.empty(B, dtype=np.complex128)
+    mus = np.empty(mu0.shape, dtype=np.complex128)
     for i in prange(B):
-        r, xf, m = run_orbit(X0[i], b, mu0[i], f, site_pos, site_off, site_n, eta, steps, save_every)
+        r, xf, m = run_orbit(X0[i], b, mu0[i], f[i], site_pos, site_off, site_n, eta[i], steps, save_every, substeps)
         rows[:, i, :] = r
         final[i] = xf
         mus[i] = m

@@ -340,11 +340,11 @@ class SunGaudinModel(GaudinModel):
 
         check_solve_method(self, method)
 
-    def exact_flow(self, H, dt: float, substeps: int = 1):
+    def exact_flow(self, H, dt: float, substeps: int = 1, backend="auto"):
         """The exact time-``dt`` flow of ``H`` (``n = 3``; :class:`jetgaudin.gaudin.sun_exact.SunExactFlow`)."""
         from .sun_exact import SunExactFlow
 
-        return SunExactFlow(H, dt, substeps)
+        return SunExactFlow(H, dt, substeps, backend)
 
     def hamiltonian(self, weights) -> SunHamiltonian:
         """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""

@@ -28,15 +28,19 @@ the real parts of ``K = 3M`` maps at ``2M`` real points and solve for the imagin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 
-from .._errors import BranchPointError, InvalidParameterError, StepTooLargeError
+from .._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
+from .._validate import real_number
+from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .sun import SunGaudinModel
+from .sun_maps import SunTwoPointBacklund
 
-__all__ = ["SunExactFlow", "SunExactStep", "exact_parameters", "match_weights", "step_weights"]
+__all__ = ["SunExactFlow", "SunExactStep", "compose", "exact_parameters", "match_weights", "step_weights"]
 
 
 def step_weights(model: SunGaudinModel, X, etas, branches) -> np.ndarray:
@@ -67,14 +71,24 @@ class SunExactStep:
 
     def iterate(self, X, steps: int) -> np.ndarray:
         """``steps + 1`` states ``X, S(X), S²(X), …``."""
-        out = [np.asarray(X, dtype=float)]
-        cur = out[0]
-        carries = [None] * len(self._maps)  # type: ignore[attr-defined]
-        for _ in range(int(steps)):
-            for i, m in enumerate(self._maps):  # type: ignore[attr-defined]
-                cur, carries[i], _ = m.step(cur, carries[i])
-            out.append(cur)
-        return np.array(out)
+        x = np.asarray(X, dtype=float)
+        rows = np.empty((int(steps),) + x.shape)
+        compose(self._maps, x, int(steps), 1, 1, rows)  # type: ignore[attr-defined]
+        return np.concatenate([x[None], rows])
+
+
+def compose(maps, x: np.ndarray, steps: int, substeps: int, save_every: int, rows: np.ndarray) -> np.ndarray:
+    """``steps`` steps from ``x``, each ``substeps`` times ``maps`` in turn by their NumPy route (each map's ``μ_r``
+    carried from its branch rule at ``x``), ``rows[j − 1]`` the state after ``j · save_every`` steps; returns the
+    last state."""
+    cur, carries = x, [None] * len(maps)
+    for k in range(1, steps + 1):
+        for _ in range(substeps):
+            for j, m in enumerate(maps):
+                cur, carries[j], _ = m.step(cur, carries[j])
+        if k % save_every == 0:
+            rows[k // save_every - 1] = cur
+    return cur
 
 
 def match_weights(model: SunGaudinModel, X, weights, dt: float, etas0, branches, *, tol: float = 1e-12,
@@ -201,51 +215,202 @@ def exact_parameters(model: SunGaudinModel, X, weights, dt: float, *, tol: float
                             "not converge; give a smaller dt or substeps", dt_max=abs(float(dt)) / 2)
 
 
-@dataclass(frozen=True)
-class SunExactFlow:
-    """The time-``dt`` flow of ``H = Σ_I w_I h_I`` on an su(3) chain, ``substeps`` exact sub-steps of ``dt/substeps``
-    per step, each :class:`SunExactStep` with the parameters of :func:`exact_parameters` (solved once per orbit:
-    the weights ``ω`` are functions of the integrals).  :func:`jetgaudin.solve`'s ``method="exact"``."""
+#: a map whose ``|Im η|`` is at round-off of its ``Re η`` has weights ~1e-17: the identity, left out of the step
+_IDENTITY_IM = 1e-13
+#: the bisection of :meth:`SunExactFlow.max_dt`: relative width (each trial is one solve, ~0.2-0.9 s)
+_BISECT_REL = 1e-2
+
+
+@dataclass(frozen=True, eq=False)
+class SunExactFlow(Map):
+    r"""The exact time-``dt`` flow of ``H = Σ_I w_I h_I`` on an su(3) chain (a :class:`jetgaudin.maps.Map`: runs,
+    the CLI's ``flow --method exact`` and ``orbit --dt``, :func:`jetgaudin.solve`'s ``method="exact"``).
+
+    One step is ``substeps`` exact sub-steps of ``dt/substeps``, each the composition of the ``K = 3M`` maps
+    :class:`SunExactStep` of :func:`exact_parameters`, solved once per orbit at the start of every :meth:`advance`
+    call (the weights ``ω`` are functions of the integrals: constant along the orbit).  ``backend="compiled"``
+    runs every step of one orbit in one compiled call, the su(3) kernel's loop with the ``K`` maps
+    (:func:`jetgaudin.gaudin._sun_kernel.orbit_loop`: the loop of the single map, ``k = K``), a batch on all cores,
+    each orbit its own parameters and its single run bit for bit; ``"numpy"`` the maps' NumPy route; ``"auto"`` the
+    compiled one from ``AUTO_MIN_WORK`` map steps on.  The run layer cuts it in fixed chunks
+    (``chunk_invariant = False``: the parameters are solved again at every call, from a state whose integrals moved
+    by round-off), so a resumed run meets the same cuts and the same bits."""
 
     H: Any
     dt: float
     substeps: int = 1
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)
+    properties: MapProperties = field(
+        default=MapProperties(preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True,
+                              interpolates_flow=False), init=False, repr=False, compare=False)
+    chunk_invariant: ClassVar[bool] = False
 
     def __post_init__(self):
-        if not isinstance(getattr(self.H, "model", None), SunGaudinModel):
-            raise InvalidParameterError("H must be an su(n) chain's model.hamiltonian(weights)")
-        if not (np.isfinite(self.dt) and self.dt != 0) or int(self.substeps) < 1:
-            raise InvalidParameterError("dt must be finite and nonzero, substeps a positive integer")
+        model = getattr(self.H, "model", None)
+        if not isinstance(model, SunGaudinModel) or np.ndim(self.H.weights) != 1:
+            raise InvalidParameterError("H must be an su(n) chain's model.hamiltonian(weights) with one set of weights")
+        if model.n != 3:
+            raise InvalidParameterError(f"exact steps are built for su(3), not {model.algebra.name}; use "
+                                        "method='dop853'")
+        dt = real_number(self.dt, "dt")
+        if dt == 0:
+            raise InvalidParameterError("dt must be nonzero (dt = 0 is the identity); give e.g. dt = 0.1")
+        object.__setattr__(self, "dt", dt)
+        object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
+        self._init_backend()
 
-    def _step(self, x: np.ndarray) -> SunExactStep:
-        model = self.H.model
-        etas, branches = exact_parameters(model, x, self.H.weights, self.dt / self.substeps)
-        return SunExactStep(model, etas, branches)
+    @property
+    def model(self) -> SunGaudinModel:
+        return self.H.model
 
-    def __call__(self, X) -> np.ndarray:
-        """One step of ``dt`` from ``X`` ``(n_state,)``."""
-        x = np.asarray(self.H.model.check_state(X), dtype=float)
-        return self._step(x).iterate(x, self.substeps)[-1]
+    @property
+    def n_state(self) -> int:
+        return int(self.model.n_state)
 
-    def advance(self, X, carry, steps: int, save_every: int = 1):
-        """``steps`` steps from ``X`` ``(..., n_state)``, rows every ``save_every``
-        (:class:`jetgaudin.maps.Advance`)."""
-        from ..maps import Advance
+    @property
+    def time_step(self) -> float:
+        return self.dt
 
-        X = np.asarray(self.H.model.check_state(X), dtype=float)
+    @property
+    def has_compiled(self) -> bool:
+        return True
+
+    def integrals(self, X) -> np.ndarray:
+        return np.asarray(self.model.integrals(X), dtype=float)
+
+    def integral_names(self) -> list[str]:
+        return self.model.integral_labels()
+
+    def state_labels(self) -> list[str]:
+        return self.model.labels()
+
+    def parameters(self, x) -> tuple[tuple[complex, ...], tuple[int, ...]]:
+        """``(etas, branches)`` of one sub-step (``dt/substeps``) on the orbit ``x`` ``(8M,)``
+        (:func:`exact_parameters`); :class:`~jetgaudin.StepTooLargeError` with ``dt_max`` the largest sub-step
+        found solvable (:meth:`max_dt`) where there are none."""
+        x = np.asarray(self.model.check_state(x), dtype=float)
+        if x.ndim != 1:
+            raise InvalidParameterError(f"parameters take one orbit (shape ({self.n_state},)), got {x.shape}")
+        h = self.dt / self.substeps
+        try:
+            return exact_parameters(self.model, x, self.H.weights, h)
+        except StepTooLargeError:
+            dmax = self._largest_dt(x, h)
+        if dmax == 0.0:
+            raise StepTooLargeError(f"dt = {h:g}: no exact step's parameters on this orbit even at "
+                                    f"{abs(h) * 1e-3:.3g}; use method='dop853'", dt_max=0.0)
+        raise StepTooLargeError(
+            f"dt = {h:g} is too large for this orbit: the exact step's parameters (Newton from the small-Im(eta) "
+            f"guess) do not converge; the largest step found solvable is dt = {dmax:.4g} (bisection to 1 %): give "
+            f"|dt| <= {abs(dmax):.4g} or substeps >= {math.ceil(abs(self.dt) / abs(dmax) * 1.01)}", dt_max=dmax)
+
+    def _solvable(self, x, h: float) -> bool:
+        try:
+            exact_parameters(self.model, x, self.H.weights, h)
+        except (StepTooLargeError, InvalidParameterError):
+            return False
+        return True
+
+    def _largest_dt(self, x, h: float) -> float:
+        """The largest ``|h'| ≤ |h|`` (sign of ``h``) with parameters, by bisection to :data:`_BISECT_REL` (0 when
+        ``h/1000`` has none)."""
+        lo, hi = abs(h) * 1e-3, abs(h)
+        if not self._solvable(x, math.copysign(lo, h)):
+            return 0.0
+        while hi - lo > _BISECT_REL * hi:
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if self._solvable(x, math.copysign(mid, h)) else (lo, mid)
+        return math.copysign(lo, h)
+
+    def max_dt(self, X) -> np.ndarray:
+        """The largest sub-step found solvable (searched up to ``10 |dt|``, bisection to 1 %) for each orbit of
+        ``X`` ``(..., 8M)``: one step is solvable where ``|dt|/substeps`` is below it."""
+        X = np.asarray(self.model.check_state(X), dtype=float)
+        return np.array([abs(self._largest_dt(x, 10 * self.dt)) for x in X.reshape(-1, X.shape[-1])]
+                        ).reshape(X.shape[:-1])
+
+    def _maps(self, x) -> list[SunTwoPointBacklund]:
+        """The sub-step's maps on the orbit ``x`` (those with ``|Im η|`` at round-off left out: the identity)."""
+        etas, branches = self.parameters(x)
+        return [SunTwoPointBacklund(self.model, e, r, Backend.NUMPY) for e, r in zip(etas, branches, strict=True)
+                if abs(e.imag) > _IDENTITY_IM * max(abs(e.real), 1.0)]
+
+    def _auto_backend(self, X, steps) -> Backend:
+        from ._backend import AUTO_MIN_WORK
+
+        work = int(steps) * self.substeps * 3 * self.model.M * max(1, int(np.prod(np.shape(X)[:-1])))
+        return Backend.COMPILED if work >= AUTO_MIN_WORK else Backend.NUMPY
+
+    def advance(self, X, carry: Any, steps: int, save_every: int = 1) -> Advance:
+        """``steps`` exact steps from ``X`` ``(..., 8M)`` (parameters solved at ``X``, per orbit), rows every
+        ``save_every`` (class doc); ``carry`` is not used (zeros back)."""
+        steps = check_count(steps, "steps")
+        save_every = check_count(save_every, "save_every", 1)
+        X = np.asarray(self.model.check_state(X), dtype=float)
         flat = X.reshape(-1, X.shape[-1])
         rows = np.empty((steps // save_every,) + flat.shape)
         final = flat.copy()
+        maps = []
         for i, x in enumerate(flat):
-            maps = self._step(x)._maps  # type: ignore[attr-defined]
-            cur, carries = x, [None] * len(maps)
-            for k in range(1, steps + 1):
-                for _ in range(self.substeps):
-                    for j, m in enumerate(maps):
-                        cur, carries[j], _ = m.step(cur, carries[j])
-                if k % save_every == 0:
-                    rows[k // save_every - 1, i] = cur
-            final[i] = cur
+            try:
+                maps.append(self._maps(x) if steps else [])
+            except StepTooLargeError as exc:
+                raise StepTooLargeError(f"orbit {i}: {exc}" if len(flat) > 1 else str(exc), dt_max=exc.dt_max) from None
+        if (steps and self.resolved_backend(X, steps) is Backend.COMPILED and len(maps[0])
+                and all(len(m) == len(maps[0]) for m in maps)):
+            rows, final = self._compiled(flat, maps, steps, save_every)
+        elif steps:
+            for i, (x, ms) in enumerate(zip(flat, maps, strict=True)):
+                final[i] = compose(ms, x, steps, self.substeps, save_every, rows[:, i])
         zeros = np.zeros(X.shape[:-1])
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros.astype(complex),
                        imag_max=zeros)
+
+    def _compiled(self, flat, maps, steps: int, save_every: int) -> tuple[np.ndarray, np.ndarray]:
+        """The su(3) kernel's loop with the ``K`` maps of each orbit (a batch on all cores); ``μ_r`` of each map at
+        the orbit's start by the NumPy branch rule, as the map's own compiled route."""
+        from . import _sun_kernel as K
+
+        B, k = len(flat), len(maps[0])
+        mu0 = np.array([[m.start(x) for m in ms] for x, ms in zip(flat, maps, strict=True)], dtype=complex)
+        eta = np.array([[m.eta for m in ms] for ms in maps], dtype=complex).reshape(B, k)
+        consts = [[K.orbit_constants(self.model, m.eta) for m in ms] for ms in maps]
+        fb, _, pos, off, orders = consts[0][0]
+        F = np.array([[c[1] for c in cs] for cs in consts], dtype=complex).reshape(B, k, -1)
+        run_orbit: Any = K.run_orbit  # Numba dispatchers
+        run_batch: Any = K.run_batch
+        x = np.ascontiguousarray(flat)
+        if B == 1:
+            r, xf, _ = run_orbit(x[0], fb, mu0[0], F[0], pos, off, orders, eta[0], steps, save_every, self.substeps)
+            rows, final = r[:, None], xf[None]
+        else:
+            rows, final, _ = run_batch(x, fb, mu0, F, pos, off, orders, eta, steps, save_every, self.substeps)
+        if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
+            raise SingularStepError("the compiled su(3) exact step produced non-finite values (a map's eta at a branch "
+                                    "point?); give a smaller dt")
+        return rows, final
+
+    def step(self, X, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        adv = self.advance(X, carry, 1)
+        return adv.X, adv.carry, adv.imag_max
+
+    def inverse(self) -> SunExactFlow:
+        return SunExactFlow(self.H, -self.dt, self.substeps, self.backend)
+
+    def describe(self) -> dict:
+        return {"kind": "sun_exact", **self.model.describe(), "weights": np.asarray(self.H.weights).tolist(),
+                "dt": self.dt, "substeps": self.substeps, "backend": self.backend.value}
+
+
+def _from(d: dict) -> SunExactFlow:
+    from .model import GaudinModel
+
+    model = GaudinModel.from_description(d)
+    if not isinstance(model, SunGaudinModel):
+        raise InvalidParameterError("a sun_exact description needs an su(n) model ('algebra': 'su(n)')")
+    return SunExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
+                        int(d.get("substeps", 1)), Backend.parse(d.get("backend", "numpy")))
+
+
+register_map("sun_exact", _from)

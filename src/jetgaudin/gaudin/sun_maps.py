@@ -218,11 +218,14 @@ class SunTwoPointBacklund(Map):
                 raise SingularStepError(
                     f"orbit {int(np.flatnonzero(status)[0])} of the su(3) GPU route went non-finite (eta at a branch "
                     "point?); change eta")
-        elif Xb.shape[0] == 1:
-            r, xf, m = run_orbit(Xb[0], c[0], complex(mu[0]), *c[1:], self.eta, steps, save_every)
-            rows, final, last = r[:, None], xf[None], np.array([m])
+        elif Xb.shape[0] == 1:  # one map: k = 1 of the kernel's composed loop
+            r, xf, m = run_orbit(Xb[0], c[0], mu[:1], c[1][None], *c[2:], np.array([self.eta]), steps, save_every, 1)
+            rows, final, last = r[:, None], xf[None], m
         else:
-            rows, final, last = run_batch(Xb, c[0], mu, *c[1:], self.eta, steps, save_every)
+            B = Xb.shape[0]
+            rows, final, last = run_batch(Xb, c[0], mu[:, None], np.repeat(c[1][None, None], B, axis=0), *c[2:],
+                                          np.full((B, 1), self.eta), steps, save_every, 1)
+            last = last[:, 0]
         if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(final))):
             raise SingularStepError("the compiled su(3) orbit produced non-finite values (eta at a branch point?); "
                                     "change eta")

@@ -177,7 +177,8 @@ def run_chain_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n,
 
 def run_sun_batch(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_every):
     """The su(3) chains' map on a batch on the GPU: the arguments and returns of
-    :func:`jetgaudin.gaudin._sun_kernel.run_batch` -- ``(rows (steps//save_every, B, 8M) without the start states,
+    :func:`jetgaudin.gaudin._sun_kernel.run_batch` for one map (``k = 1``: ``mu0`` (B,), ``f`` (C,), ``eta`` a
+    number) -- ``(rows (steps//save_every, B, 8M) without the start states,
     final (B, 8M), last μ_r (B,))`` -- and ``status (B,)`` (1 where the orbit ended non-finite, else 0)."""
     c = require()
     from ._kernels import MAX_ORDER, MAX_SUN_STATE, sun_kernel
@@ -193,13 +194,15 @@ def run_sun_batch(X0, b, mu0, f, site_pos, site_off, site_n, eta, steps, save_ev
     _check_fits(c, 8 * B * (n * (S + 1) + 4), f"a call of {B} orbits with {S} saved rows")
     t0 = time.perf_counter()
     args = [c.to_device(np.ascontiguousarray(a)) for a in (X0, np.asarray(b, dtype=np.float64),
-                                                            np.asarray(mu0, dtype=np.complex128), f, site_pos,
+                                                            np.asarray(mu0, dtype=np.complex128),
+                                                            np.asarray(f, dtype=np.complex128)[None], site_pos,
                                                             site_off, site_n)]
     d_rows = c.device_array((S, B, n))
     d_final = c.device_array((B, n))
     d_mu = c.device_array(B, np.complex128)
     d_status = c.device_array(B, np.int64)
-    tk = _launch(sun_kernel(), B, (*args, complex(eta), np.int64(steps), np.int64(save_every), d_rows, d_final, d_mu,
+    d_eta = c.to_device(np.array([complex(eta)]))  # the kernel's one map: eta (1,), f (1, C)
+    tk = _launch(sun_kernel(), B, (*args, d_eta, np.int64(steps), np.int64(save_every), d_rows, d_final, d_mu,
                                    d_status))
     rows, final, mu, status = (a.copy_to_host() for a in (d_rows, d_final, d_mu, d_status))
     _record(tk, time.perf_counter() - t0, B, int(steps))

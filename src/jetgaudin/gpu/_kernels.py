@@ -173,7 +173,7 @@ def chain_kernel() -> Any:
 def sun_kernel() -> Any:
     """The su(3) chains' real two-point map ``B^{(r)}_η``, one thread per orbit, compiled at first use.
 
-    Takes ``(X0 (B, 8M), b (8,), mu0 (B,), f, site_pos, site_off, site_n, eta, steps, save_every, rows
+    Takes ``(X0 (B, 8M), b (8,), mu0 (B,), f (1, C), site_pos, site_off, site_n, eta (1,), steps, save_every, rows
     (steps//save_every, B, 8M), final (B, 8M), mu_last (B,), status (B,))`` with the per-``(model, η)`` constants of
     :func:`jetgaudin.gaudin._sun_kernel.orbit_constants`; ``status[i] = 1`` where orbit ``i`` ended non-finite
     (``η`` at a branch point, an overflow: NaN stays NaN, so a failed step shows in the final state), else 0."""
@@ -198,10 +198,13 @@ def sun_kernel() -> Any:
             acc = cuda.local.array((3, 3), _C16)
             ac = cuda.local.array(MAX_ORDER, _C16)
             gc = cuda.local.array(MAX_ORDER, _C16)
+            m = cuda.local.array(1, _C16)  # the carry of the kernel's one map (k = 1: f (1, C), eta (1,))
+            m[0] = mu0[i]
             for k in range(n):
                 x[k] = X0[i, k]
-            mu = loop(x[:n], y[:n], rows[:, i], final[i], b, mu0[i], f, site_pos, site_off, site_n, eta, xi, L, u, w,
-                      Y, acc, ac, gc, steps, save_every)
+            loop(x[:n], y[:n], rows[:, i], final[i], b, m, f, site_pos, site_off, site_n, eta, xi, L, u, w, Y, acc,
+                 ac, gc, steps, save_every, 1)
+            mu = m[0]
             mu_last[i] = mu
             ok = 1 if (mu.real - mu.real == 0.0 and mu.imag - mu.imag == 0.0) else 0  # finite: x - x is 0, else NaN
             for k in range(n):
