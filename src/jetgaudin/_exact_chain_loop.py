@@ -26,45 +26,64 @@ __all__ = ["rows_rational", "rows_family", "stack_constants"]
 def rows_rational(x0, b, eta, nu, F, G, site_pos, site_off, site_n, theta, steps, save_every, substeps, rows, final):
     """One orbit ``x0`` (3M,) of the rational family: ``rows[r] = X_{(r+1) save_every}``, ``final = X_steps``; the
     maps ``eta`` (k,) with their kernel constants ``F`` (k, ...), ``G`` (k, ...), ``nu`` (k,) their first ``ν1``
-    (overwritten by the last)."""
-    z = x0.copy()
+    (overwritten by the last).  Each map step is the kernel's own step (:func:`jetgaudin.gaudin._kernels._step`,
+    the arithmetic of its ``run_orbit``) on scratch allocated once per call."""
+    n = x0.shape[0]
+    M = n // 3
+    x = x0.copy()
+    y = np.empty(n)
+    Nmax = 1
+    for i in range(site_n.shape[0]):
+        Nmax = max(Nmax, site_n[i])
+    w0 = np.empty((Nmax, 4), dtype=np.complex128)
+    w1 = np.empty((Nmax, 4), dtype=np.complex128)
+    wp = np.empty((Nmax, 4), dtype=np.complex128)
+    gs = np.empty(Nmax, dtype=np.complex128)
     left = save_every
     r = 0
-    for n in range(steps):
+    for s in range(steps):
         for _ in range(substeps):
             for j in range(eta.shape[0]):
-                _, xn, nv = _rk.run_orbit(z, b, eta[j], nu[j], F[j], G[j], site_pos, site_off, site_n, 1, 1)
-                nu[j] = nv
-                z[:] = xn
+                nu[j] = _rk._step(x, y, b, eta[j], nu[j], F[j], G[j], gs, site_pos, site_off, site_n, M, w0, w1, wp)
+                x, y = y, x
         left -= 1
         if left == 0:
             left = save_every
-            _rotate_into(z, ((n + 1) * substeps) * theta, rows[r])
+            _rotate_into(x, ((s + 1) * substeps) * theta, rows[r])
             r += 1
-    _rotate_into(z, (steps * substeps) * theta, final)
+    _rotate_into(x, (steps * substeps) * theta, final)
 
 
 @njit(cache=True)
 def rows_family(x0, b, nu, F, rule, GK, T, PIDX, n_basis, site_off, site_n, theta, steps, save_every, substeps, rows,
                 final):
     """:func:`rows_rational` for the family kernel (trigonometric, elliptic): the constants ``F, GK, T, PIDX``
-    stacked over the ``k`` maps."""
-    z = x0.copy()
+    stacked over the ``k`` maps; each map step :func:`jetgaudin.gaudin._family_kernel._step` (the arithmetic of
+    its ``run_orbit``) on scratch allocated once per call."""
+    n = x0.shape[0]
+    x = x0.copy()
+    y = np.empty(n)
+    Nmax = T.shape[2]
+    c = np.zeros(n_basis, dtype=np.complex128)
+    Dt = np.empty((Nmax, 4), dtype=np.complex128)
+    At = np.empty((Nmax, 4), dtype=np.complex128)
+    det = np.empty(Nmax, dtype=np.complex128)
+    g = np.empty(Nmax, dtype=np.complex128)
+    P = np.empty((Nmax, 4), dtype=np.complex128)
     left = save_every
     r = 0
-    for n in range(steps):
+    for s in range(steps):
         for _ in range(substeps):
             for j in range(nu.shape[0]):
-                _, xn, nv = _fk.run_orbit(z, b, nu[j], F[j], rule, GK[j], T[j], PIDX[j], n_basis, site_off, site_n,
-                                          1, 1)
-                nu[j] = nv
-                z[:] = xn
+                nu[j] = _fk._step(x, y, b, nu[j], F[j], rule, GK[j], T[j], PIDX[j], site_off, site_n, c, Dt, At, det,
+                                  g, P)
+                x, y = y, x
         left -= 1
         if left == 0:
             left = save_every
-            _rotate_into(z, ((n + 1) * substeps) * theta, rows[r])
+            _rotate_into(x, ((s + 1) * substeps) * theta, rows[r])
             r += 1
-    _rotate_into(z, (steps * substeps) * theta, final)
+    _rotate_into(x, (steps * substeps) * theta, final)
 
 
 def stack_constants(consts: list[tuple]) -> tuple:

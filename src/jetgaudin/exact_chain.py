@@ -39,6 +39,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
+from functools import cache, cached_property
 from typing import Any, ClassVar
 
 import numpy as np
@@ -89,6 +90,9 @@ _NODES, _QUAD_TOL = 64, 1e-13
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
 _R_FLOOR = 1e-6
+#: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); the
+#: others (elliptic) solve on the NumPy route
+COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1}
 
 
 class _Weights:
@@ -100,7 +104,7 @@ class _Weights:
     nearer to the previous one, and no step may move ``ν`` by more than a quarter of its size, else
     :class:`~jetgaudin.BranchPointError`: a branch point near the segment).  That is the default branch of
     ``model.nu`` while no branch point is near the segment; the solve checks the end values against
-    ``model.nu`` itself (:meth:`branch_ok`)."""
+    ``model.nu`` itself (:func:`_branch_ok`)."""
 
     def __init__(self, flow: ChainExactFlow, x: np.ndarray, keep: np.ndarray):
         self.flow, self.x, self.keep = flow, x, keep
@@ -143,11 +147,26 @@ class _Weights:
         om2 = -h[:, None] * np.einsum("q,jqi->ji", rules[1][1], f[:, n + 1:-1])
         return om, -f[:, n], float(np.max(np.abs(om - om2)) / (np.abs(om).sum(axis=0).max() + 1e-300))
 
-    def branch_ok(self, eta: np.ndarray) -> bool:
-        """Whether the continued end values (the last call's) are ``model.nu``'s default branch at ``η_j`` (to
-        1e-8 relative: the maps take that branch)."""
-        ref = np.asarray(self.flow.model.nu(self.x, eta))
-        return bool(np.all(np.abs(ref - self.nu_end) <= 1e-8 * np.abs(ref)))
+
+def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, bp: np.ndarray) -> bool:
+    """Whether the continued end values ``nu_end`` are ``model.nu``'s default branch at ``η_j`` (to 1e-8 relative:
+    the maps take that branch); ``bp`` the orbit's branch points (``model.nu`` with them given)."""
+    from .gaudin._curve import nu_with_roots
+
+    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, bp))
+    return bool(np.all(np.abs(ref - nu_end) <= 1e-8 * np.abs(ref)))
+
+
+@cache
+def _rules() -> tuple[np.ndarray, ...]:
+    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2)``, ``xs1`` the 64-point rule's nodes and
+    the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass), ``perm*`` the
+    order of the continuation (increasing ``|s|``, stable: the NumPy route's order)."""
+    x1, w1 = _gauss_legendre(_NODES)
+    x2, w2 = _gauss_legendre(_NODES // 2)
+    xs1 = np.concatenate([x1, [1.0]])
+    xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
+    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2)
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,6 +216,7 @@ class ChainExactFlow(Map):
     def integrals(self, X: np.ndarray) -> np.ndarray:
         return np.asarray(self.model.integrals(X), dtype=float)
 
+    @cached_property
     def _design(self) -> tuple[np.ndarray, np.ndarray, float]:
         """``(keep, E, rate)``: the integrals matched (``keep``: the non-Casimirs, with the family's extras), the extra
         unknowns' columns ``E`` (the rotation generator first, when the family has one, then the linear identities)
@@ -229,11 +249,12 @@ class ChainExactFlow(Map):
         F = np.concatenate([np.stack(cols, -1), np.broadcast_to(dconst, lam.shape + dconst.shape)], -1)
         return F[:, keep]
 
-    def _real_parts(self, x: np.ndarray, k: int) -> np.ndarray | None:
-        """``ρ_1..ρ_k`` (module doc); ``None`` where no rule applies (one site, no branch points, no period)."""
+    def _real_parts(self, x: np.ndarray, k: int, bp: np.ndarray | None = None) -> np.ndarray | None:
+        """``ρ_1..ρ_k`` (module doc); ``None`` where no rule applies (one site, no branch points, no period).
+        ``bp``: the orbit's branch points when the caller has them (``model.branch_points(x)``)."""
         model = self.model
         lc = float(np.mean(model.positions))
-        bp = np.ravel(model.branch_points(x))
+        bp = np.ravel(model.branch_points(x) if bp is None else bp)
         R = max(float(np.max(np.abs(bp - lc))) if bp.size else 0.0, float(np.max(np.abs(model.positions - lc))),
                 _R_FLOOR)
         P = model.family.period
@@ -251,16 +272,71 @@ class ChainExactFlow(Map):
         except (BranchPointError, InvalidParameterError, np.linalg.LinAlgError):
             return None
 
-    def _newton(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float, np.ndarray] | None:
+    def _newton(self, x: np.ndarray, dt: float, compiled: bool | None = None
+                ) -> tuple[np.ndarray, float, np.ndarray] | None:
+        """The solve of :meth:`_solve`: Newton's method by the compiled route (:mod:`jetgaudin._exact_chain_kernels`,
+        the families of its ``COMPILED_FAMILIES``) or the NumPy route (:meth:`_newton_numpy`; ``compiled=False``
+        forces it: the tests compare the two), then the acceptance (quadrature estimate, residual, branch)."""
         model = self.model
-        keep, E, rate = self._design()
+        keep, E, rate = self._design
         target = dt * np.asarray(self.H.weights, dtype=float)[keep]
         k = int(keep.sum()) - E.shape[1]
-        rho = self._real_parts(x, k)
+        bp = model.branch_points(x)  # once per orbit: the real parts and the branch check
+        rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
         lc = float(np.mean(model.positions))
         P = model.family.period
+        # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
+        # points η, η̄ coincide modulo the period 2iK')
+        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
+        fid = COMPILED_FAMILIES.get(model.family.name)
+        if compiled is None:
+            compiled = fid is not None
+        if compiled and fid is None:
+            raise InvalidParameterError(f"the {model.family.name} family has no compiled exact-step solve")
+        sol = (self._newton_compiled(x, int(fid), keep, E, target, rho, bound) if compiled  # type: ignore[arg-type]
+               else self._newton_numpy(x, keep, E, target, rho, bound))
+        if sol is None:
+            return None
+        u, om, quad, nu_end = sol
+        if quad > _QUAD_TOL:  # the rule has not converged on some segment: the adaptive quadrature
+            om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
+        scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
+        eta = rho + 1j * u[:k]
+        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and _branch_ok(model, x, eta,
+                                                                                                  nu_end, bp):
+            return eta, -rate * u[k] if rate else 0.0, nu_end
+        return None
+
+    def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound):
+        """:meth:`_newton_numpy` in one compiled call: ``(u, ω (k, n_keep), quadrature estimate, ν(η_j))`` or
+        ``None``."""
+        model = self.model
+        fam = model.family
+        I = np.asarray(model.integrals(x), dtype=float)
+        extra = I[2 * model.M:]
+        const = float(np.real(fam.nu2_constant(float(model.b), extra)))
+        dconst = np.ascontiguousarray(fam.nu2_constant_gradient(float(model.b), extra), dtype=float)
+        k = len(rho)
+        u = np.empty(E.shape[0])
+        om = np.empty((k, E.shape[0]))
+        nu_end = np.empty(k, dtype=complex)
+        K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
+        xs1, perm1, w1, xs2, perm2, w2 = _rules()
+        status, quad = K.newton(fid, float(getattr(fam, "gamma", 0.0)), model.positions.astype(float),
+                              np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
+                              dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
+                              np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),
+                              np.ascontiguousarray(bound, dtype=float), xs1, perm1, w1, xs2, perm2, w2, _STEP_TOL,
+                              _ITERATIONS, u, om, nu_end)
+        return None if status else (u, om, quad, nu_end)
+
+    def _newton_numpy(self, x, keep, E, target, rho, bound):
+        """Newton's method on the NumPy route (:class:`_Weights`): ``(u, ω (k, n_keep), quadrature estimate,
+        ν(η_j))`` or ``None``."""
+        model = self.model
+        k = len(rho)
         weights = _Weights(self, x, keep)
 
         def jac(dom):
@@ -271,9 +347,6 @@ class ChainExactFlow(Map):
         if not np.all(np.isfinite(J0)) or np.linalg.cond(J0) > 1e12:
             return None
         u = np.linalg.solve(J0, target)
-        # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
-        # points η, η̄ coincide modulo the period 2iK')
-        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
         for _ in range(_ITERATIONS):
             if np.any(np.abs(u[:k]) > bound) or not np.all(np.isfinite(u)):
                 return None
@@ -287,13 +360,7 @@ class ChainExactFlow(Map):
                 return None
             if np.all(np.abs(du) <= _STEP_TOL * np.abs(u)):
                 om, _, quad = weights(rho, u[:k], estimate=True)
-                if quad > _QUAD_TOL:  # the rule has not converged on some segment: the adaptive quadrature
-                    om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
-                scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
-                eta = rho + 1j * u[:k]
-                if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and weights.branch_ok(eta):
-                    return eta, -rate * u[k] if rate else 0.0, weights.nu_end
-                return None
+                return u, om, quad, weights.nu_end
         return None
 
     def parameters(self, x: np.ndarray) -> tuple[np.ndarray, float]:

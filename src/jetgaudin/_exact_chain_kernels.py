@@ -1,0 +1,263 @@
+r"""Compiled parameter solve of :class:`jetgaudin.ChainExactFlow` (private): Newton's method for the imaginary parts
+``h_j`` of the maps and the free multiples ``u_{k:}`` (rotation, identities) in one Numba call
+(:func:`newton`), the twin of the NumPy route ``exact_chain._Weights`` / ``ChainExactFlow._newton_numpy`` (the
+tests compare the two to round-off).
+
+``ν²`` along a vertical segment ``λ = ρ + i s`` from the integrals: ``ν²(λ) = c + Σ_{i,m} h_{i,m} ψ_m(λ − λ_i)``
+(``c`` the family's constant ``nu2_constant(b, extra)``; ``docs/families.md``), with the basis ``ψ_m`` compiled
+per family (:func:`_psi_site`): rational ``ψ_m(z) = z^{−m}``; trigonometric ``ψ_m = (−1)^{m−1} [x^{m−1}] w_3(z + x)``,
+``w_3 = γ cot(γ ·)``, from the Taylor series of ``sin`` and ``cos`` at ``γz`` (series inverse and product, as
+:meth:`jetgaudin.families.TrigonometricFamily.taylor`).  The
+elliptic family has no compiled basis yet (its Jacobi functions of complex argument are NumPy/SciPy): it keeps the
+NumPy route (``exact_chain.COMPILED_FAMILIES``: the ids of :func:`_psi_site`).
+
+The weights ``ω_I(ρ_j + i h_j) = −h_j Σ_q w_q Re[∂ν²/∂I(λ_q)/ν(λ_q)]`` by the Gauss–Legendre rule, ``ν`` continued
+node by node from ``+√ν²(ρ)`` in the order of ``|s|`` (the root nearer to the previous one; a step that moves ``ν``
+by more than a quarter of its size, or ``ν = 0``: a branch point near the segment, the solve fails), the derivative
+``∂ω_I/∂h = −Re[∂ν²/∂I(η)/ν(η)]`` at the end point; the extras' column ``∂ν²/∂I`` is the constant ``dconst``.
+"""
+
+from __future__ import annotations
+
+import cmath
+
+import numpy as np
+from numba import njit
+
+__all__ = ["newton", "psi_values"]
+
+
+@njit(cache=True, error_model="numpy")
+def _psi_site(fid, gamma, z, order, out, s, c, r):
+    """``out[m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r`` complex scratch of length ``order``)."""
+    if fid == 0:
+        inv = 1.0 / z
+        p = inv
+        for m in range(order):
+            out[m] = p
+            p = p * inv
+        return
+    t = gamma * z
+    s0 = cmath.sin(t)
+    c0 = cmath.cos(t)
+    f = 1.0
+    for n in range(order):
+        q = n % 4
+        if q == 0:
+            s[n] = f * s0
+            c[n] = f * c0
+        elif q == 1:
+            s[n] = f * c0
+            c[n] = -f * s0
+        elif q == 2:
+            s[n] = -f * s0
+            c[n] = -f * c0
+        else:
+            s[n] = -f * c0
+            c[n] = f * s0
+        f = f * gamma / (n + 1)
+    r0 = 1.0 / s[0]
+    r[0] = r0
+    for m in range(1, order):
+        acc = 0j
+        for k in range(1, m + 1):
+            acc += s[k] * r[m - k]
+        r[m] = -acc * r0
+    for m in range(order):
+        r[m] = gamma * r[m]
+    for n in range(order):
+        acc = 0j
+        for p in range(n + 1):
+            acc += c[p] * r[n - p]
+        out[n] = acc if n % 2 == 0 else -acc
+
+
+@njit(cache=True, error_model="numpy")
+def _psi_point(fid, gamma, lam, site_pos, site_n, psi, s, c, r):
+    """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``)."""
+    o = 0
+    for i in range(site_pos.shape[0]):
+        order = 2 * site_n[i]
+        _psi_site(fid, gamma, lam - site_pos[i], order, psi[o:o + order], s, c, r)
+        o += order
+
+
+def psi_values(fid: int, gamma: float, lam: np.ndarray, site_pos: np.ndarray, site_n: np.ndarray) -> np.ndarray:
+    """``ψ_m(λ − λ_i)`` for each point of ``lam`` (1-D complex), shape ``(len(lam), 2M)`` (the tests compare it with
+    :meth:`jetgaudin.families.Family.nu2_basis`)."""
+    return _psi_many(fid, float(gamma), np.ascontiguousarray(lam, dtype=complex), site_pos, site_n)
+
+
+@njit(cache=True, error_model="numpy")
+def _psi_many(fid, gamma, lam, site_pos, site_n):
+    n2 = 0
+    nmax = 1
+    for i in range(site_n.shape[0]):
+        n2 += 2 * site_n[i]
+        nmax = max(nmax, 2 * site_n[i])
+    out = np.empty((lam.shape[0], n2), dtype=np.complex128)
+    s = np.empty(nmax, dtype=np.complex128)
+    c = np.empty(nmax, dtype=np.complex128)
+    r = np.empty(nmax, dtype=np.complex128)
+    for q in range(lam.shape[0]):
+        _psi_point(fid, gamma, lam[q], site_pos, site_n, out[q], s, c, r)
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r):
+    """``f[q, i] = Re[∂ν²/∂I_{kidx[i]}(λ_q)/ν(λ_q)]`` at ``λ_q = a + i h xs[q]``, ``ν`` continued from ``+√ν²(a)``
+    along ``perm`` (the nodes by increasing ``xs``); returns ``(ok, ν at the end point xs = 1)`` (``ok`` false: a step
+    moved ``ν`` by more than a quarter of its size, or ``ν = 0``)."""
+    n2 = hI.shape[0]
+    _psi_point(fid, gamma, complex(a, 0.0), site_pos, site_n, psi, s, c, r)
+    acc = complex(const, 0.0)
+    for cI in range(n2):
+        acc += hI[cI] * psi[cI]
+    v = cmath.sqrt(acc)
+    if v.real < 0:
+        v = -v
+    ok = True
+    nu_last = v
+    for t in range(perm.shape[0]):
+        q = perm[t]
+        lam = complex(a, h * xs[q])
+        _psi_point(fid, gamma, lam, site_pos, site_n, psi, s, c, r)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        rq = cmath.sqrt(acc)
+        if abs(rq - v) > abs(rq + v):
+            rq = -rq
+        if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
+            ok = False
+        if not abs(rq) > 0:
+            ok = False
+        v = rq
+        inv = 1.0 / rq
+        for i in range(kidx.shape[0]):
+            col = kidx[i]
+            F = psi[col] if col < n2 else complex(dconst[col - n2], 0.0)
+            f[q, i] = (F * inv).real
+        if xs[q] == 1.0:
+            nu_last = rq
+    return ok, nu_last
+
+
+@njit(cache=True, error_model="numpy")
+def _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
+             nu_end, f, psi, s, c, r):
+    """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
+    ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
+    ``nu_end[j]`` the continued ``ν`` at ``η_j``.  Returns ``False`` where ``ν`` cannot be continued."""
+    n2r = w2.shape[0]
+    for j in range(rho.shape[0]):
+        ok, nv = _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
+                          c, r)
+        if not ok:
+            return False
+        nu_end[j] = nv
+        for i in range(kidx.shape[0]):
+            acc = 0.0
+            for q in range(n1):
+                acc += w1[q] * f[q, i]
+            om[j, i] = -h[j] * acc
+            dom[j, i] = -f[n1, i]
+            if n2r:
+                acc = 0.0
+                for q in range(n2r):
+                    acc += w2[q] * f[n1 + 1 + q, i]
+                om2[j, i] = -h[j] * acc
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
+           w2, step_tol, iterations, u, om, nu_end):
+    """Newton's method of ``ChainExactFlow._newton_numpy`` compiled: ``u = (h_1..h_k, extra unknowns)`` with
+    ``Σ_j ω(ρ_j + i h_j) − E u_{k:} = target`` on the matched integrals ``kidx``.  The start from the linearisation
+    at ``h = 0`` (``∂ω/∂h = −Re[∂ν²/∂I(ρ)/ν(ρ)]``), then steps with the exact Jacobian while ``|h_j| ≤ bound_j``,
+    the Jacobian finite with condition number at most 1e12, until every ``|Δu| ≤ step_tol |u|``; then one pass of
+    the rule ``w1`` and the half rule ``w2`` (nodes ``xs2``, their continuation order ``perm2``) at the solution.
+    Returns ``(status, quadrature estimate)``: status 0 converged (``u``, ``om`` (k, n_keep) by the rule ``w1``,
+    ``nu_end`` (k,) written), 1 no solution (diverged, left the bound, ill conditioned, or ``ν`` not continued)."""
+    k = rho.shape[0]
+    nk = kidx.shape[0]
+    ne = E.shape[1]
+    n2 = hI.shape[0]
+    nmax = 1
+    for i in range(site_n.shape[0]):
+        nmax = max(nmax, 2 * site_n[i])
+    psi = np.empty(n2, dtype=np.complex128)
+    s = np.empty(nmax, dtype=np.complex128)
+    c = np.empty(nmax, dtype=np.complex128)
+    r = np.empty(nmax, dtype=np.complex128)
+    f = np.empty((xs2.shape[0], nk))
+    dom = np.empty((k, nk))
+    om2 = np.empty((k, nk))
+    nw1 = w1.shape[0]
+    empty = np.empty(0)
+    J = np.empty((nk, k + ne))
+    # the start: the linearisation at h = 0
+    for j in range(k):
+        _psi_point(fid, gamma, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        nus = cmath.sqrt(acc).real
+        for i in range(nk):
+            col = kidx[i]
+            F = psi[col] if col < n2 else complex(dconst[col - n2], 0.0)
+            J[i, j] = -(F / nus).real
+    for i in range(nk):
+        for e in range(ne):
+            J[i, k + e] = -E[i, e]
+    if not (np.all(np.isfinite(J)) and np.linalg.cond(J) <= 1e12):
+        return 1, 0.0
+    u[:] = np.linalg.solve(J, target)
+    res = np.empty(nk)
+    for _ in range(iterations):
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1, 0.0
+        if not np.all(np.isfinite(u)):
+            return 1, 0.0
+        if not _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
+                        nw1, om, dom, om2, nu_end, f, psi, s, c, r):
+            return 1, 0.0
+        for i in range(nk):
+            acc = -target[i]
+            for j in range(k):
+                acc += om[j, i]
+                J[i, j] = dom[j, i]
+            for e in range(ne):
+                acc -= E[i, e] * u[k + e]
+                J[i, k + e] = -E[i, e]
+            res[i] = acc
+        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om)) and np.linalg.cond(J) <= 1e12):
+            return 1, 0.0
+        du = np.linalg.solve(J, res)
+        done = True
+        for i in range(k + ne):
+            u[i] -= du[i]
+            if not abs(du[i]) <= step_tol * abs(u[i]):
+                done = False
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1, 0.0
+        if not np.all(np.isfinite(u)):
+            return 1, 0.0
+        if done:
+            if not _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
+                            nw1, om, dom, om2, nu_end, f, psi, s, c, r):
+                return 1, 0.0
+            quad = 0.0
+            scale = 0.0
+            for i in range(nk):
+                tot = 0.0
+                for j in range(k):
+                    quad = max(quad, abs(om[j, i] - om2[j, i]))
+                    tot += abs(om[j, i])
+                scale = max(scale, tot)
+            return 0, quad / (scale + 1e-300)
+    return 1, 0.0

@@ -1,0 +1,91 @@
+"""The compiled parameter solve of ChainExactFlow (jetgaudin._exact_chain_kernels) against the NumPy route, and the
+compiled chain loop against the chain maps' own route (issue 33 item 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import jetgaudin as jg
+from jetgaudin._errors import StepTooLargeError
+from jetgaudin._exact_chain_kernels import psi_values
+from jetgaudin.exact_chain import COMPILED_FAMILIES
+
+
+def _models():
+    rat = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 2)])
+    trig = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="trigonometric", gamma=0.5)
+    trig2 = jg.GaudinModel(0.7, [(-0.4, 2), (0.9, 1)], family="trigonometric", gamma=0.8)
+    return {
+        "rational": (rat.hamiltonian([0.3, 0.1, -0.2, 0.4, 0.5, 0.2]),
+                     np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6])),
+        "trigonometric": (trig.hamiltonian([0.3, 0, -0.2, 0, 0.5, 0, 0.4]),
+                          np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6])),
+        "trigonometric, a site of order 2": (trig2.hamiltonian([0.2, 0.1, -0.3, 0.05, 0.4, 0.0, 0.3]),
+                                             np.array([0.2, -0.5, 0.3, 0.1, 0.2, -0.1, -0.4, 0.3, 0.5])),
+    }
+
+
+@pytest.mark.parametrize("family, kw", [("rational", {}), ("trigonometric", {"gamma": 0.5}),
+                                        ("trigonometric", {"gamma": 1.7})])
+def test_the_compiled_basis_is_the_family_s_nu2_basis(family, kw):
+    model = jg.GaudinModel(1.0, [(0.0, 2), (1.3, 3)], family=family, **kw)
+    rng = np.random.default_rng(5)
+    lam = rng.uniform(-1, 3, 40) + 1j * rng.uniform(-2, 2, 40)
+    got = psi_values(COMPILED_FAMILIES[family], kw.get("gamma", 0.0), lam, model.positions.astype(float),
+                     np.array(model.orders, dtype=np.int64))
+    ref = np.stack([model.family.nu2_basis(m, lam - p) for p, N in model.sites for m in range(1, 2 * N + 1)], -1)
+    # the same series (sin, cos, inverse, product) in another order of operations: round-off of the largest
+    # term of the Cauchy sums, ~1e-15 of |ψ| plus the size of the terms (the points are O(1) from the poles)
+    assert np.max(np.abs(got - ref) / (np.abs(ref) + 1)) < 1e-12
+
+
+@pytest.mark.parametrize("name", list(_models()))
+@pytest.mark.parametrize("dt", [0.05, -0.08, 0.01])
+def test_compiled_solve_agrees_with_the_numpy_route(name, dt):
+    H, x = _models()[name]
+    flow = jg.ChainExactFlow(H, dt)
+    a = flow._newton(x, dt, compiled=True)
+    b = flow._newton(x, dt, compiled=False)
+    assert a is not None and b is not None
+    # both converge to a Newton step of 1e-13 |h| on the same 64-point rule, summed in another order: the
+    # parameters agree to a few 1e-15 (tolerance 1e-12 relative to |η|, ~1e4 ulps)
+    assert np.max(np.abs(a[0] - b[0])) <= 1e-12 * np.max(np.abs(b[0]))
+    assert abs(a[1] - b[1]) <= 1e-12 * max(1.0, abs(b[1]))
+    assert np.max(np.abs(a[2] - b[2])) <= 1e-12 * np.max(np.abs(b[2]))
+
+
+@pytest.mark.parametrize("name", list(_models()))
+def test_compiled_solve_refuses_the_same_steps(name):
+    H, x = _models()[name]
+    flow = jg.ChainExactFlow(H, 1.0)
+    dmax = float(flow.max_dt(x))  # searched up to 10
+    assert 0 < dmax < 9.9
+    for dt in (0.95 * dmax, 1.05 * dmax, 3 * dmax):
+        a = flow._newton(x, dt, compiled=True)
+        b = flow._newton(x, dt, compiled=False)
+        assert (a is None) == (b is None), dt
+    with pytest.raises(StepTooLargeError) as err:
+        jg.ChainExactFlow(H, 3 * dmax).advance(x, None, 2)
+    # dt_max of the message is the bisection's (to 1e-3 relative) on the sub-step: that of max_dt
+    assert abs(err.value.dt_max - dmax) <= 2e-3 * dmax
+
+
+def test_a_batch_with_one_infeasible_orbit_names_it():
+    H, x = _models()["trigonometric"]
+    flow = jg.ChainExactFlow(H, 0.1)
+    big = 6.0 * x  # a larger state: larger branch points, a smaller dt_max
+    assert float(flow.max_dt(big)) < 0.1 < float(flow.max_dt(x))
+    with pytest.raises(StepTooLargeError, match="orbit 1"):
+        flow.advance(np.stack([x, big]), None, 3)
+
+
+@pytest.mark.parametrize("name", list(_models()))
+def test_the_exact_step_is_the_flow(name):
+    """The compiled solve's maps are the time-dt flow of H: 20 steps against DOP853 at tight tolerances."""
+    H, x = _models()[name]
+    dt = 0.05
+    rows = jg.ChainExactFlow(H, dt).iterate(x, 20)
+    ref = jg.solve(H, x, (0.0, 20 * dt), dt=dt, method="dop853", rtol=1e-13, atol=1e-13).X
+    # DOP853 at 1e-13 over t = 1: its own error ~1e-12; the exact steps are round-off (~1e-14)
+    assert np.max(np.abs(rows[-1] - ref[-1])) < 1e-10
