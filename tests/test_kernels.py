@@ -393,13 +393,17 @@ def test_real_form_step_equals_the_complex_division(eta, rng):
                 assert np.max(np.abs(np.array(got) - ref)) <= 1e-14 * np.max(np.abs(ref))
 
 
-def test_lanes_redo_path_equals_the_single_orbit():
-    # orbits whose Newton update of nu1 is refused (nu1 passed 1e-3 off, cont=True) are redone by the lanes' second
-    # pass with the closest root: bit for bit the single-orbit route's fallback
+@pytest.mark.parametrize("rel", [1e-3, 1e-10, 1e-15])
+def test_lanes_redo_path_equals_the_single_orbit(rel):
+    # every third orbit gets nu1 off by `rel` (cont=True), so nu^2 changes by ~2 rel at the first step: 1e-3, the
+    # Newton update is refused and the lane is redone by the second pass with the closest root; 1e-10 (above the
+    # carry's 1e-13, below 1e-8), the lane is redone with nu1 set to its Newton update first; 1e-15, nu1 is used as
+    # it is and its update carried.  Each is bit for bit the single-orbit route's case (a redone lane that kept its
+    # old nu1, or took the update when it should carry it, differs in the first step's bits)
     X = sample_on_leaf(3, [0.5, 0.2, 1.0], 70, seed=4)
     b = np.full(70, 1.0)
     eta = np.full(70, 5 + 0.1j)
-    nu = _kernels.nu_default(X, b, eta) * np.where(np.arange(70) % 3 == 0, 1 + 1e-3, 1.0)
+    nu = _kernels.nu_default(X, b, eta) * np.where(np.arange(70) % 3 == 0, 1 + rel, 1.0)
     out, _, _, nu_last, status, _ = _kernels.run_batch(X, b, eta, nu, True, 30, 1)
     assert np.all(status == 0)
     for i in (0, 1, 3, 66, 69):
