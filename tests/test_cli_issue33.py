@@ -121,3 +121,22 @@ def test_flow_midpoint_runs_on_a_chain(tmp_path, capsys):
     run = json.loads((out / "run.json").read_text())
     assert run["map"]["kind"] == "midpoint" and run["map"]["model"]["family"] == "elliptic"
     assert max(run["max_drift_abs"]) < 1e-12
+
+
+def test_every_command_with_a_route_names_it_backend_with_kernel_its_alias():
+    """One option name on every command: where a command has ``--kernel`` it has ``--backend`` (the same option)
+    and vice versa, and the commands that run a map with a route (orbit, ensemble, flow) have both."""
+    import typer.main
+
+    from jetgaudin.cli import app
+
+    group = typer.main.get_command(app)
+    names = {}
+    for cmd_name, cmd in group.commands.items():  # type: ignore[attr-defined]
+        opts = {o for p in cmd.params for o in getattr(p, "opts", [])}
+        names[cmd_name] = opts
+        same = [p for p in cmd.params if "--backend" in getattr(p, "opts", []) or "--kernel" in getattr(p, "opts", [])]
+        assert len(same) <= 1 and all({"--backend", "--kernel"} <= set(p.opts) for p in same), cmd_name
+    routed = {c for c, o in names.items() if "--backend" in o}
+    assert {"orbit", "ensemble", "flow"} <= routed
+    assert routed == {c for c, o in names.items() if "--kernel" in o}

