@@ -2,9 +2,8 @@ r"""N = 3 ensembles: ``LANES`` orbits in lock-step (structure of arrays), branch
 
 :func:`_lane_axis` and :func:`_lane_dress` are the two halves of :func:`._n3._step3` with both sides of every
 choice computed and the same value selected, so each lane gives the bits of the single-orbit route (the same
-operations, fused multiply-adds included, in the same order); lanes where ``_step3`` does not use the carried ``ν1``
-as it is (its Newton update applied first, or refused) are redone by a second pass with ``ν1`` set to the update or
-continued by the closest root (:func:`run_lanes3`).  Import only after
+operations, fused multiply-adds included, in the same order); lanes whose Newton update of ``ν1`` is refused are
+redone by a second pass with ``ν1`` continued by the closest root (:func:`run_lanes3`).  Import only after
 :func:`._target.configure`.
 """
 
@@ -36,27 +35,24 @@ from ._status import STATUS_BRANCH, STATUS_NONFINITE, STATUS_OK, STATUS_RESIDUAL
 @block(inline="always")
 def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i, q, nu, newton):
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``
-    (carried to the next step), the eigenvector for the carried ``ν1`` and the unnormalised axis ``n'`` with
-    ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of two of :func:`._n3._scale3`).  Returns ``(ν1 for
-    the next step, n'_1, n'_2, n'_3, r, redo, nonfinite, branch)``; ``redo``: ``_REDO_NONE`` (``_step3`` carries
-    the update: the step stands), ``_REDO_NEWTON`` (it applies the update first) or ``_REDO_ROOT`` (it takes the
-    closest root): the lane must be redone with that ``ν1`` (issue 36: the eigenvector no longer waits for
-    ``ν²(x_n)`` and the tests, which the selects of the three cases put on the step's dependency chain)."""
+    (carried to the next step, or applied first: the selects of ``_step3``'s cases), the eigenvector and the
+    unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of two of
+    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
+    ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
     nu2 = _nu2(u, v, w)
     c = nu2 - nu * nu
     a2 = S._abs2(c)
     s2 = S._abs2(nu2)
+    # the closest-root fallback of _step3 is rare: flag the lane (redone by a second pass) instead of computing it
+    need_root = S._sel(newton, not (a2 <= _NEWTON_TOL2 * s2), False)  # selects, no short-circuit control flow
     nn = _newton_nu(nu, c, S._cdiv(complex(1.0, 0.0), nu + nu))
-    # the usual case of _step3 (the change of ν² at round-off level): ν1 used as is, its update carried.  The
-    # others are rare: the lane is flagged (redone by a second pass, ν1 first set to the Newton update or the
-    # closest root) instead of selected here, so that the eigenvector does not wait for ν²(x_n) and the tests
-    redo = S._sel(a2 <= _CARRY_TOL2 * s2, _REDO_NONE, S._sel(a2 <= _NEWTON_TOL2 * s2, _REDO_NEWTON, _REDO_ROOT))
-    redo = S._sel(newton, redo, _REDO_NONE)  # selects, no short-circuit control flow
+    carry = a2 <= _CARRY_TOL2 * s2  # ν1 used as is, its update carried (as _step3)
     nu_next = S._selc(newton, nn, nu)
+    nu = S._selc(S._sel(newton, not carry, False), nn, nu)
     k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
     n1, n2, n3, r = _axis(k1, k2, nk, q)
-    return nu_next, n1, n2, n3, r, redo, bad_scale, branch
+    return nu_next, n1, n2, n3, r, need_root, bad_scale, branch
 
 
 @block(inline="always")
@@ -76,20 +72,15 @@ def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, ba
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 32
 # rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status, redo (the lane
-# is redone: a _REDO_* value) and a copy of alive during the second pass
+# needs the closest-root fallback) and a copy of alive during the second pass
 _C0 = 12
 _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
 _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
-# the values of the redo row: the lane's step is kept; redone with ν1 set to its Newton update (the change of ν² above
-# round-off, below 1e-8 relative: _step3 applies the update first); redone with the closest root
-_REDO_NONE = 0.0
-_REDO_NEWTON = 1.0
-_REDO_ROOT = 2.0
 # the power of two q of _n3._scale3 (per orbit and call)
 _Q = _ALIVE + 4
-# scratch rows between the two halves of a step: ν1 (2), n' (3), r, redo, nonfinite, branch, the residual
+# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch, the residual
 # tolerance
 _MID = _ALIVE + 5
 # the new state (9 rows) and the step's status, copied back by a loop of their own (a select stored in place
@@ -120,7 +111,7 @@ def _lanes_pass(buf, newton):
         buf[M + 3 * L + l] = r[2]
         buf[M + 4 * L + l] = r[3]
         buf[M + 5 * L + l] = r[4]
-        buf[M + 6 * L + l] = r[5]
+        buf[M + 6 * L + l] = S._sel(r[5], 1.0, 0.0)
         buf[M + 7 * L + l] = S._sel(r[6], 1.0, 0.0)
         buf[M + 8 * L + l] = S._sel(r[7], 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
@@ -136,6 +127,7 @@ def _lanes_pass(buf, newton):
         alive = buf[_ALIVE * L + l] != 0.0
         Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l], buf[M + 3 * L + l],
                   buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
+        redo = S._sel(alive, buf[M + 6 * L + l] != 0.0, False)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
                         buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 9 * L + l], buf[M + 7 * L + l] != 0.0,
                         buf[M + 8 * L + l] != 0.0)
@@ -150,7 +142,7 @@ def _lanes_pass(buf, newton):
         buf[N + 7 * L + l] = r[8]
         buf[N + 8 * L + l] = r[9]
         buf[N + 9 * L + l] = float(r[0])
-        buf[_REDO * L + l] = S._sel(alive, buf[M + 6 * L + l], _REDO_NONE)
+        buf[_REDO * L + l] = S._sel(redo, 1.0, 0.0)
     if _all_row(buf, _ALIVE * L) and not _any_row(buf, _REDO * L) and not _any_row(buf, (_NEW + 9) * L):
         # every lane stepped and none failed (the usual step): the new values as they are, ν1 from the scratch rows
         for i in range(9):
@@ -227,10 +219,9 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     Each block runs in lock-step, SIMD across its orbits (a partial last block repeats its first orbit in the
     unused lanes, whose results are discarded); every orbit gets the bits of its single-orbit run
     (:func:`._n3.run_orbit3`), and a failed orbit is frozen at its last good state.  A step is one pass of
-    :func:`_lanes_pass` over the block; lanes where ``_step3`` does not carry the Newton update of ``ν1`` (it applies
-    it first, or refuses it) are left unchanged by it, their ``ν1`` set to the update or continued by the closest
-    root, and they alone are stepped by a second pass without the Newton update: the operations of
-    :func:`._n3._step3`'s cases, hence the same bits.
+    :func:`_lanes_pass` over the block; lanes whose Newton update of ``ν1`` was refused are left unchanged by it,
+    their ``ν1`` continued by the closest root, and they alone are stepped by a second pass without the Newton
+    update: the operations of :func:`._n3._step3`'s fallback, hence the same bits.
 
     One function from the blocks to the step loop (no intermediate compiled functions): Numba links the code of
     every callee into each caller's module and optimises it again there, so each level above the lanes' pass
@@ -281,11 +272,8 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                     if not _any_row(buf, _REDO * L):
                         break
                     redo = True
-                    for l in range(L):  # ν1 of the lanes to redo: the Newton update, or the closest root
-                        if buf[_REDO * L + l] == _REDO_NEWTON:
-                            buf[9 * L + l] = buf[_MID * L + l]  # ν1 for the next step of the first pass
-                            buf[10 * L + l] = buf[(_MID + 1) * L + l]
-                        elif buf[_REDO * L + l] != _REDO_NONE:
+                    for l in range(L):  # ν1 of the lanes to redo continued by the closest root
+                        if buf[_REDO * L + l] != 0.0:
                             u, v, w = _ell3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                             buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l],
                                             buf[11 * L + l], buf[12 * L + l], buf[13 * L + l], buf[14 * L + l],
@@ -295,7 +283,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                             buf[10 * L + l] = nu.imag
                     for l in range(L):  # the second pass steps those lanes alone
                         buf[_SAVED * L + l] = buf[_ALIVE * L + l]
-                        buf[_ALIVE * L + l] = S._sel(buf[_REDO * L + l] != _REDO_NONE, 1.0, 0.0)
+                        buf[_ALIVE * L + l] = buf[_REDO * L + l]
                 _lanes_pass(buf, newton and not second)
             if redo:
                 for l in range(L):
