@@ -90,9 +90,18 @@ _NODES, _QUAD_TOL = 64, 1e-13
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
 _R_FLOOR = 1e-6
-#: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); the
-#: others (elliptic) solve on the NumPy route
-COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1}
+#: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); any
+#: other family solves on the NumPy route
+COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
+
+
+def _family_constants(fam) -> np.ndarray:
+    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``(k, m, K, K', E, E', k')``."""
+    if fam.name == "elliptic":
+        from ._exact_elliptic import elliptic_constants
+
+        return elliptic_constants(float(fam.modulus))
+    return np.array([float(getattr(fam, "gamma", 0.0))])
 
 
 class _Weights:
@@ -263,12 +272,13 @@ class ChainExactFlow(Map):
             return _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
         return None if R <= _R_FLOOR else rho
 
-    def _solve(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float, np.ndarray] | None:
+    def _solve(self, x: np.ndarray, dt: float, compiled: bool | None = None
+               ) -> tuple[np.ndarray, float, np.ndarray] | None:
         """``(η_1..η_k, θ)`` of the exact time-``dt`` step on the orbit ``x``, or ``None`` (no accepted solution:
         Newton's method diverges, leaves the monotone branch, meets a branch point or a period's edge); the third
         entry is ``ν(η_j)`` on the maps' branch (checked against ``model.nu``), the maps' first ``ν1``."""
         try:
-            return self._newton(x, dt)
+            return self._newton(x, dt, compiled)
         except (BranchPointError, InvalidParameterError, np.linalg.LinAlgError):
             return None
 
@@ -304,10 +314,30 @@ class ChainExactFlow(Map):
             om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
         scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
         eta = rho + 1j * u[:k]
-        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and _branch_ok(model, x, eta,
-                                                                                                  nu_end, bp):
-            return eta, -rate * u[k] if rate else 0.0, nu_end
-        return None
+        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) > _RES_TOL:
+            return None
+        if compiled and model.family.uniformizer(0.0) is None:  # the numerical branch rule, compiled
+            ok = self._branch_numerical(x, eta, nu_end)
+        else:
+            ok = _branch_ok(model, x, eta, nu_end, bp)
+        return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
+
+    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray) -> bool:
+        """:func:`_branch_ok` for a family without a uniformizer (elliptic), by the compiled twin of its branch rule
+        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``)."""
+        model = self.model
+        fam = model.family
+        K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
+        args = (COMPILED_FAMILIES[fam.name], _family_constants(fam), model.positions.astype(float),
+                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
+                float(fam.period or np.inf))
+        for e, v in zip(eta, nu_end, strict=True):
+            ok, ref = K.nu_numerical(*args, complex(e), 64, 2**16)
+            if not (ok and abs(ref - v) <= 1e-8 * abs(ref)):
+                return False
+        return True
 
     def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound):
         """:meth:`_newton_numpy` in one compiled call: ``(u, ω (k, n_keep), quadrature estimate, ν(η_j))`` or
@@ -324,7 +354,7 @@ class ChainExactFlow(Map):
         nu_end = np.empty(k, dtype=complex)
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
         xs1, perm1, w1, xs2, perm2, w2 = _rules()
-        status, quad = K.newton(fid, float(getattr(fam, "gamma", 0.0)), model.positions.astype(float),
+        status, quad = K.newton(fid, _family_constants(fam), model.positions.astype(float),
                               np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
                               dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
                               np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),
