@@ -38,6 +38,7 @@ def test_the_compiled_basis_is_the_family_s_nu2_basis(family, kw):
     model = jg.GaudinModel(0.0 if family == "elliptic" else 1.0, [(0.0, 2), (1.3, 3)], family=family, **kw)
     rng = np.random.default_rng(5)
     lam = rng.uniform(-1, 3, 40) + 1j * rng.uniform(-2, 2, 40)  # elliptic: across the pole rows Im = ±K' too
+    lam = np.concatenate([lam, 2.2 + 1j * np.linspace(-4, 4, 41)])  # a vertical line (the elliptic cache of Re λ)
     got = psi_values(COMPILED_FAMILIES[family], _family_constants(model.family), lam, model.positions.astype(float),
                      np.array(model.orders, dtype=np.int64))
     ref = np.stack([model.family.nu2_basis(m, lam - p) for p, N in model.sites for m in range(1, 2 * N + 1)], -1)

@@ -26,17 +26,18 @@ import cmath
 import numpy as np
 from numba import njit
 
-from ._exact_elliptic import psi_elliptic
+from ._exact_elliptic import psi_elliptic_cached
 
 __all__ = ["newton", "psi_values"]
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_site(fid, fp, z, order, out, s, c, r, d):
+def _psi_site(fid, fp, z, order, out, s, c, r, d, xc):
     """``out[m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
-    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``)."""
+    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xc`` (8,) the
+    elliptic functions of ``Re z`` kept between points of one segment, zeros before the first)."""
     if fid == 2:
-        psi_elliptic(z, fp, order, out, s, c, r, d)
+        psi_elliptic_cached(z, fp, order, out, s, c, r, d, xc)
         return
     if fid == 0:
         inv = 1.0 / z
@@ -82,12 +83,12 @@ def _psi_site(fid, fp, z, order, out, s, c, r, d):
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d):
+def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache):
     """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``)."""
     o = 0
     for i in range(site_pos.shape[0]):
         order = 2 * site_n[i]
-        _psi_site(fid, fp, lam - site_pos[i], order, psi[o:o + order], s, c, r, d)
+        _psi_site(fid, fp, lam - site_pos[i], order, psi[o:o + order], s, c, r, d, xcache[i])
         o += order
 
 
@@ -109,18 +110,19 @@ def _psi_many(fid, fp, lam, site_pos, site_n):
     c = np.empty(nmax, dtype=np.complex128)
     r = np.empty(nmax, dtype=np.complex128)
     d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
     for q in range(lam.shape[0]):
-        _psi_point(fid, fp, lam[q], site_pos, site_n, out[q], s, c, r, d)
+        _psi_point(fid, fp, lam[q], site_pos, site_n, out[q], s, c, r, d, xcache)
     return out
 
 
 @njit(cache=True, error_model="numpy")
-def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d):
+def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache):
     """``f[q, i] = Re[∂ν²/∂I_{kidx[i]}(λ_q)/ν(λ_q)]`` at ``λ_q = a + i h xs[q]``, ``ν`` continued from ``+√ν²(a)``
     along ``perm`` (the nodes by increasing ``xs``); returns ``(ok, ν at the end point xs = 1)`` (``ok`` false: a step
     moved ``ν`` by more than a quarter of its size, or ``ν = 0``)."""
     n2 = hI.shape[0]
-    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d)
+    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
     acc = complex(const, 0.0)
     for cI in range(n2):
         acc += hI[cI] * psi[cI]
@@ -132,7 +134,7 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
     for t in range(perm.shape[0]):
         q = perm[t]
         lam = complex(a, h * xs[q])
-        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d)
+        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -156,14 +158,14 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
 
 @njit(cache=True, error_model="numpy")
 def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
-             nu_end, f, psi, s, c, r, d):
+             nu_end, f, psi, s, c, r, d, xcache):
     """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
     ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
     ``nu_end[j]`` the continued ``ν`` at ``η_j``.  Returns ``False`` where ``ν`` cannot be continued."""
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
         ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
-                          c, r, d)
+                          c, r, d, xcache)
         if not ok:
             return False
         nu_end[j] = nv
@@ -203,6 +205,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     c = np.empty(nmax, dtype=np.complex128)
     r = np.empty(nmax, dtype=np.complex128)
     d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
@@ -211,7 +214,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     J = np.empty((nk, k + ne))
     # the start: the linearisation at h = 0
     for j in range(k):
-        _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d)
+        _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -234,7 +237,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
         if not np.all(np.isfinite(u)):
             return 1, 0.0
         if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
-                        nw1, om, dom, om2, nu_end, f, psi, s, c, r, d):
+                        nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
             return 1, 0.0
         for i in range(nk):
             acc = -target[i]
@@ -260,7 +263,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
             return 1, 0.0
         if done:
             if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
-                            nw1, om, dom, om2, nu_end, f, psi, s, c, r, d):
+                            nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
                 return 1, 0.0
             quad = 0.0
             scale = 0.0
@@ -294,13 +297,14 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
     c = np.empty(nmax, dtype=np.complex128)
     r = np.empty(nmax, dtype=np.complex128)
     d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
     n = n0
     while n <= n_max:
         ok = True
         v = 0j
         for q in range(n + 1):
             lam = complex(a, eta.imag * (q / n))
-            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d)
+            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
             acc = complex(const, 0.0)
             for cI in range(n2):
                 acc += hI[cI] * psi[cI]

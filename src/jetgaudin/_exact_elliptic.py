@@ -44,14 +44,14 @@ def _agm(u, m):
     """``(sn, cn, dn, Z)`` of the real ``u`` and parameter ``0 ≤ m < 1`` (module doc)."""
     if m == 0.0:
         return math.sin(u), math.cos(u), 1.0, 0.0
-    a = np.empty(10)
-    c = np.empty(10)
+    a = np.empty(16)
+    c = np.empty(16)
     a[0] = 1.0
     c[0] = math.sqrt(m)
     b = math.sqrt(1.0 - m)
     twon = 1.0
     i = 0
-    while abs(c[i] / a[i]) > _EPS and i < 9:
+    while abs(c[i] / a[i]) > _EPS and i < 15:
         ai = a[i]
         i += 1
         c[i] = (ai - b) / 2.0
@@ -216,6 +216,73 @@ def psi_elliptic(z, ell, order, out, S, C, D, ns):
         return
     _ns_series(z, ell, order - 1, ns, S, C, D)
     c0 = 1.0 - ell[4] / ell[2]
+    for n in range(1, order):
+        acc = 0j
+        for i in range(n):
+            acc += ns[i] * ns[n - 1 - i]
+        v = -acc / n
+        if n == 1:
+            v = v + c0
+        out[n] = v if n % 2 == 0 else -v
+
+
+@njit(cache=True, error_model="numpy")
+def psi_elliptic_cached(z, ell, order, out, S, C, D, ns, xc):
+    """:func:`psi_elliptic` with the functions of ``Re z`` kept in ``xc`` (8,) between calls of equal ``Re z`` (the
+    nodes of one vertical segment): one AGM per point (``sn, cn, dn, Z`` of ``Im z``, reduced) instead of about ten.
+    The same formulas: after the reductions of :func:`curve_function`, the numerators of ``sn, cn, dn`` at the
+    reduced point ``v`` serve ``F`` and, at the pole rows (``v`` then the shifted point), the series of ``ns`` too
+    (``_jacobi._w_series`` shifts the same way); ``|Im v| ≤ K'/2``, so no reflection of ``Im v``."""
+    k, m, K, Kp, E = ell[0], ell[1], ell[2], ell[3], ell[4]
+    x0 = z.real
+    if not (xc[7] == 1.0 and xc[0] == x0):
+        nx = np.rint(x0 / (2.0 * K))
+        x = x0 - 2.0 * K * nx
+        xc[0] = x0
+        xc[1] = x
+        xc[2] = zeta_real(x, m)
+        xc[3] = sncndn(x, m)[0]
+        xc[4], xc[5], xc[6] = _reflected(x, m, K, ell[6])
+        xc[7] = 1.0
+    x = xc[1]
+    y = z.imag
+    const = 0j
+    row = 0.0
+    if math.isfinite(Kp):
+        ny = np.rint(y / (2.0 * Kp))
+        y = y - 2.0 * Kp * ny
+        const = -1j * math.pi / K * ny
+        if abs(y) > 0.5 * Kp:
+            row = 1.0 if y > 0 else -1.0
+        y = y - Kp * row
+        const = const - row * 1j * math.pi / (2.0 * K)
+    s1, c1, d1, zy = _agm(y, 1.0 - m)
+    if not math.isfinite(Kp):
+        zy = 0.0
+    s, c, d = xc[4], xc[5], xc[6]
+    delta = c1 * c1 + m * s * s * s1 * s1
+    Ns = complex(s * d1, c * d * s1 * c1)
+    Nc = complex(c * c1, -(s * d * s1 * d1))
+    Nd = complex(d * c1 * d1, -(m * s * c * s1))
+    lin = 0.0 if not math.isfinite(Kp) else math.pi / (2.0 * K * Kp)
+    z0 = xc[2] + 1j * (d1 * s1 / c1 - zy - lin * y) - m * xc[3] * (1j * s1 / c1) * (Ns / delta)
+    out[0] = z0 + const if row != 0.0 else Nc * Nd / (Ns * delta) + z0 + const
+    if order == 1:
+        return
+    n1 = order - 1
+    _ode_series(Ns / delta, Nc / delta, Nd / delta, m, n1, S, C, D)
+    if row != 0.0:
+        for n in range(n1):
+            ns[n] = k * S[n]
+    else:
+        r0 = 1.0 / S[0]
+        ns[0] = r0
+        for n in range(1, n1):
+            acc = 0j
+            for j in range(1, n + 1):
+                acc += S[j] * ns[n - j]
+            ns[n] = -acc * r0
+    c0 = 1.0 - E / K
     for n in range(1, order):
         acc = 0j
         for i in range(n):

@@ -301,6 +301,8 @@ class ChainExactFlow(Map):
         # points η, η̄ coincide modulo the period 2iK')
         bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
         fid = COMPILED_FAMILIES.get(model.family.name)
+        if fid == 2 and not float(model.family.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
+            fid = None
         if compiled is None:
             compiled = fid is not None
         if compiled and fid is None:
