@@ -128,3 +128,26 @@ def test_the_compiled_numerical_branch_rule_is_model_nu(name):
     assert np.max(np.abs(nu - ref) / np.abs(ref)) < 1e-12
     assert flow._branch_numerical(x, eta, nu)
     assert not flow._branch_numerical(x, eta, -nu)  # the other sheet is refused
+
+
+@pytest.mark.parametrize("name", ["rational", "trigonometric", "trigonometric, a site of order 2"])
+def test_the_branch_check_takes_model_nu_s_rule(name):
+    """The solve computes the branch points once and checks ν(η_j) by the rule with them: it must be model.nu's
+    (the trigonometric rule takes the roots in z = e^{2iγλ}, not in λ: with the λ-roots ~20 % of the signs differ)."""
+    from jetgaudin.exact_chain import _branch_ok, _orbit_roots
+
+    H, x0 = _models()[name]
+    model = H.model
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        x = x0 + 0.5 * rng.standard_normal(x0.size)
+        eta = rng.uniform(-2, 5, 4) + 1j * rng.uniform(-2, 2, 4)
+        raw, bp = _orbit_roots(model, x)
+        assert np.allclose(np.sort_complex(bp), np.sort_complex(np.ravel(model.branch_points(x))), atol=1e-12)
+        try:
+            ref = np.asarray(model.nu(x, eta))
+        except jg.JetGaudinError:  # a branch point on a segment: no rule to compare
+            continue
+        assert _branch_ok(model, x, eta, ref, raw)
+        flipped = ref * np.where(np.arange(4) == rng.integers(4), -1, 1)
+        assert not _branch_ok(model, x, eta, flipped, raw)

@@ -157,12 +157,22 @@ class _Weights:
         return om, -f[:, n], float(np.max(np.abs(om - om2)) / (np.abs(om).sum(axis=0).max() + 1e-300))
 
 
-def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, bp: np.ndarray) -> bool:
+def _orbit_roots(model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(raw, bp)``: the orbit's branch points as the branch rule takes them (``gaudin._curve.branch_points``: in the
+    uniformizer ``z`` for a family that has one, e.g. ``z = e^{2iγλ}``) and in ``λ`` (``model.branch_points``)."""
+    from .gaudin._curve import branch_points
+
+    raw = branch_points(model, x)
+    fam = model.family
+    return raw, (raw if fam.uniform or fam.uniformizer(0.0) is None else fam.uniformizer_inverse(raw))
+
+
+def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: np.ndarray) -> bool:
     """Whether the continued end values ``nu_end`` are ``model.nu``'s default branch at ``η_j`` (to 1e-8 relative:
-    the maps take that branch); ``bp`` the orbit's branch points (``model.nu`` with them given)."""
+    the maps take that branch); ``raw`` the orbit's branch points as the rule takes them (:func:`_orbit_roots`)."""
     from .gaudin._curve import nu_with_roots
 
-    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, bp))
+    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, raw))
     return bool(np.all(np.abs(ref - nu_end) <= 1e-8 * np.abs(ref)))
 
 
@@ -291,7 +301,7 @@ class ChainExactFlow(Map):
         keep, E, rate = self._design
         target = dt * np.asarray(self.H.weights, dtype=float)[keep]
         k = int(keep.sum()) - E.shape[1]
-        bp = model.branch_points(x)  # once per orbit: the real parts and the branch check
+        raw, bp = _orbit_roots(model, x)  # once per orbit: the real parts and the branch check
         rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
@@ -321,7 +331,7 @@ class ChainExactFlow(Map):
         if compiled and model.family.uniformizer(0.0) is None:  # the numerical branch rule, compiled
             ok = self._branch_numerical(x, eta, nu_end)
         else:
-            ok = _branch_ok(model, x, eta, nu_end, bp)
+            ok = _branch_ok(model, x, eta, nu_end, raw)
         return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
 
     def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray) -> bool:
