@@ -39,7 +39,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cache, cached_property, lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
@@ -66,6 +66,14 @@ def _periodic_real_parts(lc: float, P: float, k: int, points: np.ndarray) -> np.
         if len(chosen) == k:
             break
     return np.array(sorted(chosen))
+
+
+@lru_cache(maxsize=64)
+def _periodic_real_parts_of_sites(lc: float, P: float, k: int, sites: tuple[float, ...]) -> np.ndarray:
+    """:func:`_periodic_real_parts` for points that are the sites only (a read-only array, cached)."""
+    out = _periodic_real_parts(lc, P, k, np.array(sites, dtype=complex))
+    out.setflags(write=False)
+    return out
 
 
 def _identities(model, keep: np.ndarray) -> np.ndarray:
@@ -279,7 +287,10 @@ class ChainExactFlow(Map):
         P = model.family.period
         rho = lc + self.rho_factor * R / _node_scales(k)
         if P is not None and (R <= _R_FLOOR or np.max(np.abs(rho[:, None] - model.positions[None, :])) >= P / 2):
-            return _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
+            pts = np.concatenate([bp, model.positions.astype(complex)])
+            if not bp.size:  # no computed branch points (elliptic): the same real parts for every orbit of the model
+                return _periodic_real_parts_of_sites(lc, P, k, tuple(pts.real)).copy()
+            return _periodic_real_parts(lc, P, k, pts)
         return None if R <= _R_FLOOR else rho
 
     def _solve(self, x: np.ndarray, dt: float, compiled: bool | None = None
