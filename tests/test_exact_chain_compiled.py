@@ -151,3 +151,21 @@ def test_the_branch_check_takes_model_nu_s_rule(name):
         assert _branch_ok(model, x, eta, ref, raw)
         flipped = ref * np.where(np.arange(4) == rng.integers(4), -1, 1)
         assert not _branch_ok(model, x, eta, flipped, raw)
+
+
+def test_the_recorded_integrals_are_jg_integrals_bit_for_bit():
+    """jg.solve records the integrals of every row of a top by one compiled pass (exact.record_integrals): the same
+    bits as jg.integrals (the same sums in the same order), and its checks where it cannot."""
+    from jetgaudin.exact import record_integrals
+
+    rng = np.random.default_rng(4)
+    for N in (2, 3, 5):
+        H = jg.physical_hamiltonian(N, 1.3)
+        for shape in ((7, 3 * N), (4, 3, 3 * N), (3 * N,)):
+            X = rng.standard_normal(shape) * 10.0 ** rng.uniform(-3, 3, shape)
+            assert np.array_equal(record_integrals(H, X), np.asarray(jg.integrals(X, 1.3)))
+    H = jg.physical_hamiltonian(3, 1.0)
+    with np.errstate(over="ignore"), pytest.raises(jg.JetGaudinError, match="overflow"):  # the NumPy route's
+        record_integrals(H, np.full((2, 9), 1e200))  # refusal, not a silent inf
+    tr = jg.solve(H, [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0], (0.0, 2.0), dt=0.1)
+    assert np.array_equal(tr.integrals, np.asarray(jg.integrals(tr.X, 1.0)))

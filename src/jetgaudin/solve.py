@@ -27,7 +27,7 @@ import numpy as np
 
 from ._errors import InvalidParameterError, StepTooLargeError
 from ._validate import as_state, parse_choice, real_number
-from .exact import ExactFlow, MatchedBacklund
+from .exact import ExactFlow, MatchedBacklund, record_integrals
 from .flows import Method, Trajectory, integrate
 from .hamiltonians import IntegralHamiltonian
 from .maps import Backend, check_count, check_output_size
@@ -214,7 +214,7 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
             s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
     if method not in (SolveMethod.MIDPOINT, SolveMethod.KAHAN):
         info["substeps"] = s
-    recorded = H.record_integrals(Xs) if chain else integrals(Xs, H.b, H.c)
+    recorded = H.record_integrals(Xs) if chain else record_integrals(H, Xs)  # compiled where it can (issue 33)
     tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
     if method is SolveMethod.EXACT and (X0.ndim == 1 or not chain):
         tr = replace(tr, dense=_exact_dense(H, chain, s, tr.t, Xs))
