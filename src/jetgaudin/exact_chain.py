@@ -26,7 +26,9 @@ the Clebsch top, whose ``λ_c ± cR`` sat on the site).  So ``k = (matched integ
 ``M − 1`` (rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.
 
 **Solve and steps** (``docs/integrators.md`` §7).  The weights by a 64-point Gauss–Legendre rule with ``ν`` continued
-node by node (:class:`_Weights`; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
+node by node, Newton's method in one compiled call for every family (:mod:`jetgaudin._exact_chain_kernels`, the
+family's basis ``ψ_m`` compiled; :data:`COMPILED_FAMILIES`) or on the NumPy route (:class:`_Weights`, the reference
+the tests compare with; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
 without a solution raises :class:`~jetgaudin.StepTooLargeError` with its ``dt_max`` (bisection); ``substeps`` splits a
 step exactly.  The steps of every map run in one compiled loop (:mod:`jetgaudin._exact_chain_loop`), each row the
 unrotated orbit rotated once through its accumulated angle.  The largest feasible step is smaller than a top's when the
