@@ -13,7 +13,8 @@ Beyond ``K/2`` the reflection ``t = K − |x|`` of ``_jacobi._reflected`` (A&S 1
 **Complex arguments** as in ``_jacobi``: the addition theorem with Jacobi's imaginary transformation
 (A&S 16.21.1–4) on the reduced arguments; ``F = cs dn + Z`` by ``_jacobi._zeta_parts`` (the pole rows ``Im u = ±K'``
 shifted away: ``F(v ± iK') = Z(v) ∓ iπ/(2K)``), its Taylor coefficients from ``F' = 1 − E/K − ns²`` with ``ns``
-from the ODE series of ``sn, cn, dn`` (``_jacobi._w_series``).  ``ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``.
+from the ODE series of ``sn, cn, dn`` (``_jacobi._w_series``).  ``ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``
+(:func:`psi_elliptic_cached`; the tests compare it with ``EllipticFamily.nu2_basis``).
 
 The constants ``ell = (k, m, K, K', E, E', k')`` come from SciPy (:func:`elliptic_constants`), once per family.
 """
@@ -26,7 +27,7 @@ import numpy as np
 from numba import njit
 from scipy import special
 
-__all__ = ["elliptic_constants", "psi_elliptic", "sncndn", "zeta_real", "curve_function"]
+__all__ = ["elliptic_constants", "psi_elliptic_cached", "sncndn", "zeta_real"]
 
 _EPS = 1.1102230246251565e-16
 
@@ -95,68 +96,6 @@ def _reflected(x, m, K, kc):
 
 
 @njit(cache=True, error_model="numpy")
-def _numerators(u, ell):
-    """``_jacobi._numerators``: ``(δ, N_s, N_c, N_d)`` of the reduced ``u``."""
-    k, m, K, Kp, kc = ell[0], ell[1], ell[2], ell[3], ell[6]
-    x = u.real
-    y = u.imag
-    nx = np.rint(x / (2.0 * K))
-    fx = -1.0 if abs(nx) % 2.0 == 1.0 else 1.0
-    x = x - 2.0 * K * nx
-    fy = 1.0
-    if math.isfinite(Kp):
-        ny = np.rint(y / (2.0 * Kp))
-        fy = -1.0 if abs(ny) % 2.0 == 1.0 else 1.0
-        y = y - 2.0 * Kp * ny
-    s, c, d = _reflected(x, m, K, kc)
-    s1, c1, d1 = _reflected(y, 1.0 - m, Kp, k)
-    s *= fx
-    c *= fx
-    s1 *= fy
-    c1 *= fy
-    delta = c1 * c1 + m * s * s * s1 * s1
-    return (delta, complex(s * d1, c * d * s1 * c1), complex(c * c1, -(s * d * s1 * d1)),
-            complex(d * c1 * d1, -(m * s * c * s1)))
-
-
-@njit(cache=True, error_model="numpy")
-def _ellipfun(u, ell):
-    delta, ns, nc, nd = _numerators(u, ell)
-    return ns / delta, nc / delta, nd / delta
-
-
-@njit(cache=True, error_model="numpy")
-def curve_function(u, ell):
-    """``F(u) = cs(u) dn(u) + Z(u)`` (``_jacobi.curve_function`` with ``_zeta_parts``)."""
-    m, K, Kp = ell[1], ell[2], ell[3]
-    nx = np.rint(u.real / (2.0 * K))
-    u = u - 2.0 * K * nx
-    const = 0j
-    row = 0.0
-    if math.isfinite(Kp):
-        ny = np.rint(u.imag / (2.0 * Kp))
-        u = u - 2j * Kp * ny
-        const = -1j * math.pi / K * ny
-        if abs(u.imag) > 0.5 * Kp:
-            row = 1.0 if u.imag > 0 else -1.0
-        u = u - 1j * Kp * row
-        const = const - row * 1j * math.pi / (2.0 * K)
-    x = u.real
-    y = u.imag
-    zx = zeta_real(x, m)
-    s1, c1, d1 = sncndn(y, 1.0 - m)
-    lin = 0.0 if not math.isfinite(Kp) else math.pi / (2.0 * K * Kp)
-    zy = zeta_real(y, 1.0 - m) if math.isfinite(Kp) else 0.0
-    ziy = 1j * (d1 * s1 / c1 - zy - lin * y)
-    snu, cnu, dnu = _ellipfun(u, ell)
-    z0 = zx + ziy - m * sncndn(x, m)[0] * (1j * s1 / c1) * snu
-    if row != 0.0:
-        return z0 + const
-    delta, ns, nc, nd = _numerators(u, ell)
-    return nc * nd / (ns * delta) + z0 + const
-
-
-@njit(cache=True, error_model="numpy")
 def _ode_series(s0, c0, d0, m, order, S, C, D):
     S[0] = s0
     C[0] = c0
@@ -175,64 +114,18 @@ def _ode_series(s0, c0, d0, m, order, S, C, D):
 
 
 @njit(cache=True, error_model="numpy")
-def _ns_series(x0, ell, order, out, S, C, D):
-    """``out[:order]``: the Taylor coefficients of ``ns`` at ``x0`` (``_jacobi._w_series``, ``a = 0``)."""
-    k, m, K, Kp = ell[0], ell[1], ell[2], ell[3]
-    nx = np.rint(x0.real / (2.0 * K))
-    # ns(x + 2K) = −ns(x); ns(x + 2iK') = ns(x) (ψ needs ns² only: the sign is kept for the twin's sake)
-    sign = -1.0 if abs(nx) % 2.0 == 1.0 else 1.0
-    x = x0 - 2.0 * K * nx
-    near = False
-    if math.isfinite(Kp):
-        ny = np.rint(x.imag / (2.0 * Kp))
-        x = x - 2j * Kp * ny
-        near = abs(x.imag) > 0.5 * Kp
-    if near:
-        u = x - 1j * Kp * (1.0 if x.imag > 0 else -1.0)
-        s, c, d = _ellipfun(u, ell)
-        _ode_series(s, c, d, m, order, S, C, D)
-        for n in range(order):
-            out[n] = sign * k * S[n]
-        return
-    s, c, d = _ellipfun(x, ell)
-    _ode_series(s, c, d, m, order, S, C, D)
-    r0 = 1.0 / S[0]
-    out[0] = r0
-    for n in range(1, order):
-        acc = 0j
-        for j in range(1, n + 1):
-            acc += S[j] * out[n - j]
-        out[n] = -acc * r0
-    for n in range(order):
-        out[n] = sign * out[n]
-
-
-@njit(cache=True, error_model="numpy")
-def psi_elliptic(z, ell, order, out, S, C, D, ns):
-    """``out[m − 1] = ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``, ``m = 1..order`` (``S, C, D, ns`` complex scratch of
-    length ``order``): ``F(z)``, then ``[x^n] F = [x^{n−1}](1 − E/K − ns²)/n``."""
-    out[0] = curve_function(z, ell)
-    if order == 1:
-        return
-    _ns_series(z, ell, order - 1, ns, S, C, D)
-    c0 = 1.0 - ell[4] / ell[2]
-    for n in range(1, order):
-        acc = 0j
-        for i in range(n):
-            acc += ns[i] * ns[n - 1 - i]
-        v = -acc / n
-        if n == 1:
-            v = v + c0
-        out[n] = v if n % 2 == 0 else -v
-
-
-@njit(cache=True, error_model="numpy")
 def psi_elliptic_cached(z, ell, order, out, S, C, D, ns, xc):
-    """:func:`psi_elliptic` with the functions of ``Re z`` kept in ``xc`` (8,) between calls of equal ``Re z`` (the
-    nodes of one vertical segment): one AGM per point (``sn, cn, dn, Z`` of ``Im z``, reduced) instead of about ten.
-    The same formulas: after the reductions of :func:`curve_function`, the numerators of ``sn, cn, dn`` at the
-    reduced point ``v`` serve ``F`` and, at the pole rows (``v`` then the shifted point), the series of ``ns`` too
-    (``_jacobi._w_series`` shifts the same way); ``|Im v| ≤ K'/2``, so no reflection of ``Im v``."""
+    """``out[m − 1] = ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``, ``m = 1..order`` (``S, C, D, ns`` complex scratch of
+    length ``order``), with the functions of ``Re z`` kept in ``xc`` (8,; zeros before the first call) between calls
+    of equal ``Re z`` (the nodes of one vertical segment): one AGM per point (``sn, cn, dn, Z`` of ``Im z``).
+
+    ``z`` reduced as in ``_jacobi._zeta_parts`` (``Re`` modulo ``2K``, ``Im`` modulo ``2K'``, and within ``K'/2`` of a
+    pole row shifted to ``v = z ∓ iK'``, where ``F(v ± iK') = Z(v) ∓ iπ/(2K)``); ``Z(v)`` by the addition theorem
+    ``Z(x + iy) = Z(x) + Z(iy) − m sn x sn(iy) sn(x + iy)``; ``sn, cn, dn(v)`` by the addition theorem from the
+    numerators ``(δ, N_s, N_c, N_d)`` of ``_jacobi._numerators`` (``|Im v| ≤ K'/2``: no reflection of ``Im v``); the
+    Taylor series of ``F`` from ``F' = 1 − E/K − ns²``, ``ns = 1/sn`` by series inversion of the ODE series of
+    ``sn, cn, dn`` at ``v`` (at a pole row ``ns(v ± iK') = k sn v``: ``_jacobi._w_series``; the sign of ``ns``
+    under the reductions does not enter ``ns²``)."""
     k, m, K, Kp, E = ell[0], ell[1], ell[2], ell[3], ell[4]
     x0 = z.real
     if not (xc[7] == 1.0 and xc[0] == x0):
