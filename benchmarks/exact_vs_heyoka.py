@@ -1,12 +1,13 @@
 """Exact steps against heyoka at equal end-state error, T = 100, on the call that returns every row (issue 33).
 
 For each model: ``dt = T/n`` with ``n = ⌈T / (0.9 dt_max)⌉`` (``max_dt`` of the start state); the exact flow's
-**every-row** call (``advance(X0, None, n, 1)``: what ``iterate`` and ``solve(save_every=1)`` run, the parameter solve
-included) and its **end-state** call (``advance(X0, None, n, n)``); heyoka's ``propagate_until(T)`` (construction
+**every-row** call (``advance(X0, None, n, 1)``: what ``iterate`` runs, the parameter solve included), the user's
+call ``jg.solve(H, X0, (0, T), dt=dt, save_every=1)`` (the integrals of every row recorded too), the **end-state**
+call (``advance(X0, None, n, n)``) and the parameter solve alone; heyoka's ``propagate_until(T)`` (construction
 and JIT outside the time) at the largest tolerance of 1e-16 … 1e-9 whose end-state error is at most the exact
 flow's ("equal error"; the default 2.2e-16 when none is).  Errors against heyoka in long double at tol 1e-19.  CPU
-time of this thread (``harness.timed``), median of ``repeat``.  One run, one machine: the ratios are comparable,
-the absolute times on a shared machine are not.
+time of this thread (``harness.timed``), median of ``repeat`` after one warm-up call of each.  One run, one
+machine: the ratios are comparable, the absolute times on a shared machine are not.
 
 ``python benchmarks/exact_vs_heyoka.py [repeat]``
 """
@@ -72,7 +73,8 @@ def cases():
 def main(repeat: int = 5) -> None:
     import heyoka  # noqa: F401  (fail early)
 
-    print(f"machine: {platform.processor() or platform.machine()}; T = {T:g}; median of {repeat} (CPU time)")
+    cpu = harness.machine_info().get("Model name", platform.processor() or platform.machine())
+    print(f"machine: {cpu}; T = {T:g}; median of {repeat} (thread CPU time)")
     for name, (H, X0, cls) in cases().items():
         dtmax = float(cls(H, 1.0).max_dt(X0))
         n = int(np.ceil(T / (0.9 * dtmax)))
@@ -81,7 +83,10 @@ def main(repeat: int = 5) -> None:
         ref = np.asarray(_ta(H, X0, 1e-19, np.longdouble).propagate_grid(grid)[-1][-1], dtype=float)
         rows = lambda E=E, n=n, X0=X0: E.advance(X0, None, n, 1).X  # noqa: E731
         end = lambda E=E, n=n, X0=X0: E.advance(X0, None, n, n).X  # noqa: E731
+        user = lambda H=H, n=n, X0=X0: jg.solve(H, X0, (0.0, T), dt=T / n, save_every=1)  # noqa: E731
+        params = lambda E=E, X0=X0: E.parameters(X0)  # noqa: E731
         e_exact = float(np.max(np.abs(end() - ref)))
+        e_rows = float(np.max(np.abs(rows() - ref)))
         pick = None
         for tol in (1e-9, 1e-10, 1e-11, 1e-12, 1e-13, 1e-14, 1e-15, 1e-16, 2.2e-16):
             fh = _heyoka_end(_ta(H, X0, tol), X0)
@@ -91,10 +96,16 @@ def main(repeat: int = 5) -> None:
                 break
         assert pick is not None
         tol, fh, eh = pick
-        t_rows, t_end, t_hy = (float(np.median(harness.timed(f, repeat))) for f in (rows, end, fh))
-        print(f"{name}: {n} steps of {T / n:.4g} (dt_max {dtmax:.4g}); exact every row {t_rows * 1e3:.2f} ms, end "
-              f"state {t_end * 1e3:.2f} ms (rows/end {t_rows / t_end:.2f}), error {e_exact:.1e}; heyoka tol {tol:g} "
-              f"{t_hy * 1e3:.2f} ms, error {eh:.1e}; heyoka / exact every row: {t_hy / t_rows:.2f}x")
+        for f in (rows, end, user, params, fh):  # warm-up (first-use loading of compiled code)
+            f()
+        t_rows, t_end, t_user, t_par, t_hy = (float(np.median(harness.timed(f, repeat)))
+                                              for f in (rows, end, user, params, fh))
+        print(f"{name}: {n} steps of {T / n:.4g} (dt_max {dtmax:.4g})\n"
+              f"  exact every row {t_rows * 1e3:.3f} ms (error {e_rows:.1e}), end state {t_end * 1e3:.3f} ms (error "
+              f"{e_exact:.1e}; rows/end {t_rows / t_end:.2f}), jg.solve(save_every=1) {t_user * 1e3:.3f} ms, "
+              f"parameter solve {t_par * 1e3:.3f} ms\n"
+              f"  heyoka tol {tol:g} {t_hy * 1e3:.3f} ms (error {eh:.1e}); heyoka / exact every row "
+              f"{t_hy / t_rows:.2f}x, heyoka / jg.solve {t_hy / t_user:.2f}x, heyoka / end state {t_hy / t_end:.2f}x")
 
 
 if __name__ == "__main__":

@@ -7,14 +7,16 @@ tests compare the two to round-off).
 (``c`` the family's constant ``nu2_constant(b, extra)``; ``docs/families.md``), with the basis ``ψ_m`` compiled
 per family (:func:`_psi_site`): rational ``ψ_m(z) = z^{−m}``; trigonometric ``ψ_m = (−1)^{m−1} [x^{m−1}] w_3(z + x)``,
 ``w_3 = γ cot(γ ·)``, from the Taylor series of ``sin`` and ``cos`` at ``γz`` (series inverse and product, as
-:meth:`jetgaudin.families.TrigonometricFamily.taylor`).  The
-elliptic family has no compiled basis yet (its Jacobi functions of complex argument are NumPy/SciPy): it keeps the
-NumPy route (``exact_chain.COMPILED_FAMILIES``: the ids of :func:`_psi_site`).
+:meth:`jetgaudin.families.TrigonometricFamily.taylor`); elliptic ``ψ_m = (−1)^{m−1} [x^{m−1}] F(z + x)``,
+``F = cs dn + Z`` (:mod:`jetgaudin._exact_elliptic`).  Family ids: ``exact_chain.COMPILED_FAMILIES``.
 
 The weights ``ω_I(ρ_j + i h_j) = −h_j Σ_q w_q Re[∂ν²/∂I(λ_q)/ν(λ_q)]`` by the Gauss–Legendre rule, ``ν`` continued
 node by node from ``+√ν²(ρ)`` in the order of ``|s|`` (the root nearer to the previous one; a step that moves ``ν``
 by more than a quarter of its size, or ``ν = 0``: a branch point near the segment, the solve fails), the derivative
 ``∂ω_I/∂h = −Re[∂ν²/∂I(η)/ν(η)]`` at the end point; the extras' column ``∂ν²/∂I`` is the constant ``dconst``.
+
+Numba's cache keys this module by its own source: after an edit of :mod:`jetgaudin._exact_elliptic`, clear
+``jetgaudin/__pycache__/_exact_chain_kernels.*`` (the compiled callers keep the old elliptic code otherwise).
 """
 
 from __future__ import annotations
@@ -24,12 +26,19 @@ import cmath
 import numpy as np
 from numba import njit
 
+from ._exact_elliptic import psi_elliptic_cached
+
 __all__ = ["newton", "psi_values"]
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_site(fid, gamma, z, order, out, s, c, r):
-    """``out[m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r`` complex scratch of length ``order``)."""
+def _psi_site(fid, fp, z, order, out, s, c, r, d, xc):
+    """``out[m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
+    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xc`` (8,) the
+    elliptic functions of ``Re z`` kept between points of one segment, zeros before the first)."""
+    if fid == 2:
+        psi_elliptic_cached(z, fp, order, out, s, c, r, d, xc)
+        return
     if fid == 0:
         inv = 1.0 / z
         p = inv
@@ -37,6 +46,7 @@ def _psi_site(fid, gamma, z, order, out, s, c, r):
             out[m] = p
             p = p * inv
         return
+    gamma = fp[0]
     t = gamma * z
     s0 = cmath.sin(t)
     c0 = cmath.cos(t)
@@ -73,23 +83,23 @@ def _psi_site(fid, gamma, z, order, out, s, c, r):
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_point(fid, gamma, lam, site_pos, site_n, psi, s, c, r):
+def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache):
     """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``)."""
     o = 0
     for i in range(site_pos.shape[0]):
         order = 2 * site_n[i]
-        _psi_site(fid, gamma, lam - site_pos[i], order, psi[o:o + order], s, c, r)
+        _psi_site(fid, fp, lam - site_pos[i], order, psi[o:o + order], s, c, r, d, xcache[i])
         o += order
 
 
-def psi_values(fid: int, gamma: float, lam: np.ndarray, site_pos: np.ndarray, site_n: np.ndarray) -> np.ndarray:
+def psi_values(fid: int, fp: np.ndarray, lam: np.ndarray, site_pos: np.ndarray, site_n: np.ndarray) -> np.ndarray:
     """``ψ_m(λ − λ_i)`` for each point of ``lam`` (1-D complex), shape ``(len(lam), 2M)`` (the tests compare it with
     :meth:`jetgaudin.families.Family.nu2_basis`)."""
-    return _psi_many(fid, float(gamma), np.ascontiguousarray(lam, dtype=complex), site_pos, site_n)
+    return _psi_many(fid, np.asarray(fp, dtype=float), np.ascontiguousarray(lam, dtype=complex), site_pos, site_n)
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_many(fid, gamma, lam, site_pos, site_n):
+def _psi_many(fid, fp, lam, site_pos, site_n):
     n2 = 0
     nmax = 1
     for i in range(site_n.shape[0]):
@@ -99,18 +109,20 @@ def _psi_many(fid, gamma, lam, site_pos, site_n):
     s = np.empty(nmax, dtype=np.complex128)
     c = np.empty(nmax, dtype=np.complex128)
     r = np.empty(nmax, dtype=np.complex128)
+    d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
     for q in range(lam.shape[0]):
-        _psi_point(fid, gamma, lam[q], site_pos, site_n, out[q], s, c, r)
+        _psi_point(fid, fp, lam[q], site_pos, site_n, out[q], s, c, r, d, xcache)
     return out
 
 
 @njit(cache=True, error_model="numpy")
-def _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r):
+def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache):
     """``f[q, i] = Re[∂ν²/∂I_{kidx[i]}(λ_q)/ν(λ_q)]`` at ``λ_q = a + i h xs[q]``, ``ν`` continued from ``+√ν²(a)``
     along ``perm`` (the nodes by increasing ``xs``); returns ``(ok, ν at the end point xs = 1)`` (``ok`` false: a step
     moved ``ν`` by more than a quarter of its size, or ``ν = 0``)."""
     n2 = hI.shape[0]
-    _psi_point(fid, gamma, complex(a, 0.0), site_pos, site_n, psi, s, c, r)
+    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
     acc = complex(const, 0.0)
     for cI in range(n2):
         acc += hI[cI] * psi[cI]
@@ -122,7 +134,7 @@ def _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, pe
     for t in range(perm.shape[0]):
         q = perm[t]
         lam = complex(a, h * xs[q])
-        _psi_point(fid, gamma, lam, site_pos, site_n, psi, s, c, r)
+        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -145,15 +157,15 @@ def _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, pe
 
 
 @njit(cache=True, error_model="numpy")
-def _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
-             nu_end, f, psi, s, c, r):
+def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
+             nu_end, f, psi, s, c, r, d, xcache):
     """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
     ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
     ``nu_end[j]`` the continued ``ν`` at ``η_j``.  Returns ``False`` where ``ν`` cannot be continued."""
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
-        ok, nv = _segment(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
-                          c, r)
+        ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
+                          c, r, d, xcache)
         if not ok:
             return False
         nu_end[j] = nv
@@ -172,7 +184,7 @@ def _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, 
 
 
 @njit(cache=True, error_model="numpy")
-def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
+def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
            w2, step_tol, iterations, u, om, nu_end):
     """Newton's method of ``ChainExactFlow._newton_numpy`` compiled: ``u = (h_1..h_k, extra unknowns)`` with
     ``Σ_j ω(ρ_j + i h_j) − E u_{k:} = target`` on the matched integrals ``kidx``.  The start from the linearisation
@@ -192,6 +204,8 @@ def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho
     s = np.empty(nmax, dtype=np.complex128)
     c = np.empty(nmax, dtype=np.complex128)
     r = np.empty(nmax, dtype=np.complex128)
+    d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
@@ -200,7 +214,7 @@ def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho
     J = np.empty((nk, k + ne))
     # the start: the linearisation at h = 0
     for j in range(k):
-        _psi_point(fid, gamma, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r)
+        _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -222,8 +236,8 @@ def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho
                 return 1, 0.0
         if not np.all(np.isfinite(u)):
             return 1, 0.0
-        if not _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
-                        nw1, om, dom, om2, nu_end, f, psi, s, c, r):
+        if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
+                        nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
             return 1, 0.0
         for i in range(nk):
             acc = -target[i]
@@ -248,8 +262,8 @@ def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho
         if not np.all(np.isfinite(u)):
             return 1, 0.0
         if done:
-            if not _weights(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
-                            nw1, om, dom, om2, nu_end, f, psi, s, c, r):
+            if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
+                            nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
                 return 1, 0.0
             quad = 0.0
             scale = 0.0
@@ -261,3 +275,48 @@ def newton(fid, gamma, site_pos, site_n, hI, const, dconst, kidx, E, target, rho
                 scale = max(scale, tot)
             return 0, quad / (scale + 1e-300)
     return 1, 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
+    """The branch rule of ``gaudin._curve._nu_numerical`` (families without a uniformizer) compiled, with ``ν²`` from
+    the expansion: ``±√ν²`` at ``n + 1`` equally spaced points of ``[Re η, η]``, each time the root nearer to the
+    previous one, ``n`` doubling from ``n0`` to ``n_max`` until no step moves ``ν`` by more than a quarter of its size.
+    Returns ``(ok, ν(η))`` (``ok`` false: no such ``n``, or ``Re η`` a site modulo ``period``)."""
+    a = eta.real
+    for i in range(site_pos.shape[0]):
+        r = (a - site_pos[i]) / period
+        if abs(r - np.rint(r)) < 1e-14:
+            return False, 0j
+    n2 = hI.shape[0]
+    nmax = 1
+    for i in range(site_n.shape[0]):
+        nmax = max(nmax, 2 * site_n[i])
+    psi = np.empty(n2, dtype=np.complex128)
+    s = np.empty(nmax, dtype=np.complex128)
+    c = np.empty(nmax, dtype=np.complex128)
+    r = np.empty(nmax, dtype=np.complex128)
+    d = np.empty(nmax, dtype=np.complex128)
+    xcache = np.zeros((site_pos.shape[0], 8))
+    n = n0
+    while n <= n_max:
+        ok = True
+        v = 0j
+        for q in range(n + 1):
+            lam = complex(a, eta.imag * (q / n))
+            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
+            acc = complex(const, 0.0)
+            for cI in range(n2):
+                acc += hI[cI] * psi[cI]
+            rq = cmath.sqrt(acc)
+            if q > 0:
+                if abs(rq - v) > abs(rq + v):
+                    rq = -rq
+                if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
+                    ok = False
+                    break
+            v = rq
+        if ok and v != 0:
+            return True, v
+        n *= 2
+    return False, 0j

@@ -312,3 +312,15 @@ def rotate(X, theta):
             out[i, 3 * n + 1] = s * y1 + c * y2
             out[i, 3 * n + 2] = X[i, 3 * n + 2]
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def integrals_rows(X, b, out):
+    """``out[r] = (H_1..H_N, C_1..C_N)`` of every row of ``X`` (R, 3N) in the field ``b e_3`` (reduction (lax2)):
+    ``κ_1..κ_{2N}`` of :func:`_kappa`, summed in the order of :func:`jetgaudin.spectral.curve_coefficients` (the
+    same bits as :func:`jetgaudin.spectral.integrals`; tested)."""
+    kappa = np.empty(out.shape[1] + 1)
+    for r in range(X.shape[0]):
+        _kappa(X[r], b, kappa)
+        for m in range(out.shape[1]):
+            out[r, m] = kappa[m + 1]

@@ -19,7 +19,12 @@ from numba import njit, prange
 
 from .backlund.kernels._drivers import kernel_module
 
-_orbit3 = kernel_module("_n3").orbit3
+_n3 = kernel_module("_n3")
+_orbit3 = _n3.orbit3
+_step3 = _n3._step3
+_constants3 = _n3._constants3
+_scale3 = _n3._scale3
+_cdiv = _n3.S._cdiv
 _orbit_generic = kernel_module("_generic").orbit_generic
 
 __all__ = ["rows_single", "rows_batch"]
@@ -36,6 +41,59 @@ def _rotate_into(z, angle, out):
 
 
 @njit(cache=True, error_model="numpy")
+def _rotate3_into(x, angle, out):
+    """:func:`_rotate_into` of the N = 3 state as a tuple of 9 floats."""
+    c = np.cos(angle)
+    s = np.sin(angle)
+    for n in range(3):
+        out[3 * n] = c * x[3 * n] - s * x[3 * n + 1]
+        out[3 * n + 1] = s * x[3 * n] + c * x[3 * n + 1]
+        out[3 * n + 2] = x[3 * n + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def _rows3(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
+    """:func:`rows_single` for ``N = 3`` and ``k ≤ 2`` maps (the exact flow's two, the matched map's one): the N = 3
+    kernel's step (:func:`jetgaudin.backlund.kernels._n3._step3`, inlined) on the state as a tuple, with each map's
+    per-run constants (``_constants3``) and scale (``_scale3``: a power of two from the state's size, which the step's
+    bits do not depend on) computed once per call instead of once per step (``orbit3`` with one step did both at
+    every step).  The same arithmetic as :func:`~jetgaudin.backlund.kernels._n3.orbit3` step by step: the same bits."""
+    k = eta.shape[0]
+    c0 = _constants3(eta[0])
+    c1 = _constants3(eta[k - 1])
+    x = (x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8])
+    q = _scale3(x0[0], x0[1], x0[2], x0[3], x0[4], x0[5], x0[6], x0[7], x0[8], b)
+    n0 = nu[0]
+    n1 = nu[k - 1]
+    info[0] = 0
+    info[1] = 0
+    left = save_every
+    r = 0
+    for n in range(steps):
+        for p in range(substeps):
+            newton = n > 0 or p > 0
+            st, n0, xn = _step3(x, b, c0, q, n0, n0 * n0, _cdiv(complex(1.0, 0.0), n0 + n0), newton)
+            if st != 0:
+                info[0] = st
+                info[1] = n
+                return
+            x = xn
+            if k == 2:
+                st, n1, xn = _step3(x, b, c1, q, n1, n1 * n1, _cdiv(complex(1.0, 0.0), n1 + n1), newton)
+                if st != 0:
+                    info[0] = st
+                    info[1] = n
+                    return
+                x = xn
+        left -= 1
+        if left == 0:
+            left = save_every
+            _rotate3_into(x, ((n + 1) * substeps) * theta, rows[r])
+            r += 1
+    _rotate3_into(x, (steps * substeps) * theta, final)
+
+
+@njit(cache=True, error_model="numpy")
 def rows_single(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
     """One orbit ``x0`` (3N,): ``steps`` steps, each ``substeps`` times every map ``η_j`` (``eta`` (k,), first ``ν1``
     ``nu`` (k,), then continued) and the rotation ``θ`` per sub-step; ``rows[r] = X_{(r+1) save_every}``,
@@ -43,6 +101,9 @@ def rows_single(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final,
     n3 = x0.shape[0]
     N = n3 // 3
     k = eta.shape[0]
+    if N == 3 and k <= 2:
+        _rows3(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info)
+        return
     z = x0.copy()
     out = np.empty((2, n3))
     fin = np.empty(n3)

@@ -48,7 +48,8 @@ from .hamiltonians import IntegralHamiltonian
 from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
 from .spectral import _nu_from_kappa, integrals
 
-__all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR"]
+__all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR",
+           "record_integrals"]
 
 #: ``c`` of ``ρ_j = c R / t_j`` (module doc): the segments stay ``(c − 1) R`` away from the branch points
 RHO_FACTOR = 1.5
@@ -211,6 +212,24 @@ def _accepted(H: IntegralHamiltonian, dt: float, Xf: np.ndarray, rho_factor: flo
             dt_max=dmax,
         )
     return eta, theta, res, quad, nu
+
+
+def record_integrals(H: IntegralHamiltonian, X) -> np.ndarray:
+    """``jg.integrals(X, H.b, H.c)`` of the rows ``X`` ``(..., 3N)`` that ``jg.solve`` records: one compiled pass
+    (:func:`jetgaudin._exact_kernels.integrals_rows`, the same bits) for the reduction (lax2) with a field along
+    ``e_3`` and real finite rows, else :func:`jetgaudin.spectral.integrals` (which also refuses an overflow)."""
+    X = np.asarray(X)
+    b = H.b
+    if (H.c is None and type(b) is float and X.dtype == np.float64 and X.ndim >= 1 and X.shape[-1] % 3 == 0
+            and X.size and np.isfinite(b)):
+        from ._exact_kernels import integrals_rows
+
+        flat = np.ascontiguousarray(X.reshape(-1, X.shape[-1]))
+        out = np.empty((flat.shape[0], 2 * (X.shape[-1] // 3)))
+        integrals_rows(flat, b, out)
+        if np.isfinite(out).all():
+            return out.reshape(X.shape[:-1] + out.shape[-1:])
+    return np.asarray(integrals(X, b, H.c), dtype=float)
 
 
 def rotate_about_field(X, theta):

@@ -26,7 +26,9 @@ the Clebsch top, whose ``λ_c ± cR`` sat on the site).  So ``k = (matched integ
 ``M − 1`` (rational, trigonometric), ``M`` (elliptic).  Only :class:`~jetgaudin.GaudinModel`'s public methods are used.
 
 **Solve and steps** (``docs/integrators.md`` §7).  The weights by a 64-point Gauss–Legendre rule with ``ν`` continued
-node by node (:class:`_Weights`; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
+node by node, Newton's method in one compiled call for every family (:mod:`jetgaudin._exact_chain_kernels`, the
+family's basis ``ψ_m`` compiled; :data:`COMPILED_FAMILIES`) or on the NumPy route (:class:`_Weights`, the reference
+the tests compare with; the adaptive quadrature only where the rule's estimate is above round-off); an orbit
 without a solution raises :class:`~jetgaudin.StepTooLargeError` with its ``dt_max`` (bisection); ``substeps`` splits a
 step exactly.  The steps of every map run in one compiled loop (:mod:`jetgaudin._exact_chain_loop`), each row the
 unrotated orbit rotated once through its accumulated angle.  The largest feasible step is smaller than a top's when the
@@ -39,7 +41,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cache, cached_property, lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
@@ -68,6 +70,14 @@ def _periodic_real_parts(lc: float, P: float, k: int, points: np.ndarray) -> np.
     return np.array(sorted(chosen))
 
 
+@lru_cache(maxsize=64)
+def _periodic_real_parts_of_sites(lc: float, P: float, k: int, sites: tuple[float, ...]) -> np.ndarray:
+    """:func:`_periodic_real_parts` for points that are the sites only (a read-only array, cached)."""
+    out = _periodic_real_parts(lc, P, k, np.array(sites, dtype=complex))
+    out.setflags(write=False)
+    return out
+
+
 def _identities(model, keep: np.ndarray) -> np.ndarray:
     """Orthonormal rows ``c`` with ``Σ_I c_I I(X)`` constant on every state: the linear identities among the matched
     integrals (elliptic: ``Σ_i h_{i,1} = 0``, the residue theorem; trigonometric: one between the ``h_{i,1}`` and
@@ -90,9 +100,18 @@ _NODES, _QUAD_TOL = 64, 1e-13
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
 _R_FLOOR = 1e-6
-#: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); the
-#: others (elliptic) solve on the NumPy route
-COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1}
+#: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); any
+#: other family solves on the NumPy route
+COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
+
+
+def _family_constants(fam) -> np.ndarray:
+    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``(k, m, K, K', E, E', k')``."""
+    if fam.name == "elliptic":
+        from ._exact_elliptic import elliptic_constants
+
+        return elliptic_constants(float(fam.modulus))
+    return np.array([float(getattr(fam, "gamma", 0.0))])
 
 
 class _Weights:
@@ -148,12 +167,22 @@ class _Weights:
         return om, -f[:, n], float(np.max(np.abs(om - om2)) / (np.abs(om).sum(axis=0).max() + 1e-300))
 
 
-def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, bp: np.ndarray) -> bool:
+def _orbit_roots(model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(raw, bp)``: the orbit's branch points as the branch rule takes them (``gaudin._curve.branch_points``: in the
+    uniformizer ``z`` for a family that has one, e.g. ``z = e^{2iγλ}``) and in ``λ`` (``model.branch_points``)."""
+    from .gaudin._curve import branch_points
+
+    raw = branch_points(model, x)
+    fam = model.family
+    return raw, (raw if fam.uniform or fam.uniformizer(0.0) is None else fam.uniformizer_inverse(raw))
+
+
+def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: np.ndarray) -> bool:
     """Whether the continued end values ``nu_end`` are ``model.nu``'s default branch at ``η_j`` (to 1e-8 relative:
-    the maps take that branch); ``bp`` the orbit's branch points (``model.nu`` with them given)."""
+    the maps take that branch); ``raw`` the orbit's branch points as the rule takes them (:func:`_orbit_roots`)."""
     from .gaudin._curve import nu_with_roots
 
-    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, bp))
+    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, raw))
     return bool(np.all(np.abs(ref - nu_end) <= 1e-8 * np.abs(ref)))
 
 
@@ -260,15 +289,19 @@ class ChainExactFlow(Map):
         P = model.family.period
         rho = lc + self.rho_factor * R / _node_scales(k)
         if P is not None and (R <= _R_FLOOR or np.max(np.abs(rho[:, None] - model.positions[None, :])) >= P / 2):
-            return _periodic_real_parts(lc, P, k, np.concatenate([bp, model.positions.astype(complex)]))
+            pts = np.concatenate([bp, model.positions.astype(complex)])
+            if not bp.size:  # no computed branch points (elliptic): the same real parts for every orbit of the model
+                return _periodic_real_parts_of_sites(lc, P, k, tuple(pts.real)).copy()
+            return _periodic_real_parts(lc, P, k, pts)
         return None if R <= _R_FLOOR else rho
 
-    def _solve(self, x: np.ndarray, dt: float) -> tuple[np.ndarray, float, np.ndarray] | None:
+    def _solve(self, x: np.ndarray, dt: float, compiled: bool | None = None
+               ) -> tuple[np.ndarray, float, np.ndarray] | None:
         """``(η_1..η_k, θ)`` of the exact time-``dt`` step on the orbit ``x``, or ``None`` (no accepted solution:
         Newton's method diverges, leaves the monotone branch, meets a branch point or a period's edge); the third
         entry is ``ν(η_j)`` on the maps' branch (checked against ``model.nu``), the maps' first ``ν1``."""
         try:
-            return self._newton(x, dt)
+            return self._newton(x, dt, compiled)
         except (BranchPointError, InvalidParameterError, np.linalg.LinAlgError):
             return None
 
@@ -281,7 +314,7 @@ class ChainExactFlow(Map):
         keep, E, rate = self._design
         target = dt * np.asarray(self.H.weights, dtype=float)[keep]
         k = int(keep.sum()) - E.shape[1]
-        bp = model.branch_points(x)  # once per orbit: the real parts and the branch check
+        raw, bp = _orbit_roots(model, x)  # once per orbit: the real parts and the branch check
         rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
@@ -291,6 +324,8 @@ class ChainExactFlow(Map):
         # points η, η̄ coincide modulo the period 2iK')
         bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
         fid = COMPILED_FAMILIES.get(model.family.name)
+        if fid == 2 and not float(model.family.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
+            fid = None
         if compiled is None:
             compiled = fid is not None
         if compiled and fid is None:
@@ -304,10 +339,30 @@ class ChainExactFlow(Map):
             om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
         scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
         eta = rho + 1j * u[:k]
-        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) <= _RES_TOL and _branch_ok(model, x, eta,
-                                                                                                  nu_end, bp):
-            return eta, -rate * u[k] if rate else 0.0, nu_end
-        return None
+        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) > _RES_TOL:
+            return None
+        if compiled and model.family.uniformizer(0.0) is None:  # the numerical branch rule, compiled
+            ok = self._branch_numerical(x, eta, nu_end)
+        else:
+            ok = _branch_ok(model, x, eta, nu_end, raw)
+        return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
+
+    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray) -> bool:
+        """:func:`_branch_ok` for a family without a uniformizer (elliptic), by the compiled twin of its branch rule
+        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``)."""
+        model = self.model
+        fam = model.family
+        K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
+        args = (COMPILED_FAMILIES[fam.name], _family_constants(fam), model.positions.astype(float),
+                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
+                float(fam.period or np.inf))
+        for e, v in zip(eta, nu_end, strict=True):
+            ok, ref = K.nu_numerical(*args, complex(e), 64, 2**16)
+            if not (ok and abs(ref - v) <= 1e-8 * abs(ref)):
+                return False
+        return True
 
     def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound):
         """:meth:`_newton_numpy` in one compiled call: ``(u, ω (k, n_keep), quadrature estimate, ν(η_j))`` or
@@ -324,7 +379,7 @@ class ChainExactFlow(Map):
         nu_end = np.empty(k, dtype=complex)
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
         xs1, perm1, w1, xs2, perm2, w2 = _rules()
-        status, quad = K.newton(fid, float(getattr(fam, "gamma", 0.0)), model.positions.astype(float),
+        status, quad = K.newton(fid, _family_constants(fam), model.positions.astype(float),
                               np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
                               dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
                               np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),

@@ -32,6 +32,7 @@ import numpy as np
 
 from ._errors import InvalidParameterError, StepTooLargeError
 from ._validate import parse_choice, real_number
+from .exact import record_integrals
 from .flows import Method, Trajectory, integrate
 from .maps import check_count, check_output_size
 from .methods import check_method, method_map
@@ -179,7 +180,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
             s = max(s + 1, math.ceil(abs(h) / abs(exc.dt_max) * 1.01))
     if method not in (SolveMethod.MIDPOINT, SolveMethod.KAHAN):
         info["substeps"] = s
-    tr = Trajectory(t0 + idx * h, Xs, np.asarray(H.record_integrals(Xs), dtype=float), method.value, info)
+    # the top's rows through one compiled pass (exact.record_integrals, the same bits as jg.integrals; issue 33)
+    recorded = record_integrals(H, Xs) if H.route_kind == "top" else H.record_integrals(Xs)
+    tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
     if method is SolveMethod.EXACT:
         tr = replace(tr, dense=_exact_dense(H, s, tr.t, Xs))
     if t_eval is not None:  # the exact flow's dense output at the requested times
