@@ -106,7 +106,7 @@ def chain_maps_per_step(H) -> int:
     """``k``: the two-point maps of one exact step of the chain Hamiltonian ``H`` (module doc)."""
     from .exact_chain import ChainExactFlow
 
-    keep, E, _ = ChainExactFlow(H, 1.0)._design()
+    keep, E, _ = ChainExactFlow(H, 1.0)._design
     return int(keep.sum()) - int(E.shape[1])
 
 
