@@ -170,6 +170,32 @@ class EllipticFamily(Family):
             out[:, a + 1] = T[a][:, None, None] * PAULI[a]
         return out
 
+    def mp_w(self, a, x):
+        """``ns, ds, cs`` (``a = 1, 2, 3``) of parameter ``m = k²`` (the modulus as given, squared exactly)."""
+        import mpmath
+
+        m = mpmath.mpf(self.modulus) ** 2
+        sn = mpmath.ellipfun("sn", x, m=m)
+        return 1 / sn if a == 1 else mpmath.ellipfun("dn" if a == 2 else "cn", x, m=m) / sn
+
+    def _mp_lam0(self, xi):
+        import mpmath
+
+        nK, nKp = HALF_PERIODS[self.half_period]
+        m = mpmath.mpf(self.modulus) ** 2
+        return (mpmath.re(xi) + (nK * mpmath.ellipk(m) if nK else 0)
+                + (1j * mpmath.ellipk(1 - m) if nKp else 0))
+
+    def mp_dressing_basis(self, lam, xi):
+        w1, w2, w3 = (self.mp_w(a, lam - self._mp_lam0(xi)) for a in (1, 2, 3))
+        return [[1, 0, 0, 1], [0, w1, w1, 0], [0, -1j * w2, 1j * w2, 0], [w3, 0, 0, -w3]]
+
+    def mp_kernel_constants(self, xi):
+        import mpmath
+
+        lam0 = self._mp_lam0(xi)
+        return [self.mp_w(a, z - lam0) for z in (xi, mpmath.conj(xi)) for a in (1, 2, 3)]
+
     def real_dressing(self, xi, k1, k2):
         return spectral_null_vector(self, xi, k1, k2)
 

@@ -151,6 +151,25 @@ class TrigonometricFamily(Family):
         out[:, 5, 1, 1] = em
         return out
 
+    def mp_w(self, a, x):
+        import mpmath
+
+        g = mpmath.mpf(self.gamma)
+        return g / mpmath.sin(g * x) if a in (1, 2) else g * mpmath.cot(g * x)
+
+    def mp_dressing_basis(self, lam, xi=None):
+        import mpmath
+
+        ep, em = mpmath.expj(self.gamma * lam), mpmath.expj(-self.gamma * lam)
+        return [[ep, 0, 0, 0], [em, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, ep], [0, 0, 0, em]]
+
+    def mp_kernel_constants(self, xi):
+        import mpmath
+
+        g, xb = mpmath.mpf(self.gamma), mpmath.conj(xi)
+        return [mpmath.expj(-g * xi), mpmath.expj(-g * xb), mpmath.expj(g * xi), mpmath.expj(g * xb),
+                mpmath.sin(g * (xi - xb))]
+
     def real_dressing(self, xi, k1, k2):
         return gauge_rule(self.gamma, xi, k1, k2)
 

@@ -40,7 +40,7 @@ from ..lax import ell_coefficients, state_from_ell
 from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, check_gpu, register_map, step_loop
 from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
-from ._curve import _component_poles, nu_with_roots
+from ._curve import nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
@@ -85,14 +85,41 @@ def _check_eta(model: GaudinModel, eta) -> complex:
     return eta
 
 
+def _two_prod(a, b):
+    """``a·b = p + e`` exactly (real arrays; Dekker's product with Veltkamp's split, no fused multiply-add)."""
+    p = a * b
+    ta, tb = 134217729.0 * a, 134217729.0 * b  # 2^27 + 1
+    ah, bh = ta - (ta - a), tb - (tb - b)
+    al, bl = a - ah, b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _acc(s, e, a, bh, bl):
+    """``s + e += a·(bh + bl)`` compensated (reals; :func:`jetgaudin.gaudin._kernels._acc`, the compiled route's)."""
+    p, ep = _two_prod(a, bh)
+    t = s + p
+    z = t - s
+    return t, e + (ep + ((s - (t - z)) + (p - z)) + a * bl)
+
+
 def _ell_at(model, parts, lam):
-    """``ℓ(λ) = ℓ(∞) + Σ_c P_c (λ − λ_c)^{-(k_c+1)}`` for scalar ``λ``; ``parts`` ``(B, M, 2, 2)``."""
-    pos, power = _component_poles(model.sites)
-    f = (lam - pos) ** (-power)
-    out = np.einsum("c,...cij->...ij", f, parts)
-    out[..., 0, 0] += model.b
-    out[..., 1, 1] -= model.b
-    return out
+    """``ℓ(λ) = ℓ(∞) + Σ_c P_c (λ − λ_c)^{-(k_c+1)}`` for scalar ``λ``; ``parts`` ``(B, M, 2, 2)``.  The weights as
+    two words and the sums compensated, rounded once (:func:`_acc`; ``docs/reliability.md``, "Drift like round-off":
+    a weight rounded once would put the same relative error into ``ℓ(η)`` at every step, a linear drift)."""
+    from ._curve import rational_weights
+
+    f, flo = rational_weights(model.sites, complex(lam))
+    z = np.zeros(parts.shape[:-3] + (2, 2))
+    sr, si, er, ei = z.copy(), z.copy(), z.copy(), z.copy()
+    sr[..., 0, 0] += model.b
+    sr[..., 1, 1] -= model.b
+    for c in range(len(f)):
+        P = parts[..., c, :, :]
+        sr, er = _acc(sr, er, P.real, f[c].real, flo[c].real)
+        sr, er = _acc(sr, er, -P.imag, f[c].imag, flo[c].imag)
+        si, ei = _acc(si, ei, P.real, f[c].imag, flo[c].imag)
+        si, ei = _acc(si, ei, P.imag, f[c].real, flo[c].real)
+    return (sr + er) + 1j * (si + ei)
 
 
 def _inv_series(d, order):
