@@ -151,7 +151,7 @@ def test_the_family_kernels_drift_grows_like_a_random_walk(family, monkeypatch):
 
 def test_the_compensated_sums_are_the_exact_sums_rounded_once():
     """``s + e`` of the kernels' compensated sum (``gaudin._kernels._acc``, compiled) and of the NumPy route's
-    (``gaudin.maps._acc``) over 3 terms ``a_j (bh_j + bl_j)``, a two-word constant each, is the exact sum rounded
+    (``gaudin._compensated.acc``) over 3 terms ``a_j (bh_j + bl_j)``, a two-word constant each, is the exact sum rounded
     once: within 1 ulp of the 40-digit value on every one of 2000 random draws, and unbiased — the mean signed error
     below 0.05 ulp (round-to-nearest: ~0.29 ulp spread / √2000 ≈ 0.006 ulp), where the plain sum of the rounded
     products ``Σ fl(a_j bh_j)`` misses by the constants' own relative error, the same at every draw (here the low
@@ -159,8 +159,8 @@ def test_the_compensated_sums_are_the_exact_sums_rounded_once():
     import mpmath
     from numba import njit
 
+    from jetgaudin.gaudin import _compensated as C
     from jetgaudin.gaudin import _kernels as K
-    from jetgaudin.gaudin import maps
 
     @njit(cache=False)
     def compiled(a, bh, bl):
@@ -180,7 +180,7 @@ def test_the_compensated_sums_are_the_exact_sums_rounded_once():
             ulp = np.spacing(float(exact))
             s, e = 0.0, 0.0
             for j in range(3):
-                s, e = maps._acc(s, e, a[j], bh[j], bl[j])
+                s, e = C.acc(s, e, a[j], bh[j], bl[j])
             for name, v in (("compiled", compiled(a, bh, bl)), ("numpy", s + e), ("plain", float(np.sum(a * bh)))):
                 errs[name].append(float((mpmath.mpf(v) - exact) / ulp))
     for name in ("compiled", "numpy"):

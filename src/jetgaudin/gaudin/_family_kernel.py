@@ -32,6 +32,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
+from ._compensated import exact_tables
 from ._kernels import _abs2, _acc, _cacc, _put_site  # first: it applies the Bäcklund kernels' Numba target
 
 
@@ -288,48 +289,6 @@ def run_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps
     return rows, final, last
 
 
-def _split(z) -> tuple[complex, complex]:
-    """An ``mpc`` as two words ``hi + lo`` (``hi`` the nearest double, ``lo`` the rest rounded)."""
-    import mpmath
-
-    hi = complex(z)
-    return hi, complex(z - mpmath.mpc(hi.real, hi.imag))
-
-
-def _exact_tables(model, xi) -> tuple:
-    """``(f, T, gk)`` of :func:`orbit_constants` as ``(hi, lo)`` pairs from the family's :mod:`mpmath` functions at 40
-    digits (:meth:`jetgaudin.families.Family.mp_w`), or ``None`` for a family without them.  Taylor coefficients by
-    :func:`mpmath.taylor` (its numerical derivatives work at raised precision: ~1e-40 relative here)."""
-    import mpmath
-
-    fam = model.family
-    Nmax = max(model.orders)
-    f = np.zeros((2, 3, model.M), dtype=complex)
-    T = np.zeros((2, len(model.sites), Nmax, fam.n_dressing, 4), dtype=complex)
-    try:
-        with mpmath.workdps(40):
-            x = mpmath.mpc(complex(xi).real, complex(xi).imag)
-            for i, (p, N) in enumerate(model.sites):
-                o = model.offsets[i]
-                for a in range(3):
-                    t = mpmath.taylor(lambda z, a=a: fam.mp_w(a + 1, z), x - mpmath.mpf(p), N - 1)
-                    for k in range(N):
-                        f[:, a, o + k] = _split((-1) ** k * t[k])  # φ_{a,k} = (−1)^k [x^k] w_a
-                basis = fam.mp_dressing_basis(mpmath.mpf(p), x)
-                for q in range(fam.n_dressing):
-                    for e in range(4):
-                        if basis[q][e] == 0:
-                            continue
-                        t = mpmath.taylor(lambda z, q=q, e=e: fam.mp_dressing_basis(z, x)[q][e], mpmath.mpf(p),
-                                          N - 1)
-                        for n in range(N):
-                            T[:, i, n, q, e] = _split(mpmath.mpmathify(t[n]))
-            gk = np.array([_split(z) for z in fam.mp_kernel_constants(x)], dtype=complex).T
-    except NotImplementedError:
-        return None
-    return f, T, gk
-
-
 def orbit_constants(model, xi):
     """``(f, rule, gk, T, pidx, P, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module
     docstring), each **as two words** ``hi + lo`` where the family gives its functions in :mod:`mpmath`
@@ -347,7 +306,7 @@ def orbit_constants(model, xi):
     fam = model.family
     Nmax = max(model.orders)
     P = fam.n_dressing
-    exact = _exact_tables(model, xi)
+    exact = exact_tables(model, complex(xi))
     if exact is None:  # a family without mpmath functions: the double constants, no low words
         f1 = np.zeros((3, model.M), dtype=complex)
         full1 = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
