@@ -86,8 +86,8 @@ def exact_tables(model, xi: complex) -> tuple | None:
             gk = np.array([split(z) for z in fam.mp_kernel_constants(x)], dtype=complex).T
     except NotImplementedError:
         return None
-    for a in (f, T, gk):
-        a.setflags(write=False)
+    for table in (f, T, gk):
+        table.setflags(write=False)
     return f, T, gk
 
 
