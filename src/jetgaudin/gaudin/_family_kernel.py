@@ -191,7 +191,8 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
             for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, compensated, rounded once (_acc)
                 sr, si, er, ei = 0.0, 0.0, 0.0, 0.0
                 for t in range(0, pidx.shape[1], 2):
-                    sr, si, er, ei = _cacc(sr, si, er, ei, c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
+                    if T[i, m, e, t] != 0:  # zero padding (a term of another entry) adds nothing
+                        sr, si, er, ei = _cacc(sr, si, er, ei, c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
                 Dt[m, e] = complex(sr + er, si + ei)
             At[m, 0] = Dt[m, 3]
             At[m, 1] = -Dt[m, 1]
