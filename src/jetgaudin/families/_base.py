@@ -67,6 +67,24 @@ class Family(abc.ABC):
         """The constants ``gk`` of the gauge rule in the compiled kernel for the parameter ``ξ``."""
         return np.array([xi], dtype=complex)
 
+    # ---- the same constants to many digits (the compiled kernel's two-word constants) -------------------------
+
+    def mp_w(self, a: int, x):
+        """``w_a(x)`` in :mod:`mpmath` arithmetic at the working precision (``x`` an ``mpc``), for the compiled
+        kernel's constants as two words (:func:`jetgaudin.gaudin._family_kernel.orbit_constants`: constants rounded
+        once repeat their error at every step, a linear drift of the integrals; ``docs/reliability.md``, "Drift like
+        round-off").  ``NotImplementedError`` (default): the kernel takes the double constants alone."""
+        raise NotImplementedError(f"the {self.name} family has no mpmath basis functions")
+
+    def mp_dressing_basis(self, lam, xi) -> list:
+        """The dressing basis ``B_p(λ)`` in :mod:`mpmath` arithmetic: ``P`` lists of the 4 entries ``00, 01, 10,
+        11`` (``xi`` the map's parameter, used where :attr:`dressing_needs_xi`); see :meth:`mp_w`."""
+        raise NotImplementedError(f"the {self.name} family has no mpmath dressing basis")
+
+    def mp_kernel_constants(self, xi) -> list:
+        """:meth:`kernel_constants` in :mod:`mpmath` arithmetic (``xi`` an ``mpc``); see :meth:`mp_w`."""
+        raise NotImplementedError(f"the {self.name} family has no mpmath kernel constants")
+
     # ---- parameters -------------------------------------------------------------------------------------
 
     @property

@@ -55,6 +55,8 @@ spin about the axis ``b``; ``ω = K, iK', K + iK'`` ↔ ``b = 3, 1, 2``).  Only 
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy import special
 
@@ -170,6 +172,32 @@ class EllipticFamily(Family):
             out[:, a + 1] = T[a][:, None, None] * PAULI[a]
         return out
 
+    def mp_w(self, a, x):
+        """``ns, ds, cs`` (``a = 1, 2, 3``) of parameter ``m = k²`` (the modulus as given, squared exactly)."""
+        import mpmath
+
+        m = mpmath.mpf(self.modulus) ** 2
+        sn = mpmath.ellipfun("sn", x, m=m)
+        return 1 / sn if a == 1 else mpmath.ellipfun("dn" if a == 2 else "cn", x, m=m) / sn
+
+    def _mp_lam0(self, xi):
+        import mpmath
+
+        nK, nKp = HALF_PERIODS[self.half_period]
+        m = mpmath.mpf(self.modulus) ** 2
+        return (mpmath.re(xi) + (nK * mpmath.ellipk(m) if nK else 0)
+                + (1j * mpmath.ellipk(1 - m) if nKp else 0))
+
+    def mp_dressing_basis(self, lam, xi):
+        w1, w2, w3 = (self.mp_w(a, lam - self._mp_lam0(xi)) for a in (1, 2, 3))
+        return [[1, 0, 0, 1], [0, w1, w1, 0], [0, -1j * w2, 1j * w2, 0], [w3, 0, 0, -w3]]
+
+    def mp_kernel_constants(self, xi):
+        import mpmath
+
+        lam0 = self._mp_lam0(xi)
+        return [self.mp_w(a, z - lam0) for z in (xi, mpmath.conj(xi)) for a in (1, 2, 3)]
+
     def real_dressing(self, xi, k1, k2):
         return spectral_null_vector(self, xi, k1, k2)
 
@@ -180,16 +208,39 @@ class EllipticFamily(Family):
         return _jacobi.w_values(np.array([xi - lam0, np.conj(xi) - lam0]), self.modulus).T.ravel()
 
 
+@lru_cache(maxsize=64)
+def _two_word_w(family: EllipticFamily, xi: complex) -> tuple:
+    """``(hi, lo)`` of :meth:`EllipticFamily.mp_kernel_constants` (40-digit :mod:`mpmath`): ``w_a(ξ − λ_0)``,
+    ``w_a(ξ̄ − λ_0)``, the dressing basis at the two spectral points."""
+    import mpmath
+
+    from ..gaudin._compensated import split
+
+    with mpmath.workdps(40):
+        words = [split(z) for z in family.mp_kernel_constants(mpmath.mpc(xi.real, xi.imag))]
+    return tuple(np.array(w) for w in zip(*words, strict=True))
+
+
 def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
     r"""``S = (S_0, S_1, S_2, S_3)`` ``(B, 4)`` with ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` (module docstring): the right
     singular vector of the smallest singular value of the ``4 × 4`` system (rank 3), normalised to ``|S| = 1`` with
     its largest component real (if it is ``S_0``) or imaginary (an ``S_a``), so that ``(S_0, iS_a)`` is real for a
     real state."""
+    from ..gaudin._compensated import cacc
+
     xi = complex(xi)
+    hi, lo = _two_word_w(family, xi)  # w_a(ξ − λ_0), then w_a(ξ̄ − λ_0), a = 1, 2, 3, as two words
     cols = []
-    for lam, k in ((xi, k1), (np.conj(xi), k2)):
-        B = family.dressing_basis(np.asarray(lam), xi)  # (4, 2, 2)
-        cols.append(np.einsum("pij,bj->bip", B, k))  # rows i of D(λ) k = Σ_p S_p (B_p k)_i
+    for j, k in enumerate((k1, k2)):
+        z = np.zeros(k.shape[:-1])
+
+        def w_times(a, v, j=j, z=z):  # w_a(·) v, compensated and rounded once (docs/reliability.md, issue 33)
+            sr, si, er, ei = cacc(z, z, z, z, v, hi[3 * j + a - 1], lo[3 * j + a - 1])
+            return (sr + er) + 1j * (si + ei)
+
+        a1, a2 = k[..., 0], k[..., 1]  # rows i of D(λ) k = Σ_p S_p (B_p k)_i: B_0 = 1, B_a = w_a σ_a
+        cols.append(np.stack([np.stack([a1, w_times(1, a2), w_times(2, -1j * a2), w_times(3, a1)], -1),
+                              np.stack([a2, w_times(1, a1), w_times(2, 1j * a1), w_times(3, -a2)], -1)], -2))
     A = np.concatenate(cols, axis=-2)  # (B, 4, 4)
     _, _, vh = np.linalg.svd(A)
     S = np.conj(vh[..., -1, :])

@@ -63,6 +63,15 @@ class RationalFamily(Family):
             out[1, 0, 0, 0] = out[1, 4, 1, 1] = 1.0
         return out
 
+    def mp_w(self, a, x):
+        return 1 / x
+
+    def mp_dressing_basis(self, lam, xi=None):
+        return [[lam, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, lam], [0, 0, 0, 1]]
+
+    def mp_kernel_constants(self, xi):
+        return [xi]
+
     def real_dressing(self, xi, k1, k2):
         # K = λ + M0 (gauge rule E = 1); k2 is implied by k1 for the real reduction (eq. (X))
         M0 = real_two_point_M0(xi, k1[..., 0], k1[..., 1])

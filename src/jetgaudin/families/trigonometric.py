@@ -38,6 +38,7 @@ normalisation at ``Im λ → −∞`` (needs ``b + iγJ ≠ 0``): :meth:`Trigono
 
 from __future__ import annotations
 
+from functools import lru_cache
 from math import factorial
 
 import numpy as np
@@ -151,6 +152,25 @@ class TrigonometricFamily(Family):
         out[:, 5, 1, 1] = em
         return out
 
+    def mp_w(self, a, x):
+        import mpmath
+
+        g = mpmath.mpf(self.gamma)
+        return g / mpmath.sin(g * x) if a in (1, 2) else g * mpmath.cot(g * x)
+
+    def mp_dressing_basis(self, lam, xi=None):
+        import mpmath
+
+        ep, em = mpmath.expj(self.gamma * lam), mpmath.expj(-self.gamma * lam)
+        return [[ep, 0, 0, 0], [em, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, ep], [0, 0, 0, em]]
+
+    def mp_kernel_constants(self, xi):
+        import mpmath
+
+        g, xb = mpmath.mpf(self.gamma), mpmath.conj(xi)
+        return [mpmath.expj(-g * xi), mpmath.expj(-g * xb), mpmath.expj(g * xi), mpmath.expj(g * xb),
+                mpmath.sin(g * (xi - xb))]
+
     def real_dressing(self, xi, k1, k2):
         return gauge_rule(self.gamma, xi, k1, k2)
 
@@ -205,6 +225,19 @@ class TrigonometricFamily(Family):
                          np.sin(g * (xi - xb))])
 
 
+@lru_cache(maxsize=64)
+def _two_word_constants(gamma: float, xi: complex) -> tuple:
+    """``(hi, lo)`` of ``e^{−iγξ}, e^{−iγξ̄}, e^{iγξ}, e^{iγξ̄}, sin(γ(ξ − ξ̄))`` (40-digit :mod:`mpmath`; the
+    compiled kernel's ``gk``, :meth:`TrigonometricFamily.mp_kernel_constants`)."""
+    import mpmath
+
+    from ..gaudin._compensated import split
+
+    with mpmath.workdps(40):
+        words = [split(z) for z in TrigonometricFamily(gamma).mp_kernel_constants(mpmath.mpc(xi.real, xi.imag))]
+    return tuple(np.array(w) for w in zip(*words, strict=True))
+
+
 def spectral_rows(gamma, xi, k1, k2):
     r"""The two rows' null vectors ``(α, α_0, β)`` and ``(γ', δ, δ_0)`` of spectrality (cross products), shape
     ``(B, 3)`` each: row 1 of ``D(ξ_i) k_i = 0`` reads ``(e^{iγξ_i} k_{i1}, e^{−iγξ_i} k_{i1}, k_{i2})·(α, α_0, β) = 0``
@@ -238,15 +271,32 @@ def gauge_rule(gamma, xi, k1, k2, rule: str = "symmetric"):
     ``"alpha"`` (``α = δ``: not real) and ``"sign"`` (``ρ = −1``, the other root of ``αα_0 = δδ_0``, e.g. the raw
     cross products of :func:`spectral_rows`: real, Poisson, but the flow composed with the rotation by ``π`` about
     ``e_3``, not the identity at ``Im ξ → 0``)."""
+    from ..gaudin._compensated import acc, cacc
+
     a1, a2 = k1[..., 0], k1[..., 1]
     p, q = np.abs(a1) ** 2, np.abs(a2) ** 2
     n = p + q
-    e1p, e1m = np.exp(1j * gamma * xi), np.exp(-1j * gamma * xi)
-    e2p, e2m = np.exp(1j * gamma * np.conj(xi)), np.exp(-1j * gamma * np.conj(xi))
-    off = np.sin(gamma * (xi - np.conj(xi))) / n
+    # the constants e^{−iγξ}, e^{−iγξ̄}, e^{iγξ}, e^{iγξ̄}, sin(γ(ξ − ξ̄)) as two words, every sum of products with them
+    # compensated and rounded once (a constant rounded once puts the same error into every step: a linear drift of
+    # the integrals; gaudin._compensated, docs/reliability.md "Drift like round-off")
+    (e1m, e2m, e1p, e2p, sn), lo = _two_word_constants(float(gamma), complex(xi))
+    z = np.zeros(np.shape(p))
+
+    def pq(x, y, i, j):  # x·K_i + y·K_j, compensated
+        sr, er = acc(z, z, x, K[i].real, lo[i].real)
+        sr, er = acc(sr, er, y, K[j].real, lo[j].real)
+        si, ei = acc(z, z, x, K[i].imag, lo[i].imag)
+        si, ei = acc(si, ei, y, K[j].imag, lo[j].imag)
+        return (sr + er) + 1j * (si + ei)
+
+    def times_sin(t):  # t·sin(γ(ξ − ξ̄)), compensated
+        sr, si, er, ei = cacc(z, z, z, z, t, K[4], lo[4])
+        return (sr + er) + 1j * (si + ei)
+
+    K = (e1m, e2m, e1p, e2p, sn)
     # s(λ − ξ) = (e^{−iγξ} e^{iγλ} − e^{iγξ} e^{−iγλ})/(2i)
-    c = np.stack([(p * e1m + q * e2m) / (2j * n), -(p * e1p + q * e2p) / (2j * n), -a1 * np.conj(a2) * off,
-                  -np.conj(a1) * a2 * off, (q * e1m + p * e2m) / (2j * n), -(q * e1p + p * e2p) / (2j * n)], -1)
+    c = np.stack([pq(p, q, 0, 1) / (2j * n), -pq(p, q, 2, 3) / (2j * n), -times_sin(a1 * np.conj(a2)) / n,
+                  -times_sin(np.conj(a1) * a2) / n, pq(q, p, 0, 1) / (2j * n), -pq(q, p, 2, 3) / (2j * n)], -1)
     if rule == "symmetric":
         return c
     if rule == "alpha":

@@ -52,6 +52,25 @@ def _component_poles(sites) -> tuple[np.ndarray, np.ndarray]:
     return pos, power
 
 
+@cache
+def rational_weights(sites, eta: complex) -> tuple[np.ndarray, np.ndarray]:
+    """The weights ``f_c = (η − λ_c)^{−(k_c+1)}`` of ``ℓ(η)`` (rational family) as two words ``(f, flo)``: ``f`` the
+    nearest doubles, ``flo`` the rest, from :mod:`mpmath` at 40 digits; read-only (both chain routes sum with them
+    compensated: ``docs/reliability.md``, "Drift like round-off")."""
+    import mpmath
+
+    pos, power = _component_poles(sites)
+    with mpmath.workdps(40):
+        e = mpmath.mpc(complex(eta).real, complex(eta).imag)
+        exact = [(e - mpmath.mpf(float(p))) ** (-int(k)) for p, k in zip(pos, power, strict=True)]
+        f = np.array([complex(z) for z in exact], dtype=complex)
+        flo = np.array([complex(z - mpmath.mpc(c.real, c.imag)) for z, c in zip(exact, f, strict=True)],
+                       dtype=complex)
+    f.setflags(write=False)
+    flo.setflags(write=False)
+    return f, flo
+
+
 def lax_vector(model, X, lam) -> np.ndarray:
     r"""``ξ^a(λ) = b δ_{a3} + Σ_i Σ_k y^{(i)a}_k φ_{a,k}(λ − λ_i)``, shape ``(..., 3)`` (rational:
     ``φ_{a,k}(x) = x^{−(k+1)}``; other families: :meth:`jetgaudin.families.Family.phi`)."""

@@ -32,7 +32,8 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
-from ._kernels import _abs2, _put_site  # first: it applies the Bäcklund kernels' Numba target (``_target.configure``)
+from ._compensated import exact_tables
+from ._kernels import _abs2, _acc, _cacc, _put_site  # first: it applies the Bäcklund kernels' Numba target
 
 
 @njit(cache=True)
@@ -42,11 +43,22 @@ def _det3(A, r0, r1, r2, c0, c1, c2):
             + A[r0][c2] * (A[r1][c0] * A[r2][c1] - A[r1][c1] * A[r2][c0]))
 
 
+@njit(cache=True, inline="always")
+def _wk(gk, j, G, k):
+    """``w·k`` for the constant ``w = gk[j] + gk[G + j]`` (two words), compensated (:func:`._kernels._acc`)."""
+    sr, si, er, ei = _cacc(0.0, 0.0, 0.0, 0.0, k, gk[j], gk[G + j])
+    return complex(sr + er, si + ei)
+
+
 @njit(cache=True)
-def _elliptic_rows(k1, k2, w1, w2, w3):
+def _elliptic_rows(k1, k2, gk, o, G):
     """The two rows of the spectrality system for one point: ``B_0 k = k``, ``B_1 k = w1 (k2, k1)``,
-    ``B_2 k = w2 (−i k2, i k1)``, ``B_3 k = w3 (k1, −k2)``."""
-    return (k1, w1 * k2, -1j * w2 * k2, w3 * k1), (k2, w1 * k1, 1j * w2 * k1, -w3 * k2)
+    ``B_2 k = w2 (−i k2, i k1)``, ``B_3 k = w3 (k1, −k2)``, with ``w_a = gk[o + a − 1]`` plus its low word
+    ``gk[G + o + a − 1]`` (:func:`orbit_constants`), each product rounded once (:func:`_wk`)."""
+    w2k2 = _wk(gk, o + 1, G, k2)
+    w2k1 = _wk(gk, o + 1, G, k1)
+    w3k2 = _wk(gk, o + 2, G, k2)
+    return (k1, _wk(gk, o, G, k2), -1j * w2k2, _wk(gk, o + 2, G, k1)), (k2, _wk(gk, o, G, k1), 1j * w2k1, -w3k2)
 
 
 @njit(cache=True)
@@ -54,8 +66,9 @@ def _elliptic_coefficients(gk, a1, a2, c):
     """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
     ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
     whose cofactors are largest.  Tuples, no arrays: the GPU kernel (:mod:`jetgaudin.gpu`) compiles it too."""
-    A0, A1 = _elliptic_rows(a1, a2, gk[0], gk[1], gk[2])
-    A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk[3], gk[4], gk[5])
+    G = gk.shape[0] // 2
+    A0, A1 = _elliptic_rows(a1, a2, gk, 0, G)
+    A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk, 3, G)
     A = (A0, A1, A2, A3)
     rn = (_abs2(A0[0]) + _abs2(A0[1]) + _abs2(A0[2]) + _abs2(A0[3]),
           _abs2(A1[0]) + _abs2(A1[1]) + _abs2(A1[2]) + _abs2(A1[3]),
@@ -85,6 +98,18 @@ def _elliptic_coefficients(gk, a1, a2, c):
     scale = math.ldexp(1.0, -((math.frexp(best)[1] + 1) // 2))
     for r in range(4):
         c[r] *= scale
+
+
+@njit(cache=True, inline="always")
+def _pq(p, q, gk, i, j):
+    """``p·gk[i] + q·gk[j]`` (real ``p, q``; the constants with their low words ``gk[i + 5]``, ``gk[j + 5]``: the
+    trigonometric rule's five), compensated and rounded once (:func:`._kernels._acc`)."""
+    hi, hj, li, lj = gk[i], gk[j], gk[i + 5], gk[j + 5]
+    sr, er = _acc(0.0, 0.0, p, hi.real, li.real)
+    sr, er = _acc(sr, er, q, hj.real, lj.real)
+    si, ei = _acc(0.0, 0.0, p, hi.imag, li.imag)
+    si, ei = _acc(si, ei, q, hj.imag, lj.imag)
+    return complex(sr + er, si + ei)
 
 
 @njit(cache=True)
@@ -117,31 +142,34 @@ def _coefficients(rule, gk, a1, a2, c):
     elif rule == 2:
         _elliptic_coefficients(gk, a1, a2, c)
     else:  # trigonometric: families.trigonometric.gauge_rule("symmetric")
-        e1m = gk[0]
-        e2m = gk[1]
-        e1p = gk[2]
-        e2p = gk[3]
-        off = gk[4]
-        d = -0.5j
-        c[0] = (p * e1m + q * e2m) * d
-        c[1] = -(p * e1p + q * e2p) * d
-        c[2] = -a1 * a2.conjugate() * off
-        c[3] = -a1.conjugate() * a2 * off
-        c[4] = (q * e1m + p * e2m) * d
-        c[5] = -(q * e1p + p * e2p) * d
+        d = -0.5j  # the constants e^{∓iγξ}, e^{∓iγξ̄} (gk[0..3]) and sin(γ(ξ − ξ̄)) (gk[4]), low words gk[5..9]
+        c[0] = _pq(p, q, gk, 0, 1) * d
+        c[1] = -_pq(p, q, gk, 2, 3) * d
+        t = a1 * a2.conjugate()
+        c[2] = -_wk(gk, 4, 5, t)
+        t = a1.conjugate() * a2
+        c[3] = -_wk(gk, 4, 5, t)
+        c[4] = _pq(q, p, gk, 0, 1) * d
+        c[5] = -_pq(q, p, gk, 2, 3) * d
 
 
 @njit(cache=True)
 def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
     M = x.shape[0] // 3
-    x1 = 0j
-    x2 = 0j
-    x3 = complex(b)
+    # f[a] + f[a + 3]: the weights as two words (orbit_constants), in compensated sums rounded once (_acc)
+    x1r, x1i, x2r, x2i, x3r, x3i = 0.0, 0.0, 0.0, 0.0, b, 0.0
+    e1r, e1i, e2r, e2i, e3r, e3i = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for k in range(M):
-        x1 += f[0, k] * x[3 * k]
-        x2 += f[1, k] * x[3 * k + 1]
-        x3 += f[2, k] * x[3 * k + 2]
+        x1r, e1r = _acc(x1r, e1r, x[3 * k], f[0, k].real, f[3, k].real)
+        x1i, e1i = _acc(x1i, e1i, x[3 * k], f[0, k].imag, f[3, k].imag)
+        x2r, e2r = _acc(x2r, e2r, x[3 * k + 1], f[1, k].real, f[4, k].real)
+        x2i, e2i = _acc(x2i, e2i, x[3 * k + 1], f[1, k].imag, f[4, k].imag)
+        x3r, e3r = _acc(x3r, e3r, x[3 * k + 2], f[2, k].real, f[5, k].real)
+        x3i, e3i = _acc(x3i, e3i, x[3 * k + 2], f[2, k].imag, f[5, k].imag)
+    x1 = complex(x1r + e1r, x1i + e1i)
+    x2 = complex(x2r + e2r, x2i + e2i)
+    x3 = complex(x3r + e3r, x3i + e3i)
     u = x3
     v = x1 - 1j * x2
     w = x1 + 1j * x2
@@ -160,11 +188,12 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
         o = site_off[i]
         N = site_n[i]
         for m in range(N):
-            for e in range(4):
-                s = 0j
-                for t in range(pidx.shape[1]):
-                    s += c[pidx[e, t]] * T[i, m, e, t]
-                Dt[m, e] = s
+            for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, compensated, rounded once (_acc)
+                sr, si, er, ei = 0.0, 0.0, 0.0, 0.0
+                for t in range(0, pidx.shape[1], 2):
+                    if T[i, m, e, t] != 0:  # zero padding (a term of another entry) adds nothing
+                        sr, si, er, ei = _cacc(sr, si, er, ei, c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
+                Dt[m, e] = complex(sr + er, si + ei)
             At[m, 0] = Dt[m, 3]
             At[m, 1] = -Dt[m, 1]
             At[m, 2] = -Dt[m, 2]
@@ -263,29 +292,47 @@ def run_batch(X0, b, nu0, f, rule, gk, T, pidx, n_basis, site_off, site_n, steps
 
 def orbit_constants(model, xi):
     """``(f, rule, gk, T, pidx, P, site_off, site_n)``: the per-orbit constants of :func:`run_orbit` (module
-    docstring)."""
+    docstring), each **as two words** ``hi + lo`` where the family gives its functions in :mod:`mpmath`
+    (:meth:`jetgaudin.families.Family.mp_w`; every family here): ``f`` ``(6, M)`` (rows ``3..5`` the low words),
+    ``gk`` ``(2G,)`` (the low words after the high ones), and ``T`` ``(S, Nmax, 4, 2K)`` with term ``t``'s high
+    word at ``2t`` and its low word at ``2t + 1`` (``pidx[e, 2t] = pidx[e, 2t + 1]``); the kernel sums the products
+    with the constants compensated and rounds each sum once (:func:`jetgaudin.gaudin._kernels._acc`).
+
+    Why two words (issue 33; ``docs/reliability.md``, "Drift like round-off"): ``ℓ(ξ)`` (``f``), the spectrality of
+    ``D`` at ``ξ, ξ̄`` (``gk``) and ``D``'s Taylor coefficients at the sites (``T``) must be those of one ``ξ`` for
+    the step to preserve the integrals; a constant rounded once repeats its error at every step, so the step misses
+    the integrals by the same ~1e-16 each time: a linear drift.  With ``hi + lo`` (~1e-32) and the products summed
+    compensated (the low word alone, added to a rounded product, changes nothing), the remaining errors are roundings
+    of quantities that vary from step to step (a random walk)."""
     fam = model.family
-    f = np.zeros((3, model.M), dtype=complex)
-    for i, (p, N) in enumerate(model.sites):
-        o = model.offsets[i]
-        for a in range(3):
-            f[a, o:o + N] = fam.phi(a + 1, complex(xi) - p, N)
     Nmax = max(model.orders)
     P = fam.n_dressing
-    full = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
-    for i, (p, N) in enumerate(model.sites):
-        T = fam.dressing_taylor(p, N, complex(xi)) if fam.dressing_needs_xi else fam.dressing_taylor(p, N)
-        full[i, :N] = T.reshape(N, P, 4)
-    used = np.any(full != 0, axis=(0, 1))  # (P, 4): which basis matrices feed which entry
+    exact = exact_tables(model, complex(xi))
+    if exact is None:  # a family without mpmath functions: the double constants, no low words
+        f1 = np.zeros((3, model.M), dtype=complex)
+        full1 = np.zeros((len(model.sites), Nmax, P, 4), dtype=complex)
+        for i, (p, N) in enumerate(model.sites):
+            o = model.offsets[i]
+            for a in range(3):
+                f1[a, o:o + N] = fam.phi(a + 1, complex(xi) - p, N)
+            Ti = fam.dressing_taylor(p, N, complex(xi)) if fam.dressing_needs_xi else fam.dressing_taylor(p, N)
+            full1[i, :N] = Ti.reshape(N, P, 4)
+        gk1 = np.asarray(fam.kernel_constants(complex(xi)), dtype=complex)
+        f2, full, gk2 = np.stack([f1, 0 * f1]), np.stack([full1, 0 * full1]), np.stack([gk1, 0 * gk1])
+    else:
+        f2, full, gk2 = exact
+    f = f2.reshape(6, model.M)
+    used = np.any(full[0] != 0, axis=(0, 1))  # (P, 4): which basis matrices feed which entry
     K = max(1, int(used.sum(axis=0).max()))
-    pidx = np.zeros((4, K), dtype=np.int64)
-    T = np.zeros((len(model.sites), Nmax, 4, K), dtype=complex)
-    for e in range(4):
+    pidx = np.zeros((4, 2 * K), dtype=np.int64)
+    T = np.zeros((len(model.sites), Nmax, 4, 2 * K), dtype=complex)
+    for e in range(4):  # interleaved: term t's high word at 2t, its low word at 2t + 1 (zero padding adds nothing)
         for t, p in enumerate(np.flatnonzero(used[:, e])):
-            pidx[e, t] = p
-            T[:, :, e, t] = full[:, :, p, e]
-    return (f, int(fam.kernel_rule), np.asarray(fam.kernel_constants(complex(xi)), dtype=complex), T, pidx, P,
-            np.array(model.offsets, dtype=np.int64), np.array(model.orders, dtype=np.int64))
+            pidx[e, 2 * t] = pidx[e, 2 * t + 1] = p
+            T[:, :, e, 2 * t] = full[0, :, :, p, e]
+            T[:, :, e, 2 * t + 1] = full[1, :, :, p, e]
+    return (f, int(fam.kernel_rule), gk2.reshape(-1), T, pidx, P, np.array(model.offsets, dtype=np.int64),
+            np.array(model.orders, dtype=np.int64))
 
 
 #: points of the vertical segment ``[Re η, η]`` on which :func:`branch_rule` continues ``ν`` (``n`` steps)

@@ -2,7 +2,8 @@ r"""Compiled (Numba) kernel of the real two-point map of a chain, any sites and 
 
 The same arithmetic as :class:`jetgaudin.gaudin.maps.ChainTwoPointBacklund.step` (the site-wise dressing of the
 principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the weights of ``ℓ(η)``,
-``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``) and ``K`` taken as
+``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``, summed compensated and rounded
+once: :func:`_acc`) and ``K`` taken as
 ``|k|² (λ + M0)``, with the Taylor coefficients ``g_d`` of ``1/det K`` at each site from the step's own ``K``
 (:func:`jetgaudin.gaudin.maps.monic_series`: the determinant of a normalised ``K`` is the same at every step and its
 rounding, the same at every step, made the sites' Casimirs drift linearly; ``docs/reliability.md``).
@@ -30,6 +31,35 @@ from ..backlund.kernels._target import configure
 # that imports the chains' kernels first (``ensemble --sites``) then loads the cache entries ``jetgaudin warmup``
 # wrote instead of compiling for another target (``tests/test_cli_interface.py``).
 configure()
+
+from ..backlund.kernels._scalar import _fma  # noqa: E402  (after configure: the Bäcklund kernels' target)
+
+
+@njit(cache=True, inline="always")
+def _acc(s, e, a, bh, bl):
+    """One term ``a·(bh + bl)`` (reals; ``bh + bl`` a constant as two words) of a compensated sum: ``s`` the rounded
+    running sum, ``e`` the sum of every rounding error so far (the product's, exact by a fused multiply-add; the
+    addition's, exact by TwoSum) and of the ``a·bl``; the sum is ``s + e`` (the Dot2 of Ogita, Rump and Oishi, 2005).
+
+    Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): ``fl(a·bh)`` misses ``a·b`` by the constant's
+    own relative error at every step, a bias; adding ``a·bl`` to a rounded double changes nothing (it is below half
+    an ulp), so the low word counts only together with the exact rounding errors, and ``s + e`` is then the exact
+    sum rounded once: an error that varies from step to step."""
+    p = a * bh
+    ep = _fma(a, bh, -p)
+    t = s + p
+    z = t - s
+    return t, e + (ep + ((s - (t - z)) + (p - z)) + a * bl)
+
+
+@njit(cache=True, inline="always")
+def _cacc(sr, si, er, ei, a, h, lo):
+    """``(sr + er) + i(si + ei) += a·(h + lo)`` compensated (:func:`_acc`), ``a``, ``h``, ``lo`` complex."""
+    sr, er = _acc(sr, er, a.real, h.real, lo.real)
+    sr, er = _acc(sr, er, -a.imag, h.imag, lo.imag)
+    si, ei = _acc(si, ei, a.real, h.imag, lo.imag)
+    si, ei = _acc(si, ei, a.imag, h.real, lo.real)
+    return sr, si, er, ei
 
 
 @njit(cache=True, inline="always")
@@ -62,18 +92,29 @@ def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0,
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used.  ``g`` (Nmax,) is scratch: the
     Taylor coefficients of ``1/det K`` at each site from this step's ``M0`` (``gaudin.maps.monic_series``)."""
     # ℓ(η) = diag(b, −b) + Σ_c f_c P_c,  P = [[y3, y1 − i y2], [y1 + i y2, −y3]]
-    u = complex(b)
-    v = 0j
-    w = 0j
+    # f + flo: the weights to ~1e-32, in compensated sums rounded once at the end (_acc: a rounded constant f alone
+    # repeats its error at every step: ℓ(η), hence the eigenvector, off by the same relative ~1e-16 each time, whose
+    # dropped residue at η drifts linearly; flo added to rounded products would change nothing)
+    ur, ui, vr, vi, wr, wi = b, 0.0, 0.0, 0.0, 0.0, 0.0
+    eur, eui, evr, evi, ewr, ewi = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for c in range(M):
         y1 = x[3 * c]
         y2 = x[3 * c + 1]
         y3 = x[3 * c + 2]
-        # f + flo: the weights to ~1e-32 (a rounded constant f alone repeats its error at every step: ℓ(η), hence
-        # the eigenvector, off by the same relative ~1e-16 each time, whose dropped residue at η drifts linearly)
-        u += f[c] * y3 + flo[c] * y3
-        v += f[c] * complex(y1, -y2) + flo[c] * complex(y1, -y2)
-        w += f[c] * complex(y1, y2) + flo[c] * complex(y1, y2)
+        fr, fi, lr, li = f[c].real, f[c].imag, flo[c].real, flo[c].imag
+        ur, eur = _acc(ur, eur, y3, fr, lr)
+        ui, eui = _acc(ui, eui, y3, fi, li)
+        vr, evr = _acc(vr, evr, y1, fr, lr)  # v: f (y1 − i y2)
+        vr, evr = _acc(vr, evr, y2, fi, li)
+        vi, evi = _acc(vi, evi, y1, fi, li)
+        vi, evi = _acc(vi, evi, -y2, fr, lr)
+        wr, ewr = _acc(wr, ewr, y1, fr, lr)  # w: f (y1 + i y2)
+        wr, ewr = _acc(wr, ewr, -y2, fi, li)
+        wi, ewi = _acc(wi, ewi, y1, fi, li)
+        wi, ewi = _acc(wi, ewi, y2, fr, lr)
+    u = complex(ur + eur, ui + eui)
+    v = complex(vr + evr, vi + evi)
+    w = complex(wr + ewr, wi + ewi)
     r = np.sqrt(u * u + v * w)
     if (r.conjugate() * nu_prev).real < 0:
         r = -r
@@ -191,17 +232,9 @@ def run_orbit(x0, b, eta, nu0, f, flo, site_pos, site_off, site_n, steps, save_e
 def orbit_constants(model, eta):
     """``(f, flo, site_pos, site_off, site_n)``: the per-orbit constants of the kernel (module docstring); the weights
     of ``ℓ(η)``, ``f_c = (η − λ_c)^{−(k_c+1)}``, as two words ``f + flo`` (``flo`` the rounding error of ``f``,
-    computed with mpmath at 40 digits)."""
-    import mpmath
+    computed with mpmath at 40 digits: :func:`jetgaudin.gaudin._curve.rational_weights`)."""
+    from ._curve import rational_weights
 
-    from ._curve import _component_poles
-
-    pos, power = _component_poles(model.sites)
-    eta = complex(eta)
-    with mpmath.workdps(40):
-        exact = [(mpmath.mpc(eta.real, eta.imag) - mpmath.mpf(float(p))) ** (-int(k)) for p, k in zip(pos, power,
-                                                                                                       strict=True)]
-        f = np.array([complex(z) for z in exact], dtype=complex)
-        flo = np.array([complex(z - mpmath.mpc(c.real, c.imag)) for z, c in zip(exact, f, strict=True)], dtype=complex)
-    return (f, flo, model.positions.astype(float), np.array(model.offsets, dtype=np.int64),
+    f, flo = rational_weights(model.sites, complex(eta))
+    return (f.copy(), flo.copy(), model.positions.astype(float), np.array(model.offsets, dtype=np.int64),
             np.array(model.orders, dtype=np.int64))

@@ -40,7 +40,8 @@ from ..lax import ell_coefficients, state_from_ell
 from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, check_gpu, register_map, step_loop
 from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
-from ._curve import _component_poles, nu_with_roots
+from ._compensated import acc, family_lax, family_site_series
+from ._curve import nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
 
@@ -86,13 +87,24 @@ def _check_eta(model: GaudinModel, eta) -> complex:
 
 
 def _ell_at(model, parts, lam):
-    """``ℓ(λ) = ℓ(∞) + Σ_c P_c (λ − λ_c)^{-(k_c+1)}`` for scalar ``λ``; ``parts`` ``(B, M, 2, 2)``."""
-    pos, power = _component_poles(model.sites)
-    f = (lam - pos) ** (-power)
-    out = np.einsum("c,...cij->...ij", f, parts)
-    out[..., 0, 0] += model.b
-    out[..., 1, 1] -= model.b
-    return out
+    """``ℓ(λ) = ℓ(∞) + Σ_c P_c (λ − λ_c)^{-(k_c+1)}`` for scalar ``λ``; ``parts`` ``(B, M, 2, 2)``.  The weights as
+    two words and the sums compensated, rounded once (:func:`jetgaudin.gaudin._compensated.acc`;
+    ``docs/reliability.md``, "Drift like round-off": a weight rounded once would put the same relative error into
+    ``ℓ(η)`` at every step, a linear drift)."""
+    from ._curve import rational_weights
+
+    f, flo = rational_weights(model.sites, complex(lam))
+    z = np.zeros(parts.shape[:-3] + (2, 2))
+    sr, si, er, ei = z.copy(), z.copy(), z.copy(), z.copy()
+    sr[..., 0, 0] += model.b
+    sr[..., 1, 1] -= model.b
+    for c in range(len(f)):
+        P = parts[..., c, :, :]
+        sr, er = acc(sr, er, P.real, f[c].real, flo[c].real)
+        sr, er = acc(sr, er, -P.imag, f[c].imag, flo[c].imag)
+        si, ei = acc(si, ei, P.real, f[c].imag, flo[c].imag)
+        si, ei = acc(si, ei, P.imag, f[c].real, flo[c].real)
+    return (sr + er) + 1j * (si + ei)
 
 
 def _inv_series(d, order):
@@ -487,14 +499,22 @@ class ChainTwoPointBacklund(_ChainMap):
         """``(ell, L(η), ν1, M0)`` for a 2-D batch ``X`` (other families: the dressing coefficients ``c``
         ``(B, P)`` of :mod:`jetgaudin.gaudin._dressing` in place of ``M0``)."""
         ell = ell_coefficients(X, self.model.b)
-        L = _ell_at(self.model, ell[..., 1:, :, :], self.eta) if self.model.family.uniform else \
-            _matrix(self.model.xi(X, self.eta))
+        if self.model.family.uniform:
+            L = _ell_at(self.model, ell[..., 1:, :, :], self.eta)
+        else:  # compensated with the two-word weights (gaudin._compensated; issue 33), else the plain sums
+            L = family_lax(self.model, X, self.eta)
+            L = _matrix(self.model.xi(X, self.eta)) if L is None else L
         # the root of ν(η)² (from ℓ(η)) closest to the carry, or to the branch rule's value: step(X) and
         # step(X, start(X)) are the same bits
         ref = self._nu_rule(X) if carry is None else np.asarray(carry).reshape(-1)
         nu1 = _continue(L[..., 0, 0] ** 2 + L[..., 0, 1] * L[..., 1, 0], ref)
         if not self.model.family.uniform:
-            return ell, L, nu1, real_coefficients(self.model, self.eta, L, nu1)
+            # D times |ℓ(ξ)|² scaled to [1/4, 1): unnormalised (a normalised D has the same det D at every step,
+            # whose reciprocal rounds alike each time: a linear drift, as monic_series); the dressing does not
+            # depend on D's scale
+            m, e = np.frexp(np.sum(np.abs(L[..., :, :]) ** 2, axis=(-2, -1)))
+            c = real_coefficients(self.model, self.eta, L, nu1)
+            return ell, L, nu1, c * np.ldexp(m, e - 2 * ((e + 1) // 2))[..., None]
         k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
         return ell, L, nu1, real_two_point_M0(self.eta, k1, k2)
 
@@ -524,7 +544,8 @@ class ChainTwoPointBacklund(_ChainMap):
         else:  # the family's dressing: residual relative to |D(η)|², principal parts from its Taylor series
             D1 = dressing_at(self.model, M0, self.eta, self.eta)
             res = _residual(D1, L, adj(D1), scale) / np.max(np.abs(D1), axis=(-2, -1)) ** 2
-            series = site_series(self.model, M0, self.eta)
+            series = family_site_series(self.model, M0, self.eta)  # compensated (gaudin._compensated)
+            series = site_series(self.model, M0, self.eta) if series is None else series
         if np.any(res > _RESIDUAL_TOL):
             raise SingularStepError(
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "

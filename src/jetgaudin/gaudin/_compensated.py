@@ -1,0 +1,142 @@
+r"""Compensated arithmetic with two-word constants for the chain maps (issue 33; ``docs/reliability.md``, "Drift like
+round-off"): a constant rounded once puts the same relative error into every step, which the integrals then show as a
+linear drift.  The kernels' constants are therefore kept as two words ``hi + lo`` (:func:`exact_tables`, 40-digit
+:mod:`mpmath` from the families' ``mp_*`` functions) and every sum of products with them is compensated and rounded
+once (:func:`acc` here for the NumPy routes, :func:`jetgaudin.gaudin._kernels._acc` in the compiled kernels).
+Numba-free: the NumPy routes import it without loading the kernels.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc"]
+
+
+def two_prod(a, b):
+    """``a·b = p + e`` exactly (real arrays; Dekker's product with Veltkamp's split, no fused multiply-add)."""
+    p = a * b
+    ta, tb = 134217729.0 * a, 134217729.0 * b  # 2^27 + 1
+    ah, bh = ta - (ta - a), tb - (tb - b)
+    al, bl = a - ah, b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def acc(s, e, a, bh, bl):
+    """``s + e += a·(bh + bl)`` compensated (real arrays; the NumPy form of the kernels'
+    :func:`jetgaudin.gaudin._kernels._acc`: ``s`` the rounded running sum, ``e`` the exact rounding errors of the
+    product and of the addition plus ``a·bl``; the sum is ``s + e``, the exact one rounded once)."""
+    p, ep = two_prod(a, bh)
+    t = s + p
+    z = t - s
+    return t, e + (ep + ((s - (t - z)) + (p - z)) + a * bl)
+
+
+def cacc(sr, si, er, ei, a, h, lo):
+    """``(sr + er) + i(si + ei) += a·(h + lo)`` compensated (:func:`acc`), ``a`` complex arrays, ``h``, ``lo`` complex
+    (broadcasting)."""
+    h, lo = np.asarray(h), np.asarray(lo)
+    sr, er = acc(sr, er, a.real, h.real, lo.real)
+    sr, er = acc(sr, er, -a.imag, h.imag, lo.imag)
+    si, ei = acc(si, ei, a.real, h.imag, lo.imag)
+    si, ei = acc(si, ei, a.imag, h.real, lo.real)
+    return sr, si, er, ei
+
+
+def split(z) -> tuple[complex, complex]:
+    """An ``mpc`` as two words ``hi + lo`` (``hi`` the nearest double, ``lo`` the rest rounded)."""
+    import mpmath
+
+    hi = complex(z)
+    return hi, complex(z - mpmath.mpc(hi.real, hi.imag))
+
+
+@lru_cache(maxsize=64)
+def exact_tables(model, xi: complex) -> tuple | None:
+    """``(f, T, gk)`` of :func:`jetgaudin.gaudin._family_kernel.orbit_constants` as ``(hi, lo)`` pairs (read-only)
+    from the family's :mod:`mpmath` functions at 40 digits (:meth:`jetgaudin.families.Family.mp_w`), or ``None``
+    for a family without them.  Taylor coefficients by :func:`mpmath.taylor` (its numerical derivatives work at
+    raised precision: ~1e-40 relative here)."""
+    import mpmath
+
+    fam = model.family
+    Nmax = max(model.orders)
+    f = np.zeros((2, 3, model.M), dtype=complex)
+    T = np.zeros((2, len(model.sites), Nmax, fam.n_dressing, 4), dtype=complex)
+    try:
+        with mpmath.workdps(40):
+            x = mpmath.mpc(complex(xi).real, complex(xi).imag)
+            for i, (p, N) in enumerate(model.sites):
+                o = model.offsets[i]
+                for a in range(3):
+                    t = mpmath.taylor(lambda z, a=a: fam.mp_w(a + 1, z), x - mpmath.mpf(p), N - 1)
+                    for k in range(N):
+                        f[:, a, o + k] = split((-1) ** k * t[k])  # φ_{a,k} = (−1)^k [x^k] w_a
+                basis = fam.mp_dressing_basis(mpmath.mpf(p), x)
+                for q in range(fam.n_dressing):
+                    for e in range(4):
+                        if basis[q][e] == 0:
+                            continue
+                        t = mpmath.taylor(lambda z, q=q, e=e: fam.mp_dressing_basis(z, x)[q][e], mpmath.mpf(p),
+                                          N - 1)
+                        for n in range(N):
+                            T[:, i, n, q, e] = split(mpmath.mpmathify(t[n]))
+            gk = np.array([split(z) for z in fam.mp_kernel_constants(x)], dtype=complex).T
+    except NotImplementedError:
+        return None
+    for table in (f, T, gk):
+        table.setflags(write=False)
+    return f, T, gk
+
+
+def family_lax(model, X: np.ndarray, xi: complex) -> np.ndarray | None:
+    """``ℓ(ξ) = [[u, v], [w, −u]]`` ``(B, 2, 2)`` at the states ``X`` ``(B, 3M)`` from the two-word weights of
+    :func:`exact_tables`, each ``ξ^a`` a compensated sum rounded once (the NumPy route's form of the family kernel's
+    first lines); ``None`` for a family without :mod:`mpmath` functions."""
+    tables = exact_tables(model, complex(xi))
+    if tables is None:
+        return None
+    f = tables[0]
+    y = np.asarray(X, dtype=float).reshape(X.shape[:-1] + (model.M, 3))
+    comp = []
+    for a in range(3):
+        z = np.zeros(X.shape[:-1])
+        sr, si, er, ei = z + (model.b if a == 2 else 0.0), z.copy(), z.copy(), z.copy()
+        for k in range(model.M):
+            sr, er = acc(sr, er, y[..., k, a], f[0, a, k].real, f[1, a, k].real)
+            si, ei = acc(si, ei, y[..., k, a], f[0, a, k].imag, f[1, a, k].imag)
+        comp.append((sr + er) + 1j * (si + ei))
+    x1, x2, u = comp
+    L = np.empty(X.shape[:-1] + (2, 2), dtype=complex)
+    L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], L[..., 1, 1] = u, x1 - 1j * x2, x1 + 1j * x2, -u
+    return L
+
+
+def family_site_series(model, c: np.ndarray, xi: complex) -> list | None:
+    """:func:`jetgaudin.gaudin._dressing.site_series` with ``D``'s Taylor coefficients at the sites
+    ``Σ_p c_p (T_p + T_p^lo)`` compensated and rounded once (the two-word tables of :func:`exact_tables`); ``None``
+    for a family without :mod:`mpmath` functions."""
+    from ..backlund._dressing import adj
+    from ..families import _series
+
+    tables = exact_tables(model, complex(xi))
+    if tables is None:
+        return None
+    T = tables[1]  # (2, S, Nmax, P, 4)
+    out = []
+    for i, (_, N) in enumerate(model.sites):
+        Dt = np.empty((N,) + c.shape[:-1] + (2, 2), dtype=complex)
+        for n in range(N):
+            for e in range(4):
+                z = np.zeros(c.shape[:-1])
+                sr, si, er, ei = z, z.copy(), z.copy(), z.copy()
+                for p in range(c.shape[-1]):
+                    if T[0, i, n, p, e] != 0:
+                        sr, si, er, ei = cacc(sr, si, er, ei, c[..., p], T[0, i, n, p, e], T[1, i, n, p, e])
+                Dt[n, ..., e // 2, e % 2] = (sr + er) + 1j * (si + ei)
+        At = adj(Dt)
+        det = _series.mul(Dt[..., 0, 0], Dt[..., 1, 1], N) - _series.mul(Dt[..., 0, 1], Dt[..., 1, 0], N)
+        out.append((list(Dt), list(At), _series.inv(det, N)))
+    return out
