@@ -130,9 +130,9 @@ def test_solve_exact_substeps_and_dense(sites):
 
 def test_compiled_equals_numpy_and_batch_equals_single():
     """The compiled route (the su(3) kernel's loop with the K = 6 maps, 2 sub-steps) against the maps' NumPy route:
-    20 steps, measured 2e-14, asserted 1e-12 (round-off of 240 map steps on O(1) states; a map left out or a
-    sub-step skipped is O(0.1)).  A batch (all cores) equals each orbit's single run bit for bit, and
-    save_every keeps the rows of the full orbit."""
+    20 steps, measured 1.6e-13, asserted 1e-11 (round-off of 240 map steps on O(1) states, two routes that agree
+    to ~1e-15 a step; a map left out or a sub-step skipped is O(0.1)).  A batch (all cores) equals each orbit's
+    single run bit for bit, and save_every keeps the rows of the full orbit."""
     from jetgaudin.gaudin import SunExactFlow
 
     H = MODEL.hamiltonian(W_ANY)
@@ -140,18 +140,18 @@ def test_compiled_equals_numpy_and_batch_equals_single():
     c = SunExactFlow(H, 0.2, 2, backend="compiled")
     n = SunExactFlow(H, 0.2, 2, backend="numpy")
     oc, on = c.iterate(X, 20), n.iterate(X, 20)
-    assert np.abs(oc - on).max() <= 1e-12 and np.abs(oc[-1] - oc[0]).max() > 0.1
+    assert np.abs(oc - on).max() <= 1e-11 and np.abs(oc[-1] - oc[0]).max() > 0.1
     for i in range(3):
-        assert np.array_equal(c.iterate(X[i], 20)[:, ], oc[:, i])
+        assert np.array_equal(c.iterate(X[i], 20), oc[:, i])
     assert np.array_equal(c.iterate(X, 20, save_every=7), oc[::7])
     assert c.describe()["kind"] == "sun_exact" and jg.map_from_description(c.describe()).describe() == c.describe()
 
 
 def test_compiled_steps_keep_the_integrals():
     """10^4 compiled exact steps of dt = 0.1 (6 * 10^4 map steps): every integral h^(k)_(j,m) kept to round-off
-    (measured max |h - h0| = 9e-14 relative to max |h0| ~ 1; asserted 5e-11, the map's own 10^4-step bound), while
-    the orbit moves by O(1); and after 10 steps it is the flow of H (DOP853 at 1e-13: measured ~1e-13, asserted
-    1e-10)."""
+    (measured max |h - h0| = 6.3e-12 relative to max |h0| = 2.9, a linear growth as the maps' own; asserted 5e-11,
+    the maps' 10^4-step bound), while the orbit moves by O(1); and after 100 steps it is the flow of H (DOP853 at
+    1e-13 over t = 10: measured 1.6e-12, asserted 1e-10)."""
     from jetgaudin.gaudin import SunExactFlow
 
     H = MODEL.hamiltonian(W_ANY)
