@@ -222,6 +222,11 @@ def checks():
         g, P = m.integral_gradients(X), m.poisson_tensor(X)
         out[f"involution su({n}) {st} (relative)"] = np.max(np.abs(g @ P @ g.T)) / (
             np.max(np.abs(g)) ** 2 * np.max(np.abs(P)))
+    for n, st in ((3, sites), (3, [(0.0, 3)]), (4, [(-0.5, 1), (0.6, 2)])):  # reality: the imaginary residue
+        m = jg.GaudinModel(0.5, st, algebra=f"su({n})")
+        X = 0.5 * np.random.default_rng(n).normal(size=m.n_state)
+        out[f"imaginary residue su({n}) {st}, every branch"] = max(
+            float(m.two_point_backlund(eta, branch=r).step(X)[2]) for r in range(n))
     m = jg.GaudinModel(0.5, sites, algebra="su3")
     X = 0.5 * np.random.default_rng(2).normal(size=m.n_state)
     A, B = m.two_point_backlund(eta, branch=0), m.two_point_backlund(-0.4 + 0.6j, branch=2)
