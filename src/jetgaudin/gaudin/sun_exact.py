@@ -24,6 +24,9 @@ method from a starting guess (a finite-difference Jacobian).
 the real parts of ``K = 3M`` maps at ``2M`` real points and solve for the imaginary parts, starting from the
 ``Im η → 0`` limit ``ω^{(r)}(a + iε) = −2ε ∂μ_r/∂h(a) + O(ε³)`` (a linear solve) — the eigenvalue gradients at
 ``2M`` points span all ``3M`` non-Casimir directions, so no constant rotation is needed (docs/sun.md §5).
+:class:`SunExactFlow` is a :class:`jetgaudin.maps.Map` (runs, the CLI's ``orbit --dt`` and ``flow --method exact``):
+its compiled route is the su(3) kernel's own loop with the ``K`` maps (:func:`jetgaudin.gaudin._sun_kernel.orbit_loop`
+composes ``k`` maps; the single map is ``k = 1``).
 """
 
 from __future__ import annotations
