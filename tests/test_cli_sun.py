@@ -219,10 +219,28 @@ def test_exact_orbit_resumes_bit_for_bit(capsys, tmp_path, monkeypatch):
     assert json.loads((tmp_path / "cut" / "run.json").read_text())["map"]["backend"] == "compiled"
 
 
+def test_exact_substeps_hint_runs(capsys, tmp_path):
+    """A --dt with no exact parameters names the --substeps that has them (the first dt/k that solves); with it
+    the run completes and is the flow of H (DOP853 at 1e-13 over t = 2: 1e-10, as above)."""
+    import re
+
+    common = ("orbit", *EXACT, "--dt", "1", "--steps", "2", "--no-plots")
+    code, _, err = run_cli(capsys, *common, "--out", tmp_path / "a")
+    assert one_line_error(code, err, "--dt", "--substeps"), err
+    k = re.search(r"--substeps (\d+)", err).group(1)
+    assert int(k) >= 2
+    code, _, err = run_cli(capsys, *common, "--substeps", k, "--out", tmp_path / "b")
+    assert code == 0, err
+    from jetgaudin import run as rl
+
+    ref = jg.solve(MODEL.hamiltonian(W), X0, (0.0, 2.0), dt=1.0, method="dop853", rtol=1e-13, atol=1e-13).X
+    assert np.abs(rl.load(tmp_path / "b").X - ref).max() <= 1e-10
+
+
 @pytest.mark.parametrize("args, words", [
     (["--algebra", "su4", "--init", ",".join(["0.1"] * 30), "--hamiltonian", ",".join(["0.1"] * 18)],
      ["--dt", "su(3)"]),
-    (["--dt", "5"], ["--dt", "--substeps"]),
+    (["--dt", "1"], ["--dt", "--substeps"]),
     (["--hamiltonian", "physical"], ["--hamiltonian"]),
     (["--hamiltonian", "1,2,3"], ["--hamiltonian", "10 weights"]),
     (["--branch", "1"], ["--branch"]),

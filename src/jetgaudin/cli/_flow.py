@@ -303,8 +303,10 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
         if dmax is None:
             raise cm.CliInputError(f"--dt: {dt:g} is too large for this orbit (no well-conditioned Bäcklund "
                                    "parameters give the exact step); give a smaller --dt") from None
-        need = math.ceil(abs(dt) / substeps / max(abs(dmax), 1e-300) * 1.01) * substeps
-        raise cm.CliInputError(f"--dt: {dt:g} is too large for this orbit's leaf: the largest feasible time step "
-                               f"is dt = {dmax:.4g}; give |--dt| <= {abs(dmax) * substeps:.4g} or --substeps {need}"
-                               ) from None
+        ratio = abs(dt) / substeps / max(abs(dmax), 1e-300)
+        sun = isinstance(model, jg.SunGaudinModel)  # su(3): dmax = dt/k, the first k that solves (not monotone)
+        need = (round(ratio) if sun else math.ceil(ratio * 1.01)) * substeps
+        what = "a feasible time step (the first dt/k that solves)" if sun else "the largest feasible time step"
+        raise cm.CliInputError(f"--dt: {dt:g} is too large for this orbit's leaf: {what} is dt = {dmax:.4g}; give "
+                               f"|--dt| <= {abs(dmax) * substeps:.4g} or --substeps {need}") from None
     return fm

@@ -24,6 +24,9 @@ method from a starting guess (a finite-difference Jacobian).
 the real parts of ``K = 3M`` maps at ``2M`` real points and solve for the imaginary parts, starting from the
 ``Im η → 0`` limit ``ω^{(r)}(a + iε) = −2ε ∂μ_r/∂h(a) + O(ε³)`` (a linear solve) — the eigenvalue gradients at
 ``2M`` points span all ``3M`` non-Casimir directions, so no constant rotation is needed (docs/sun.md §5).
+:class:`SunExactFlow` is a :class:`jetgaudin.maps.Map` (runs, the CLI's ``orbit --dt`` and ``flow --method exact``):
+its compiled route is the su(3) kernel's own loop with the ``K`` maps (:func:`jetgaudin.gaudin._sun_kernel.orbit_loop`
+composes ``k`` maps; the single map is ``k = 1``).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import numpy as np
 from .._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from .._validate import real_number
 from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
+from ._model_map import ModelMap
 from .sun import SunGaudinModel
 from .sun_maps import SunTwoPointBacklund
 
@@ -157,7 +161,7 @@ def _points(model: SunGaudinModel, count: int) -> list[float]:
 
 
 def exact_parameters(model: SunGaudinModel, X, weights, dt: float, *, tol: float = 1e-13,
-                     max_iter: int = 40) -> tuple[tuple[complex, ...], tuple[int, ...]]:
+                     max_iter: int = 20) -> tuple[tuple[complex, ...], tuple[int, ...]]:
     r"""``(etas, branches)`` with ``Σ_k ω^{(r_k)}(η_k) = dt·w`` on the non-Casimir integrals at ``X`` (``n = 3``).
 
     The real parts are fixed: ``K = 3M`` maps (``M = Σ N_j``, ``K`` the number of non-Casimir integrals) at
@@ -217,12 +221,14 @@ def exact_parameters(model: SunGaudinModel, X, weights, dt: float, *, tol: float
 
 #: a map whose ``|Im η|`` is at round-off of its ``Re η`` has weights ~1e-17: the identity, left out of the step
 _IDENTITY_IM = 1e-13
-#: the bisection of :meth:`SunExactFlow.max_dt`: relative width (each trial is one solve, ~0.2-0.9 s)
-_BISECT_REL = 1e-2
+#: the splits ``k`` :meth:`SunExactFlow._largest_dt` tries, in turn, for a solvable step ``dt/k`` (each trial is one
+#: solve, ~0.2 s where it converges and a few s where Newton fails; solvability is not monotone in ``dt``: on the
+#: orbit of ``tests/test_sun_exact.py`` 1/3 solves and 3/16 does not, so no bisection)
+_SPLITS = (2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 256, 512, 1024)
 
 
 @dataclass(frozen=True, eq=False)
-class SunExactFlow(Map):
+class SunExactFlow(ModelMap, Map):
     r"""The exact time-``dt`` flow of ``H = Σ_I w_I h_I`` on an su(3) chain (a :class:`jetgaudin.maps.Map`: runs,
     the CLI's ``flow --method exact`` and ``orbit --dt``, :func:`jetgaudin.solve`'s ``method="exact"``).
 
@@ -265,10 +271,6 @@ class SunExactFlow(Map):
         return self.H.model
 
     @property
-    def n_state(self) -> int:
-        return int(self.model.n_state)
-
-    @property
     def time_step(self) -> float:
         return self.dt
 
@@ -276,19 +278,10 @@ class SunExactFlow(Map):
     def has_compiled(self) -> bool:
         return True
 
-    def integrals(self, X) -> np.ndarray:
-        return np.asarray(self.model.integrals(X), dtype=float)
-
-    def integral_names(self) -> list[str]:
-        return self.model.integral_labels()
-
-    def state_labels(self) -> list[str]:
-        return self.model.labels()
-
     def parameters(self, x) -> tuple[tuple[complex, ...], tuple[int, ...]]:
         """``(etas, branches)`` of one sub-step (``dt/substeps``) on the orbit ``x`` ``(8M,)``
         (:func:`exact_parameters`); :class:`~jetgaudin.StepTooLargeError` with ``dt_max`` the largest sub-step
-        found solvable (:meth:`max_dt`) where there are none."""
+        ``dt/k`` of the first ``k = 2, 3, 4, 6, …`` that solves (:meth:`_largest_dt`) where there are none."""
         x = np.asarray(self.model.check_state(x), dtype=float)
         if x.ndim != 1:
             raise InvalidParameterError(f"parameters take one orbit (shape ({self.n_state},)), got {x.shape}")
@@ -298,12 +291,12 @@ class SunExactFlow(Map):
         except StepTooLargeError:
             dmax = self._largest_dt(x, h)
         if dmax == 0.0:
-            raise StepTooLargeError(f"dt = {h:g}: no exact step's parameters on this orbit even at "
-                                    f"{abs(h) * 1e-3:.3g}; use method='dop853'", dt_max=0.0)
+            raise StepTooLargeError(f"dt = {h:g}: no exact step's parameters on this orbit even at dt/{_SPLITS[-1]}; "
+                                    "use method='dop853'", dt_max=0.0)
         raise StepTooLargeError(
             f"dt = {h:g} is too large for this orbit: the exact step's parameters (Newton from the small-Im(eta) "
-            f"guess) do not converge; the largest step found solvable is dt = {dmax:.4g} (bisection to 1 %): give "
-            f"|dt| <= {abs(dmax):.4g} or substeps >= {math.ceil(abs(self.dt) / abs(dmax) * 1.01)}", dt_max=dmax)
+            f"guess) do not converge; dt = {dmax:.4g} (dt/{round(h / dmax)}) does: give |dt| <= {abs(dmax):.4g} or "
+            f"substeps >= {math.ceil(abs(self.dt) / abs(dmax) * 1.01)}", dt_max=dmax)
 
     def _solvable(self, x, h: float) -> bool:
         try:
@@ -313,19 +306,12 @@ class SunExactFlow(Map):
         return True
 
     def _largest_dt(self, x, h: float) -> float:
-        """The largest ``|h'| ≤ |h|`` (sign of ``h``) with parameters, by bisection to :data:`_BISECT_REL` (0 when
-        ``h/1000`` has none)."""
-        lo, hi = abs(h) * 1e-3, abs(h)
-        if not self._solvable(x, math.copysign(lo, h)):
-            return 0.0
-        while hi - lo > _BISECT_REL * hi:
-            mid = 0.5 * (lo + hi)
-            lo, hi = (mid, hi) if self._solvable(x, math.copysign(mid, h)) else (lo, mid)
-        return math.copysign(lo, h)
+        """The first solvable step ``h/k``, ``k`` in :data:`_SPLITS` (0 when none is)."""
+        return next((h / k for k in _SPLITS if self._solvable(x, h / k)), 0.0)
 
     def max_dt(self, X) -> np.ndarray:
-        """The largest sub-step found solvable (searched up to ``10 |dt|``, bisection to 1 %) for each orbit of
-        ``X`` ``(..., 8M)``: one step is solvable where ``|dt|/substeps`` is below it."""
+        """A solvable sub-step for each orbit of ``X`` ``(..., 8M)``: ``10 |dt|/k`` of the first ``k`` in
+        :data:`_SPLITS` that solves (solvability is not monotone: a lower bound of the largest, not the largest)."""
         X = np.asarray(self.model.check_state(X), dtype=float)
         return np.array([abs(self._largest_dt(x, 10 * self.dt)) for x in X.reshape(-1, X.shape[-1])]
                         ).reshape(X.shape[:-1])

@@ -35,6 +35,7 @@ import numpy as np
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
+from ._model_map import ModelMap
 from .sun import SunGaudinModel
 from .sun_spectral import _GAP_TOL, branch_index, check_start, eigenvalue_branch
 
@@ -64,7 +65,7 @@ def dress(model: SunGaudinModel, Y: np.ndarray, P: np.ndarray, eta: complex) -> 
 
 
 @dataclass(frozen=True)
-class SunTwoPointBacklund(Map):
+class SunTwoPointBacklund(ModelMap, Map):
     r"""``B^{(r)}_η`` of an su(n) chain (module docstring): real, keeps every integral, Poisson, the time-1 flow of
     ``G^{(r)}_η``; carry ``μ_r(η)``.
 
@@ -113,23 +114,10 @@ class SunTwoPointBacklund(Map):
         self._init_backend()
 
     @property
-    def n_state(self) -> int:
-        return self.model.n_state
-
-    @property
     def b(self) -> float:
         """The field's ``λ_3`` component ``b³`` (a float field is all of it; the whole field is in
         :meth:`describe`): the number an ensemble run records per orbit next to ``η``."""
         return float(self.model.field_vector[2])
-
-    def integrals(self, X: np.ndarray) -> np.ndarray:
-        return self.model.integrals(X)
-
-    def integral_names(self) -> list[str]:
-        return self.model.integral_labels()
-
-    def state_labels(self) -> list[str]:
-        return self.model.labels()
 
     def start(self, X: np.ndarray) -> np.ndarray:
         """``μ_r(η)`` by the branch rule, shape ``(...)``."""
