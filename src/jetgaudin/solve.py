@@ -124,7 +124,7 @@ def _exact_dense(H: Any, chain: bool, substeps: int, t_grid: np.ndarray, X_grid:
             elif chain:
                 from .exact_chain import ChainExactFlow
 
-                out[r] = ChainExactFlow(H, ds)(Xs[kk])
+                out[r] = ChainExactFlow(H, ds, substeps=substeps)(Xs[kk])  # split as the solve's steps
             else:
                 out[r] = ExactFlow(H, ds, substeps)(Xs[kk])
         return out.reshape(t.shape + Xs.shape[1:])
