@@ -53,9 +53,9 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "exact.py": ("tests/test_exact.py", "tests/test_exact_first_class.py"),
     "exact_chain.py": ("tests/test_exact_chain.py", "tests/test_exact_first_class.py", "tests/test_bite_exact.py"),
     "events.py": ("tests/test_solve.py", "tests/test_bite_events.py"),
-    "solve.py": ("tests/test_solve.py", "tests/test_exact_first_class.py"),
+    "solve.py": ("tests/test_solve.py", "tests/test_exact_first_class.py", "tests/test_bite_solve.py"),
     "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
-    "run/health.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
+    "run/health.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py", "tests/test_bite_run.py"),
     "run/store.py": ("tests/test_run.py", "tests/test_data_safety_io.py", "tests/test_reliability_runlayer.py"),
     "_fs.py": ("tests/test_fs.py", "tests/test_bite_disk.py"),
     # the GPU drivers, tested on Numba's CUDA simulator (tests/test_gpu.py sets NUMBA_ENABLE_CUDASIM=1 before
