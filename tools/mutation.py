@@ -56,7 +56,8 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "solve.py": ("tests/test_solve.py", "tests/test_exact_first_class.py", "tests/test_bite_solve.py"),
     "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
     "run/health.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py", "tests/test_bite_run.py"),
-    "run/store.py": ("tests/test_run.py", "tests/test_data_safety_io.py", "tests/test_reliability_runlayer.py"),
+    "run/store.py": ("tests/test_run.py", "tests/test_data_safety_io.py", "tests/test_reliability_runlayer.py",
+                     "tests/test_bite_run.py"),
     "_fs.py": ("tests/test_fs.py", "tests/test_bite_disk.py"),
     # the GPU drivers, tested on Numba's CUDA simulator (tests/test_gpu.py sets NUMBA_ENABLE_CUDASIM=1 before
     # numba.cuda is imported: the kernels run as Python, so a mutated kernel needs no compiler and no GPU)
