@@ -62,7 +62,7 @@ def _run(tmp_path, monkeypatch=None, steps=200):
     return rl, rl.start(spec, tmp_path / "r")
 
 
-def test_the_reserve_holds_two_records_beyond_its_margin(tmp_path, monkeypatch):
+def test_the_reserve_holds_a_record_beyond_its_margin(tmp_path, monkeypatch):
     """The reserve made at the start of a session (freed to record a full disk) holds ``RESERVE_BYTES`` and the
     run's record beyond it (the last ``run.json`` is written to a temporary copy, then renamed).  Written for
     the mutant ``+ 2 * len`` → ``+ 2 - len``
