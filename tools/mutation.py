@@ -49,7 +49,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gaudin/maps.py": ("tests/test_gaudin_maps.py", "tests/test_chain_drift.py", "tests/test_chain_refusals.py",
                        "tests/test_chain_compiled_start.py"),
     "gaudin/_backend.py": ("tests/test_auto_route.py",),
-    "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py"),
+    "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py", "tests/test_bite_exact.py"),
     "exact.py": ("tests/test_exact.py", "tests/test_exact_first_class.py"),
     "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain.py", "tests/test_exact_first_class.py"),
     "events.py": ("tests/test_bite_events.py", "tests/test_solve.py"),
