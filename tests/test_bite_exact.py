@@ -65,3 +65,52 @@ def test_the_maps_do_not_see_a_translation(name, sites):
     a = m0.two_point_backlund(eta).iterate(X, 10)
     assert np.max(np.abs(a[-1] - X)) > 1e-2
     assert np.max(np.abs(m1.two_point_backlund(eta + c).iterate(X, 10) - a)) < 1e-12
+
+
+def _xxz():
+    """The XXZ magnet of tests/test_exact_chain.py (three order-1 sites, trigonometric, γ = 0.5) and a state."""
+    m = jg.GaudinModel(1.0, ((0.0, 1), (0.4, 1), (0.9, 1)), family="trigonometric", gamma=0.5)
+    w = np.zeros(m.n_integrals)
+    w[~m.casimir_mask()] = [0.5, 0.2, 0.3, 0.1]
+    return m, m.hamiltonian(w), np.random.default_rng(3).standard_normal(m.n_state) * 0.5
+
+
+def test_the_adaptive_quadrature_is_only_a_fallback(monkeypatch):
+    """The weights of the exact step's Newton solve come from the 64-point Gauss–Legendre rule; the adaptive
+    quadrature (``model.interpolating_weights``) runs only where the rule's estimate ``|Q_64 − Q_32|`` says it has not
+    converged: never on this ordinary step; forced (a tolerance of 0), the fallback gives the same step (1e-13: both
+    are the weights to ~1e-15, and Newton's solution moves by the same relative amount).  Written for the mutant that
+    made the estimate ``|Q_64 · Q_32|`` (then every solve took the slow fallback)."""
+    import jetgaudin.exact_chain as ec
+
+    m, H, X = _xxz()
+    calls = {"n": 0}
+    real = type(m).interpolating_weights
+
+    def spy(self, *args, **kwargs):
+        calls["n"] += 1
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(type(m), "interpolating_weights", spy)
+    rule = ChainExactFlow(H, 0.02)(X)
+    assert calls["n"] == 0
+    monkeypatch.setattr(ec, "_QUAD_TOL", 0.0)
+    fallback = ChainExactFlow(H, 0.02)(X)
+    assert calls["n"] > 0
+    assert np.max(np.abs(fallback - rule)) < 1e-13 and np.max(np.abs(rule - X)) > 1e-3
+
+
+def test_the_numpy_loop_of_maps_without_a_compiled_route(monkeypatch):
+    """Every family's chain map has a compiled route today, so the exact step's NumPy loop (``k s`` steps of each map
+    per call, rows rotated once) runs only for a map without one: made so here, its rows every 2 of 6 steps equal the
+    compiled loop's (1e-12: the two routes of the same maps differ by round-off, ~1e-15 a step).  Written for the
+    mutant ``save_every - done % save_every`` → ``save_every / done % save_every`` (the loop was never run)."""
+    m, H, X = _xxz()
+    E = ChainExactFlow(H, 0.02)
+    compiled = E.advance(X, None, 6, 2)
+    map_type = type(m.two_point_backlund(0.3 + 0.1j))
+    monkeypatch.setattr(map_type, "has_compiled", property(lambda self: False))
+    numpy_loop = E.advance(X, None, 6, 2)
+    assert compiled.rows.shape == numpy_loop.rows.shape == (3, 9)
+    assert np.max(np.abs(numpy_loop.rows - compiled.rows)) < 1e-12
+    assert np.max(np.abs(numpy_loop.X - compiled.X)) < 1e-12
