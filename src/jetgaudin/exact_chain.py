@@ -49,7 +49,7 @@ import numpy as np
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
-from .maps import Advance, Map, MapProperties, check_count, register_map
+from .maps import Advance, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
 
 __all__ = ["ChainExactFlow"]
 
@@ -199,7 +199,7 @@ def _rules() -> tuple[np.ndarray, ...]:
 
 
 @dataclass(frozen=True, eq=False)
-class ChainExactFlow(Map):
+class ChainExactFlow(StepByAdvance, Map):
     r"""The exact time-``dt`` flow of a chain Hamiltonian ``H = model.hamiltonian(weights)`` (module doc), one orbit
     ``(3M,)`` or a batch (each orbit its own parameters, solved at the start of every :meth:`step` /
     :meth:`advance` call, from its integrals: constant along the orbit).
@@ -513,12 +513,7 @@ class ChainExactFlow(Map):
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit), rows every
         ``save_every`` (class doc)."""
-        steps = check_count(steps, "steps")
-        save_every = check_count(save_every, "save_every", 1)
-        X = np.asarray(self.model.check_state(X), dtype=float)
-        flat = X.reshape(-1, X.shape[-1])
-        rows = np.empty((steps // save_every,) + flat.shape)
-        final = flat.copy()
+        steps, save_every, X, flat, rows, final = per_orbit_buffers(self.model, X, steps, save_every)
         if steps:
             for i, x in enumerate(flat):
                 try:
@@ -528,10 +523,6 @@ class ChainExactFlow(Map):
         zeros = np.zeros(X.shape[:-1])
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros.astype(complex),
                        imag_max=zeros)
-
-    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
-        adv = self.advance(X, carry, 1)
-        return adv.X, adv.carry, adv.imag_max
 
     def inverse(self) -> ChainExactFlow:
         return ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)

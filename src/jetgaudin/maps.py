@@ -376,6 +376,26 @@ class Map(abc.ABC):
         """A JSON-able description with ``"kind"`` and every parameter (:func:`map_from_description` inverts it)."""
 
 
+class StepByAdvance:
+    """For a map whose one step is its own :meth:`Map.advance` of one step (the exact flows: a step is a solve of the
+    maps' parameters and their composition, so ``advance`` is the primitive and ``step`` follows from it)."""
+
+    def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
+        adv = self.advance(X, carry, 1)  # type: ignore[attr-defined]
+        return adv.X, adv.carry, adv.imag_max
+
+
+def per_orbit_buffers(model: Any, X: Any, steps: int, save_every: int):
+    """``(steps, save_every, X, flat, rows, final)`` for a map that solves per orbit (the exact flows): the counts
+    checked, ``X`` checked by ``model.check_state`` as floats, its orbits ``flat`` ``(B, n)``, the saved rows
+    ``(steps // save_every, B, n)`` to fill and the final states (a copy of ``flat``)."""
+    steps = check_count(steps, "steps")
+    save_every = check_count(save_every, "save_every", 1)
+    X = np.asarray(model.check_state(X), dtype=float)
+    flat = X.reshape(-1, X.shape[-1])
+    return steps, save_every, X, flat, np.empty((steps // save_every,) + flat.shape), flat.copy()
+
+
 def with_resolved_backend(m: Map, backend: Backend) -> Map:
     """A copy of ``m`` with its ``backend`` field set to ``backend`` (the run layer records the route ``AUTO`` chose);
     the copy is not validated again (``m`` was when it was built: a flow map run backwards, ``dt < 0``, which the

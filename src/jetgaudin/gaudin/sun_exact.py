@@ -39,7 +39,7 @@ import numpy as np
 
 from .._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from .._validate import real_number
-from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
+from ..maps import Advance, Backend, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
 from ._model_map import ModelMap
 from .sun import SunGaudinModel
 from .sun_maps import SunTwoPointBacklund
@@ -228,7 +228,7 @@ _SPLITS = (2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128, 256, 512, 1024)
 
 
 @dataclass(frozen=True, eq=False)
-class SunExactFlow(ModelMap, Map):
+class SunExactFlow(ModelMap, StepByAdvance, Map):
     r"""The exact time-``dt`` flow of ``H = Σ_I w_I h_I`` on an su(3) chain (a :class:`jetgaudin.maps.Map`: runs,
     the CLI's ``flow --method exact`` and ``orbit --dt``, :func:`jetgaudin.solve`'s ``method="exact"``).
 
@@ -331,12 +331,7 @@ class SunExactFlow(ModelMap, Map):
     def advance(self, X, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` exact steps from ``X`` ``(..., 8M)`` (parameters solved at ``X``, per orbit), rows every
         ``save_every`` (class doc); ``carry`` is not used (zeros back)."""
-        steps = check_count(steps, "steps")
-        save_every = check_count(save_every, "save_every", 1)
-        X = np.asarray(self.model.check_state(X), dtype=float)
-        flat = X.reshape(-1, X.shape[-1])
-        rows = np.empty((steps // save_every,) + flat.shape)
-        final = flat.copy()
+        steps, save_every, X, flat, rows, final = per_orbit_buffers(self.model, X, steps, save_every)
         maps = []
         for i, x in enumerate(flat):
             try:
@@ -376,10 +371,6 @@ class SunExactFlow(ModelMap, Map):
             raise SingularStepError("the compiled su(3) exact step produced non-finite values (a map's eta at a branch "
                                     "point?); give a smaller dt")
         return rows, final
-
-    def step(self, X, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
-        adv = self.advance(X, carry, 1)
-        return adv.X, adv.carry, adv.imag_max
 
     def inverse(self) -> SunExactFlow:
         return SunExactFlow(self.H, -self.dt, self.substeps, self.backend)
