@@ -20,7 +20,11 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
 (g) short calls (the per-call set-up): ``advance`` of one step from a new state, the branch rule of ``ν`` compiled
     (:func:`jetgaudin.gaudin._family_kernel.branch_rule`, today's route) against the NumPy rule that started every
     compiled call before (``advance(X, start(X), 1)``, the same kernel after it), rational and trigonometric M = 4,
-    and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call).
+    and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call);
+(h) the cost of the compensated sums (``docs/reliability.md``, "Compensated sums: the cost"): the compiled chain
+    map of every family (rational, trigonometric, elliptic; the sites of ``benchmarks/chain_drift.py`` and a magnet
+    of 4) in this checkout against ``--baseline-src DIR``, one fresh process per measurement, the two trees
+    alternated over ``--rounds`` rounds (the machine may be shared: compare the medians, read the load printed).
 """
 
 import argparse
@@ -190,6 +194,47 @@ def short_calls(args, rng):
                   f"({to / tn:.1f}x)")
 
 
+_COST = """
+import time, numpy as np, jetgaudin as jg
+from jetgaudin.gaudin import GaudinModel
+m = GaudinModel({b}, {sites}, family={fam!r}, **{kw})
+X = 0.5 * np.random.default_rng(2026).normal(size=m.n_state)
+B = m.two_point_backlund(1.5 + 0.2j, kernel="compiled")
+B.iterate(X, 10)
+t = []
+for _ in range(3):
+    s = time.thread_time(); B.iterate(X, {steps}, save_every=1000); t.append(time.thread_time() - s)
+print({steps} / float(np.median(t)))
+"""
+COST = {
+    "rational [(-0.5,1),(0.4,2)]": (1.0, [(-0.5, 1), (0.4, 2)], "rational", {}),
+    "trigonometric [(-0.5,1),(0.4,2)]": (1.0, [(-0.5, 1), (0.4, 2)], "trigonometric", {"gamma": 1.0}),
+    "elliptic [(-0.5,1),(0.4,2)]": (0.0, [(-0.5, 1), (0.4, 2)], "elliptic", {"modulus": 0.6}),
+    "trigonometric magnet M=4": (1.0, TRIG["trig magnet M=4"], "trigonometric", {"gamma": 1.0}),
+    "elliptic magnet M=4": (0.0, TRIG["trig magnet M=4"], "elliptic", {"modulus": 0.6}),
+}
+
+
+def compensated_cost(args):
+    """Part (h): steps/s of this checkout and of ``--baseline-src``, alternated, one process each (module doc)."""
+    trees = {"this checkout": os.environ.get("PYTHONPATH", "")}
+    if args.baseline_src:
+        trees["baseline"] = args.baseline_src
+    print(f"(h) compensated sums' cost: steps/s (median of 3 calls per process; {args.rounds} rounds alternated)")
+    for name, (b, sites, fam, kw) in COST.items():
+        code = _COST.format(b=b, sites=sites, fam=fam, kw=kw, steps=args.steps // 4)
+        res = {k: [] for k in trees}
+        for r in range(args.rounds):
+            for k, path in (list(trees.items()) if r % 2 == 0 else list(trees.items())[::-1]):
+                out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                                     env={**os.environ, "PYTHONPATH": path})
+                res[k].append(float(out.stdout.split()[-1]))
+        med = {k: float(np.median(v)) for k, v in res.items()}
+        line = "  ".join(f"{k} {v:10.0f}" for k, v in med.items())
+        ratio = f"  ratio {med['this checkout'] / med['baseline']:5.2f}" if "baseline" in med else ""
+        print(f"  {name:34s} {line}{ratio}   load {os.getloadavg()[0]:.2f}", flush=True)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--steps", type=int, default=1_000_000)
@@ -197,13 +242,14 @@ def main():
     p.add_argument("--work-steps", type=int, default=1000)
     p.add_argument("--baseline-src", default=None, help="a source tree (its src/) for the rational baseline")
     p.add_argument("--parts", default="abcdefg")
+    p.add_argument("--rounds", type=int, default=4, help="part (h): alternated rounds per tree")
     a = p.parse_args()
     print("machine:", machine())
     rng = np.random.default_rng(1)
     for part, fn in (("a", lambda: rational_kernel(a)), ("b", lambda: trigonometric(a, rng)),
                      ("c", lambda: one_kernel(a, rng)), ("d", lambda: same_work(a, rng)),
                      ("e", lambda: ensemble(a, rng)), ("f", lambda: elliptic(a, rng)),
-                     ("g", lambda: short_calls(a, rng))):
+                     ("g", lambda: short_calls(a, rng)), ("h", lambda: compensated_cost(a))):
         if part in a.parts:
             fn()
 

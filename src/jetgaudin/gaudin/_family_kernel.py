@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._compensated import exact_tables
-from ._kernels import _abs2, _acc, _cacc, _put_site  # first: it applies the Bäcklund kernels' Numba target
+from ._kernels import _abs2, _ctw, _put_site, _tw  # first: it applies the Bäcklund kernels' Numba target
 
 
 @njit(cache=True)
@@ -45,9 +45,8 @@ def _det3(A, r0, r1, r2, c0, c1, c2):
 
 @njit(cache=True, inline="always")
 def _wk(gk, j, G, k):
-    """``w·k`` for the constant ``w = gk[j] + gk[G + j]`` (two words), compensated (:func:`._kernels._acc`)."""
-    sr, si, er, ei = _cacc(0.0, 0.0, 0.0, 0.0, k, gk[j], gk[G + j])
-    return complex(sr + er, si + ei)
+    """``w·k`` for the constant ``w = gk[j] + gk[G + j]`` (two words), the low word counted (:func:`._kernels._ctw`)."""
+    return _ctw(k, gk[j], gk[G + j])
 
 
 @njit(cache=True)
@@ -103,13 +102,10 @@ def _elliptic_coefficients(gk, a1, a2, c):
 @njit(cache=True, inline="always")
 def _pq(p, q, gk, i, j):
     """``p·gk[i] + q·gk[j]`` (real ``p, q``; the constants with their low words ``gk[i + 5]``, ``gk[j + 5]``: the
-    trigonometric rule's five), compensated and rounded once (:func:`._kernels._acc`)."""
+    trigonometric rule's five), each product rounded once (:func:`._kernels._tw`)."""
     hi, hj, li, lj = gk[i], gk[j], gk[i + 5], gk[j + 5]
-    sr, er = _acc(0.0, 0.0, p, hi.real, li.real)
-    sr, er = _acc(sr, er, q, hj.real, lj.real)
-    si, ei = _acc(0.0, 0.0, p, hi.imag, li.imag)
-    si, ei = _acc(si, ei, q, hj.imag, lj.imag)
-    return complex(sr + er, si + ei)
+    return complex(_tw(p, hi.real, li.real) + _tw(q, hj.real, lj.real),
+                   _tw(p, hi.imag, li.imag) + _tw(q, hj.imag, lj.imag))
 
 
 @njit(cache=True)
@@ -157,19 +153,19 @@ def _coefficients(rule, gk, a1, a2, c):
 def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
     M = x.shape[0] // 3
-    # f[a] + f[a + 3]: the weights as two words (orbit_constants), in compensated sums rounded once (_acc)
+    # f[a] + f[a + 3]: the weights as two words (orbit_constants), each product rounded once (_tw), summed plainly
     x1r, x1i, x2r, x2i, x3r, x3i = 0.0, 0.0, 0.0, 0.0, b, 0.0
-    e1r, e1i, e2r, e2i, e3r, e3i = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for k in range(M):
-        x1r, e1r = _acc(x1r, e1r, x[3 * k], f[0, k].real, f[3, k].real)
-        x1i, e1i = _acc(x1i, e1i, x[3 * k], f[0, k].imag, f[3, k].imag)
-        x2r, e2r = _acc(x2r, e2r, x[3 * k + 1], f[1, k].real, f[4, k].real)
-        x2i, e2i = _acc(x2i, e2i, x[3 * k + 1], f[1, k].imag, f[4, k].imag)
-        x3r, e3r = _acc(x3r, e3r, x[3 * k + 2], f[2, k].real, f[5, k].real)
-        x3i, e3i = _acc(x3i, e3i, x[3 * k + 2], f[2, k].imag, f[5, k].imag)
-    x1 = complex(x1r + e1r, x1i + e1i)
-    x2 = complex(x2r + e2r, x2i + e2i)
-    x3 = complex(x3r + e3r, x3i + e3i)
+        y1, y2, y3 = x[3 * k], x[3 * k + 1], x[3 * k + 2]
+        x1r += _tw(y1, f[0, k].real, f[3, k].real)
+        x1i += _tw(y1, f[0, k].imag, f[3, k].imag)
+        x2r += _tw(y2, f[1, k].real, f[4, k].real)
+        x2i += _tw(y2, f[1, k].imag, f[4, k].imag)
+        x3r += _tw(y3, f[2, k].real, f[5, k].real)
+        x3i += _tw(y3, f[2, k].imag, f[5, k].imag)
+    x1 = complex(x1r, x1i)
+    x2 = complex(x2r, x2i)
+    x3 = complex(x3r, x3i)
     u = x3
     v = x1 - 1j * x2
     w = x1 + 1j * x2
@@ -188,12 +184,12 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
         o = site_off[i]
         N = site_n[i]
         for m in range(N):
-            for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, compensated, rounded once (_acc)
-                sr, si, er, ei = 0.0, 0.0, 0.0, 0.0
+            for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, each product's low word counted (_ctw)
+                s = 0j
                 for t in range(0, pidx.shape[1], 2):
                     if T[i, m, e, t] != 0:  # zero padding (a term of another entry) adds nothing
-                        sr, si, er, ei = _cacc(sr, si, er, ei, c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
-                Dt[m, e] = complex(sr + er, si + ei)
+                        s += _ctw(c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
+                Dt[m, e] = s
             At[m, 0] = Dt[m, 3]
             At[m, 1] = -Dt[m, 1]
             At[m, 2] = -Dt[m, 2]
@@ -295,14 +291,14 @@ def orbit_constants(model, xi):
     docstring), each **as two words** ``hi + lo`` where the family gives its functions in :mod:`mpmath`
     (:meth:`jetgaudin.families.Family.mp_w`; every family here): ``f`` ``(6, M)`` (rows ``3..5`` the low words),
     ``gk`` ``(2G,)`` (the low words after the high ones), and ``T`` ``(S, Nmax, 4, 2K)`` with term ``t``'s high
-    word at ``2t`` and its low word at ``2t + 1`` (``pidx[e, 2t] = pidx[e, 2t + 1]``); the kernel sums the products
-    with the constants compensated and rounds each sum once (:func:`jetgaudin.gaudin._kernels._acc`).
+    word at ``2t`` and its low word at ``2t + 1`` (``pidx[e, 2t] = pidx[e, 2t + 1]``); the kernel rounds each product
+    with the constants once, the low word counted (:func:`jetgaudin.gaudin._kernels._tw`, ``_ctw``).
 
     Why two words (issue 33; ``docs/reliability.md``, "Drift like round-off"): ``ℓ(ξ)`` (``f``), the spectrality of
     ``D`` at ``ξ, ξ̄`` (``gk``) and ``D``'s Taylor coefficients at the sites (``T``) must be those of one ``ξ`` for
     the step to preserve the integrals; a constant rounded once repeats its error at every step, so the step misses
-    the integrals by the same ~1e-16 each time: a linear drift.  With ``hi + lo`` (~1e-32) and the products summed
-    compensated (the low word alone, added to a rounded product, changes nothing), the remaining errors are roundings
+    the integrals by the same ~1e-16 each time: a linear drift.  With ``hi + lo`` (~1e-32) and each product with them
+    rounded once (the low word alone, added to a rounded product, changes nothing), the remaining errors are roundings
     of quantities that vary from step to step (a random walk)."""
     fam = model.family
     Nmax = max(model.orders)

@@ -2,8 +2,8 @@ r"""Compiled (Numba) kernel of the real two-point map of a chain, any sites and 
 
 The same arithmetic as :class:`jetgaudin.gaudin.maps.ChainTwoPointBacklund.step` (the site-wise dressing of the
 principal parts, module docstring of :mod:`jetgaudin.gaudin.maps`), with the weights of ``ℓ(η)``,
-``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``, summed compensated and rounded
-once: :func:`_acc`) and ``K`` taken as
+``f_c = (η − λ_c)^{−(k_c+1)}``, hoisted out of the loop (as two words, ``f + flo``, each product with them rounded
+once: :func:`_tw`) and ``K`` taken as
 ``|k|² (λ + M0)``, with the Taylor coefficients ``g_d`` of ``1/det K`` at each site from the step's own ``K``
 (:func:`jetgaudin.gaudin.maps.monic_series`: the determinant of a normalised ``K`` is the same at every step and its
 rounding, the same at every step, made the sites' Casimirs drift linearly; ``docs/reliability.md``).
@@ -63,6 +63,28 @@ def _cacc(sr, si, er, ei, a, h, lo):
 
 
 @njit(cache=True, inline="always")
+def _tw(a, bh, bl):
+    """``a·(bh + bl)`` (reals; ``bh + bl`` a constant as two words) rounded once: ``fma(a, bh, fl(a·bl))``, the
+    exact ``a·bh`` plus the low word's product, one rounding.  The cheap form of :func:`_acc` the chain kernels use
+    (``docs/reliability.md``, "Compensated sums: the cost"): the bias of a rounded constant (``fl(a·bh)`` misses
+    ``a·b`` by ``bh``'s own relative error, the same at every step) is gone, and the one rounding left is of a
+    product that varies from step to step (a random walk, unbiased), as are the roundings of the plain sum the
+    terms then go into.  2 flops a term, against 11 for the Dot2 term of :func:`_acc`."""
+    return _fma(a, bh, a * bl)
+
+
+@njit(cache=True, inline="always")
+def _ctw(a, h, lo):
+    """``a·(h + lo)`` (``a``, ``h``, ``lo`` complex) with each of the real and imaginary parts rounded twice, both
+    times a quantity that varies with ``a`` (:func:`_tw`): the low words' products first (plain), then the two
+    high products each added exactly by a fused multiply-add."""
+    ar, ai = a.real, a.imag
+    re = _fma(ar, h.real, _fma(-ai, h.imag, ar * lo.real - ai * lo.imag))
+    im = _fma(ar, h.imag, _fma(ai, h.real, ar * lo.imag + ai * lo.real))
+    return complex(re, im)
+
+
+@njit(cache=True, inline="always")
 def _mm(a00, a01, a10, a11, b00, b01, b10, b11):
     return (a00 * b00 + a01 * b10, a00 * b01 + a01 * b11, a10 * b00 + a11 * b10, a10 * b01 + a11 * b11)
 
@@ -92,29 +114,25 @@ def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0,
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used.  ``g`` (Nmax,) is scratch: the
     Taylor coefficients of ``1/det K`` at each site from this step's ``M0`` (``gaudin.maps.monic_series``)."""
     # ℓ(η) = diag(b, −b) + Σ_c f_c P_c,  P = [[y3, y1 − i y2], [y1 + i y2, −y3]]
-    # f + flo: the weights to ~1e-32, in compensated sums rounded once at the end (_acc: a rounded constant f alone
-    # repeats its error at every step: ℓ(η), hence the eigenvector, off by the same relative ~1e-16 each time, whose
-    # dropped residue at η drifts linearly; flo added to rounded products would change nothing)
+    # f + flo: the weights to ~1e-32, each product with them rounded once (_tw: a rounded constant f alone repeats
+    # its error at every step: ℓ(η), hence the eigenvector, off by the same relative ~1e-16 each time, whose dropped
+    # residue at η drifts linearly; flo added to a rounded product would change nothing); the sums plain: their
+    # roundings vary with the state
     ur, ui, vr, vi, wr, wi = b, 0.0, 0.0, 0.0, 0.0, 0.0
-    eur, eui, evr, evi, ewr, ewi = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for c in range(M):
         y1 = x[3 * c]
         y2 = x[3 * c + 1]
         y3 = x[3 * c + 2]
         fr, fi, lr, li = f[c].real, f[c].imag, flo[c].real, flo[c].imag
-        ur, eur = _acc(ur, eur, y3, fr, lr)
-        ui, eui = _acc(ui, eui, y3, fi, li)
-        vr, evr = _acc(vr, evr, y1, fr, lr)  # v: f (y1 − i y2)
-        vr, evr = _acc(vr, evr, y2, fi, li)
-        vi, evi = _acc(vi, evi, y1, fi, li)
-        vi, evi = _acc(vi, evi, -y2, fr, lr)
-        wr, ewr = _acc(wr, ewr, y1, fr, lr)  # w: f (y1 + i y2)
-        wr, ewr = _acc(wr, ewr, -y2, fi, li)
-        wi, ewi = _acc(wi, ewi, y1, fi, li)
-        wi, ewi = _acc(wi, ewi, y2, fr, lr)
-    u = complex(ur + eur, ui + eui)
-    v = complex(vr + evr, vi + evi)
-    w = complex(wr + ewr, wi + ewi)
+        ur += _tw(y3, fr, lr)
+        ui += _tw(y3, fi, li)
+        vr += _tw(y1, fr, lr) + _tw(y2, fi, li)  # v: f (y1 − i y2)
+        vi += _tw(y1, fi, li) - _tw(y2, fr, lr)
+        wr += _tw(y1, fr, lr) - _tw(y2, fi, li)  # w: f (y1 + i y2)
+        wi += _tw(y1, fi, li) + _tw(y2, fr, lr)
+    u = complex(ur, ui)
+    v = complex(vr, vi)
+    w = complex(wr, wi)
     r = np.sqrt(u * u + v * w)
     if (r.conjugate() * nu_prev).real < 0:
         r = -r
