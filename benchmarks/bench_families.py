@@ -23,8 +23,9 @@ median of 5 calls after a warm-up that compiles or loads the kernel):
     and 256 orbits of 10 steps in one batch call (wall, median of 5 after a warm-up; ms per call);
 (h) the cost of the compensated sums (``docs/reliability.md``, "Compensated sums: the cost"): the compiled chain
     map of every family (rational, trigonometric, elliptic; the sites of ``benchmarks/chain_drift.py`` and a magnet
-    of 4) in this checkout against ``--baseline-src DIR``, one fresh process per measurement, the two trees
-    alternated over ``--rounds`` rounds (the machine may be shared: compare the medians, read the load printed).
+    of 4) in this checkout against ``--baseline-src DIR[,DIR2...]`` (ratios against the first), one fresh process
+    per measurement, the trees alternated over ``--rounds`` rounds (the machine may be shared: compare the medians,
+    read the load printed).
 """
 
 import argparse
@@ -218,8 +219,8 @@ COST = {
 def compensated_cost(args):
     """Part (h): steps/s of this checkout and of ``--baseline-src``, alternated, one process each (module doc)."""
     trees = {"this checkout": os.environ.get("PYTHONPATH", "")}
-    if args.baseline_src:
-        trees["baseline"] = args.baseline_src
+    for i, path in enumerate((args.baseline_src or "").split(",") if args.baseline_src else []):
+        trees["baseline" if i == 0 else f"baseline{i + 1}"] = path  # ratios against the first
     print(f"(h) compensated sums' cost: steps/s (median of 3 calls per process; {args.rounds} rounds alternated)")
     for name, (b, sites, fam, kw) in COST.items():
         code = _COST.format(b=b, sites=sites, fam=fam, kw=kw, steps=args.steps // 4)

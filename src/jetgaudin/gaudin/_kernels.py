@@ -44,22 +44,14 @@ def _acc(s, e, a, bh, bl):
     Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): ``fl(a·bh)`` misses ``a·b`` by the constant's
     own relative error at every step, a bias; adding ``a·bl`` to a rounded double changes nothing (it is below half
     an ulp), so the low word counts only together with the exact rounding errors, and ``s + e`` is then the exact
-    sum rounded once: an error that varies from step to step."""
+    sum rounded once: an error that varies from step to step.  The compiled kernels now use the cheaper :func:`_tw`
+    (``docs/reliability.md``, "Compensated sums: the cost"); this Dot2 term stays as the compiled twin of the NumPy
+    route's :func:`jetgaudin.gaudin._compensated.acc` (``tests/test_chain_drift.py``)."""
     p = a * bh
     ep = _fma(a, bh, -p)
     t = s + p
     z = t - s
     return t, e + (ep + ((s - (t - z)) + (p - z)) + a * bl)
-
-
-@njit(cache=True, inline="always")
-def _cacc(sr, si, er, ei, a, h, lo):
-    """``(sr + er) + i(si + ei) += a·(h + lo)`` compensated (:func:`_acc`), ``a``, ``h``, ``lo`` complex."""
-    sr, er = _acc(sr, er, a.real, h.real, lo.real)
-    sr, er = _acc(sr, er, -a.imag, h.imag, lo.imag)
-    si, ei = _acc(si, ei, a.real, h.imag, lo.imag)
-    si, ei = _acc(si, ei, a.imag, h.real, lo.real)
-    return sr, si, er, ei
 
 
 @njit(cache=True, inline="always")
