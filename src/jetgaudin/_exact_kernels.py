@@ -19,7 +19,12 @@ from numba import njit, prange
 @njit(cache=True, error_model="numpy")
 def _weights_one(kappa, a, h, x, w, om, dom, nu_end):
     """``om[m] = ω_{m+1}(a + i h)`` (``m = 0..2N−1``) by the rule ``(x, w)`` on ``[0, 1]``; ``dom[m] = ∂ω/∂h``;
-    returns ``ν`` at the end point (continued from ``+√ν²(a)``)."""
+    returns ``ν`` at the end point (continued from ``+√ν²(a)``).
+
+    Per node ``λ = a + i s`` one real division each for ``z = 1/λ = λ̄/|λ|²`` (shared by ``ν² = Σ κ_m z^m`` and
+    the powers ``z^m``) and ``1/ν = ν̄/|ν|²``, and only the real part of ``z^m/ν``: the same quantities as
+    ``1/lam``, ``1/r`` and ``(zm * inv).real`` to round-off (Numba's complex division scales and branches; this
+    loop is the parameter solve's cost)."""
     M = kappa.shape[0] - 1
     for m in range(M):
         om[m] = 0.0
@@ -27,22 +32,51 @@ def _weights_one(kappa, a, h, x, w, om, dom, nu_end):
     n = x.shape[0]
     for q in range(n + 1):
         s = h * x[q] if q < n else h
-        lam = complex(a, s)
-        r = np.sqrt(_nu2(kappa, lam))
-        if (r.real * prev.real + r.imag * prev.imag) < 0.0:
-            r = -r
-        prev = r
-        z = 1.0 / lam
-        zm = z
-        inv = 1.0 / r
-        for m in range(M):
-            f = (zm * inv).real
-            if q < n:
-                om[m] -= h * w[q] * f
-            else:
-                dom[m] = -f
-            zm = zm * z
+        d = 1.0 / (a * a + s * s)
+        zr = a * d
+        zi = -s * d
+        pr = kappa[M]
+        pi = 0.0
+        for m in range(M - 1, -1, -1):  # Horner: ν² = Σ κ_m z^m
+            t = pr * zr - pi * zi + kappa[m]
+            pi = pr * zi + pi * zr
+            pr = t
+        rr, ri = _csqrt(pr, pi)
+        if (rr * prev.real + ri * prev.imag) < 0.0:
+            rr = -rr
+            ri = -ri
+        prev = complex(rr, ri)
+        e = 1.0 / (rr * rr + ri * ri)
+        ir = rr * e
+        ii = -ri * e
+        wr = zr
+        wi = zi
+        if q < n:
+            hw = h * w[q]
+            for m in range(M):
+                om[m] -= hw * (wr * ir - wi * ii)
+                t = wr * zr - wi * zi
+                wi = wr * zi + wi * zr
+                wr = t
+        else:
+            for m in range(M):
+                dom[m] = -(wr * ir - wi * ii)
+                t = wr * zr - wi * zi
+                wi = wr * zi + wi * zr
+                wr = t
     nu_end[0] = prev
+
+
+@njit(cache=True, error_model="numpy")
+def _csqrt(pr, pi):
+    """The principal square root of ``pr + i pi`` in real arithmetic (``t = √((|p| + |pr|)/2)``, the other part
+    ``pi/(2t)``: no cancellation), as ``cmath.sqrt`` to round-off."""
+    t = np.sqrt(0.5 * (np.hypot(pr, pi) + abs(pr)))
+    if t == 0.0:
+        return 0.0, 0.0
+    if pr >= 0.0:
+        return t, 0.5 * pi / t
+    return 0.5 * abs(pi) / t, (t if pi >= 0.0 else -t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -205,15 +239,70 @@ def _kappa(x, b, kappa):
 
 @njit(cache=True, error_model="numpy")
 def _branch_points(kappa):
-    """The roots of ``P(λ) = Σ_m κ_m λ^{2N−m}`` (``κ_0 = b² ≠ 0``): eigenvalues of the companion matrix, as
-    :func:`jetgaudin.spectral._roots`."""
+    """The roots of ``P(λ) = Σ_m κ_m λ^{2N−m}`` (``κ_0 = b² ≠ 0``): :func:`_aberth` (simple roots: ~1 µs), else
+    (a root it does not resolve to round-off, e.g. a double one) the eigenvalues of the companion matrix, as
+    :func:`jetgaudin.spectral._roots` (LAPACK, ~12 µs for N = 3)."""
     deg = kappa.shape[0] - 1
+    roots = np.empty(deg, dtype=np.complex128)
+    if _aberth(kappa, roots):
+        return roots
     comp = np.zeros((deg, deg), dtype=np.complex128)
     for j in range(deg):
         comp[0, j] = -kappa[j + 1] / kappa[0]
     for j in range(deg - 1):
         comp[j + 1, j] = 1.0
     return np.linalg.eigvals(comp)
+
+
+@njit(cache=True, error_model="numpy")
+def _aberth(kappa, z):
+    """The roots ``z`` of ``P(λ) = Σ_m κ_m λ^{deg−m}`` by the Aberth–Ehrlich iteration
+    ``z_i ← z_i − w_i/(1 − w_i Σ_{j≠i} 1/(z_i − z_j))``, ``w_i = P(z_i)/P'(z_i)``, from ``deg`` points on the circle
+    of radius ``|κ_deg/κ_0|^{1/deg}`` (the geometric mean of the roots' moduli; ``B = max_j |κ_j/κ_0|^{1/j}``, half
+    a bound on every root's modulus, where that is 0); converged when every correction is at
+    most ``4e-16 B``, so the root is correct to round-off (quadratic convergence at a simple
+    root: the last step's error is the square of the one before).  ``False`` when that does not happen within 60
+    sweeps (a multiple or nearly multiple root: the caller takes the eigenvalues)."""
+    deg = kappa.shape[0] - 1
+    bound = 0.0
+    for j in range(1, deg + 1):
+        bound = max(bound, abs(kappa[j] / kappa[0]) ** (1.0 / j))
+    if bound == 0.0 or not np.isfinite(bound):
+        return False
+    start = abs(kappa[deg] / kappa[0]) ** (1.0 / deg)  # the geometric mean of the roots' moduli
+    if start == 0.0:
+        start = bound
+    for i in range(deg):
+        z[i] = start * np.exp(complex(0.0, (2.0 * np.pi * i + 0.4) / deg))
+    for _ in range(60):
+        big = 0.0
+        for i in range(deg):
+            zi = z[i]
+            p = complex(kappa[0], 0.0)
+            dp = complex(0.0, 0.0)
+            for m in range(1, deg + 1):
+                dp = dp * zi + p
+                p = p * zi + kappa[m]
+            if dp == 0:
+                return False
+            w = p / dp
+            ar = 0.0
+            ai = 0.0
+            for j in range(deg):  # Σ_{j≠i} 1/(z_i − z_j) = Σ conj(d)/|d|²
+                if j != i:
+                    d = zi - z[j]
+                    e = 1.0 / (d.real * d.real + d.imag * d.imag)
+                    ar += d.real * e
+                    ai -= d.imag * e
+            acc = complex(ar, ai)
+            step = w / (1.0 - w * acc)
+            if not np.isfinite(step.real) or not np.isfinite(step.imag):
+                return False
+            z[i] = zi - step
+            big = max(big, abs(step))
+        if big <= 4e-16 * bound:
+            return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
