@@ -1,5 +1,5 @@
 r"""Compiled parameter solve of :mod:`jetgaudin.exact` (private): from an orbit's state to its accepted parameters in
-one call (:func:`solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
+one call (:func:`_solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
 Gauss–Legendre, Newton's method for ``h``, the branch check); a ``prange`` loop over a batch (every orbit gets the
 bits of its single solve).
 
@@ -17,38 +17,43 @@ from numba import njit, prange
 
 
 @njit(cache=True, error_model="numpy")
+def _node(kappa, a, s, prr, pri):
+    """At ``λ = a + i s``: ``z = 1/λ = λ̄/|λ|²`` (one real division, shared by ``ν² = Σ κ_m z^m`` and the powers
+    ``z^m``), ``ν`` the root of ``ν²`` nearer the previous node's ``(prr, pri)`` and ``1/ν = ν̄/|ν|²``; returns
+    ``(zr, zi, νr, νi, (1/ν)r, (1/ν)i)``.  The same quantities as ``1/lam``, ``cmath.sqrt`` and ``1/r`` to
+    round-off (Numba's complex division scales and branches; this is the parameter solve's inner loop)."""
+    M = kappa.shape[0] - 1
+    d = 1.0 / (a * a + s * s)
+    zr = a * d
+    zi = -s * d
+    pr = kappa[M]
+    pi = 0.0
+    for m in range(M - 1, -1, -1):  # Horner: ν² = Σ κ_m z^m
+        t = pr * zr - pi * zi + kappa[m]
+        pi = pr * zi + pi * zr
+        pr = t
+    rr, ri = _csqrt(pr, pi)
+    if (rr * prr + ri * pri) < 0.0:
+        rr = -rr
+        ri = -ri
+    e = 1.0 / (rr * rr + ri * ri)
+    return zr, zi, rr, ri, rr * e, -ri * e
+
+
+@njit(cache=True, error_model="numpy")
 def _weights_one(kappa, a, h, x, w, om, dom, nu_end):
     """``om[m] = ω_{m+1}(a + i h)`` (``m = 0..2N−1``) by the rule ``(x, w)`` on ``[0, 1]``; ``dom[m] = ∂ω/∂h``;
-    returns ``ν`` at the end point (continued from ``+√ν²(a)``).
-
-    Per node ``λ = a + i s`` one real division each for ``z = 1/λ = λ̄/|λ|²`` (shared by ``ν² = Σ κ_m z^m`` and
-    the powers ``z^m``) and ``1/ν = ν̄/|ν|²``, and only the real part of ``z^m/ν``: the same quantities as
-    ``1/lam``, ``1/r`` and ``(zm * inv).real`` to round-off (Numba's complex division scales and branches; this
-    loop is the parameter solve's cost)."""
+    returns ``ν`` at the end point (continued from ``+√ν²(a)``), node by node (:func:`_node`); only the real part
+    of ``z^m/ν`` is formed."""
     M = kappa.shape[0] - 1
     for m in range(M):
         om[m] = 0.0
-    prev = complex(np.sqrt(max(_nu2(kappa, complex(a, 0.0)).real, 0.0)), 0.0)
+    prr = np.sqrt(max(_nu2(kappa, complex(a, 0.0)).real, 0.0))
+    pri = 0.0
     n = x.shape[0]
     for q in range(n + 1):
         s = h * x[q] if q < n else h
-        d = 1.0 / (a * a + s * s)
-        zr = a * d
-        zi = -s * d
-        pr = kappa[M]
-        pi = 0.0
-        for m in range(M - 1, -1, -1):  # Horner: ν² = Σ κ_m z^m
-            t = pr * zr - pi * zi + kappa[m]
-            pi = pr * zi + pi * zr
-            pr = t
-        rr, ri = _csqrt(pr, pi)
-        if (rr * prev.real + ri * prev.imag) < 0.0:
-            rr = -rr
-            ri = -ri
-        prev = complex(rr, ri)
-        e = 1.0 / (rr * rr + ri * ri)
-        ir = rr * e
-        ii = -ri * e
+        zr, zi, prr, pri, ir, ii = _node(kappa, a, s, prr, pri)
         wr = zr
         wi = zi
         if q < n:
@@ -64,14 +69,65 @@ def _weights_one(kappa, a, h, x, w, om, dom, nu_end):
                 t = wr * zr - wi * zi
                 wi = wr * zi + wi * zr
                 wr = t
-    nu_end[0] = prev
+    nu_end[0] = complex(prr, pri)
+
+
+@njit(cache=True, error_model="numpy")
+def _weights_two(kappa, a0, h0, a1, h1, x, w, om0, dom0, om1, dom1, NU):
+    """:func:`_weights_one` of two segments in one loop over the nodes (two independent dependency chains the
+    processor overlaps; the exact flow of N = 3 has two maps): the same operations per segment, so the same bits."""
+    M = kappa.shape[0] - 1
+    for m in range(M):
+        om0[m] = 0.0
+        om1[m] = 0.0
+    p0r = np.sqrt(max(_nu2(kappa, complex(a0, 0.0)).real, 0.0))
+    p1r = np.sqrt(max(_nu2(kappa, complex(a1, 0.0)).real, 0.0))
+    p0i = 0.0
+    p1i = 0.0
+    n = x.shape[0]
+    for q in range(n + 1):
+        s0 = h0 * x[q] if q < n else h0
+        s1 = h1 * x[q] if q < n else h1
+        z0r, z0i, p0r, p0i, i0r, i0i = _node(kappa, a0, s0, p0r, p0i)
+        z1r, z1i, p1r, p1i, i1r, i1i = _node(kappa, a1, s1, p1r, p1i)
+        u0r = z0r
+        u0i = z0i
+        u1r = z1r
+        u1i = z1i
+        if q < n:
+            hw0 = h0 * w[q]
+            hw1 = h1 * w[q]
+            for m in range(M):
+                om0[m] -= hw0 * (u0r * i0r - u0i * i0i)
+                om1[m] -= hw1 * (u1r * i1r - u1i * i1i)
+                t0 = u0r * z0r - u0i * z0i
+                u0i = u0r * z0i + u0i * z0r
+                u0r = t0
+                t1 = u1r * z1r - u1i * z1i
+                u1i = u1r * z1i + u1i * z1r
+                u1r = t1
+        else:
+            for m in range(M):
+                dom0[m] = -(u0r * i0r - u0i * i0i)
+                dom1[m] = -(u1r * i1r - u1i * i1i)
+                t0 = u0r * z0r - u0i * z0i
+                u0i = u0r * z0i + u0i * z0r
+                u0r = t0
+                t1 = u1r * z1r - u1i * z1i
+                u1i = u1r * z1i + u1i * z1r
+                u1r = t1
+    NU[0] = complex(p0r, p0i)
+    NU[1] = complex(p1r, p1i)
 
 
 @njit(cache=True, error_model="numpy")
 def _csqrt(pr, pi):
     """The principal square root of ``pr + i pi`` in real arithmetic (``t = √((|p| + |pr|)/2)``, the other part
-    ``pi/(2t)``: no cancellation), as ``cmath.sqrt`` to round-off."""
-    t = np.sqrt(0.5 * (np.hypot(pr, pi) + abs(pr)))
+    ``pi/(2t)``: no cancellation), as ``cmath.sqrt`` to round-off; ``|p| = √(pr² + pi²)``, by ``hypot`` only where
+    the squares leave ``[1e-300, 1e300]``."""
+    a2 = pr * pr + pi * pi
+    mod = np.sqrt(a2) if 1e-300 < a2 < 1e300 else np.hypot(pr, pi)  # hypot (slow) only where a2 over/underflows
+    t = np.sqrt(0.5 * (mod + abs(pr)))
     if t == 0.0:
         return 0.0, 0.0
     if pr >= 0.0:
@@ -117,6 +173,9 @@ def _gauss_solve(A, b):
 
 @njit(cache=True, error_model="numpy")
 def _eval(kappa, rho, h, x, w, OM, DOM, NU):
+    if rho.shape[0] == 2:
+        _weights_two(kappa, rho[0], h[0], rho[1], h[1], x, w, OM[0], DOM[0], OM[1], DOM[1], NU)
+        return
     for j in range(rho.shape[0]):
         _weights_one(kappa, rho[j], h[j], x, w, OM[j], DOM[j], NU[j:j + 1])
 
@@ -224,8 +283,15 @@ def _kappa(x, b, kappa):
     """``κ_0..κ_{2N}`` of ``ν² = Σ κ_m λ^{-m}`` from the state ``x`` (3N,) in the field ``b e_3``:
     ``κ_{i+j} += ⟨ξ_i, ξ_j⟩`` with ``ξ_0 = b e_3``, ``ξ_{n+1} = y_n`` (reduction (lax2)), summed in the order of
     :func:`jetgaudin.spectral.curve_coefficients` (the same bits)."""
+    _kappa_into(x, b, kappa, np.empty((x.shape[0] // 3 + 1, 3)))
+
+
+@njit(cache=True, error_model="numpy")
+def _kappa_into(x, b, kappa, xi):
+    """:func:`_kappa` with the scratch ``xi`` ``(N + 1, 3)`` given (no allocation per row)."""
     N = x.shape[0] // 3
-    xi = np.zeros((N + 1, 3))
+    xi[0, 0] = 0.0
+    xi[0, 1] = 0.0
     xi[0, 2] = b
     for n in range(N):
         for a in range(3):
@@ -337,7 +403,7 @@ def _branch_ok(kappa, roots, rho, h, nu_end, tol):
 
 
 @njit(cache=True, error_model="numpy")
-def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+def _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
                  iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
     """One orbit from its state: ``κ`` (:func:`_kappa`), ``ρ_j = c R / t_j``, the solve (:func:`_solve_one`) and the
     acceptance (converged, residual, quadrature estimate, ``h_j ≠ 0``, branch check); ``eta`` (k,) complex,
@@ -376,14 +442,37 @@ def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc
     out[3] = 2.0 * b * (dt * weights[0] - info[3])
 
 
+@njit(cache=True, error_model="numpy")
+def _solve_packed(x, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`_solve_state` with the constants packed (fewer arguments: Numba's dispatch types each one):
+    ``rules`` the nodes and weights of the fine, estimate and coarse rules one after the other (lengths
+    ``sizes = (n, n₂, n_c)``), ``tols = (step_tol, fold, iterations, res_tol, quad_tol, branch_tol)``."""
+    n, n2, nc = sizes[0], sizes[1], sizes[2]
+    x64 = rules[0:n]
+    w64 = rules[n:2 * n]
+    o = 2 * n
+    x32 = rules[o:o + n2]
+    w32 = rules[o + n2:o + 2 * n2]
+    o += 2 * n2
+    xc = rules[o:o + nc]
+    wc = rules[o + nc:o + 2 * nc]
+    _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, tols[0], tols[1],
+                 int(tols[2]), tols[3], tols[4], tols[5], eta, nu, out)
+
+
+@njit(cache=True, error_model="numpy")
+def solve_states(X, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`_solve_packed` for every orbit of ``X`` (B, 3N) on this thread (one call from Python: no thread
+    start-up, no per-orbit dispatch); ``eta``, ``nu`` (B, k), ``out`` (B, 4)."""
+    for i in range(X.shape[0]):
+        _solve_packed(X[i], b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta[i], nu[i], out[i])
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
-def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                       iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
-    """:func:`solve_state` for every orbit of ``X`` (B, 3N) on all threads (every orbit the bits of its own; small
-    batches call :func:`solve_state` orbit by orbit: no thread start-up)."""
+def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`solve_states` on all threads (every orbit the bits of its own solve)."""
     for i in prange(X.shape[0]):
-        solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                     iterations, res_tol, quad_tol, branch_tol, eta[i], nu[i], out[i])
+        _solve_packed(X[i], b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta[i], nu[i], out[i])
 
 
 @njit(cache=True, error_model="numpy")
@@ -409,7 +498,8 @@ def integrals_rows(X, b, out):
     ``κ_1..κ_{2N}`` of :func:`_kappa`, summed in the order of :func:`jetgaudin.spectral.curve_coefficients` (the
     same bits as :func:`jetgaudin.spectral.integrals`; tested)."""
     kappa = np.empty(out.shape[1] + 1)
+    xi = np.empty((X.shape[1] // 3 + 1, 3))
     for r in range(X.shape[0]):
-        _kappa(X[r], b, kappa)
+        _kappa_into(X[r], b, kappa, xi)
         for m in range(out.shape[1]):
             out[r, m] = kappa[m + 1]

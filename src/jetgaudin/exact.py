@@ -138,29 +138,43 @@ def _field_strength(H: IntegralHamiltonian) -> float:
     return float(bvec[2])
 
 
+@cache
+def _solve_constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The solve's constants packed for :func:`jetgaudin._exact_kernels.solve_states`: the nodes and weights of the
+    ``_NODES``-, ``_NODES // 2``- and ``_COARSE_NODES``-point rules one after the other, their sizes, the
+    continuation stages and the tolerances."""
+    sizes = np.array([_NODES, _NODES // 2, _COARSE_NODES], dtype=np.int64)
+    rules = np.concatenate([a for n in sizes for a in _gauss_legendre(int(n))])
+    tols = np.array([_STEP_TOL, _FOLD, _NEWTON_ITERATIONS, _RES_TOL, _QUAD_TOL, _BRANCH_TOL])
+    return rules, sizes, _STAGES, tols
+
+
+def _weights_of(H: IntegralHamiltonian) -> np.ndarray:
+    """``H.weights`` as a contiguous float array (itself when it is one: the kernels only read it)."""
+    w = H.weights
+    if type(w) is np.ndarray and w.dtype == np.float64 and w.flags.c_contiguous:
+        return w
+    return np.ascontiguousarray(w, dtype=float)
+
+
 def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float, k: int | None = None):
     """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok, nu)`` (``nu``: the
     maps' ``ν(η_j)`` on the checked branch, their first ``ν1``); ``k`` maps
     (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow).  One
-    compiled call (:func:`jetgaudin._exact_kernels.solve_state`): per orbit the integrals ``κ``, the branch points'
+    compiled call (:func:`jetgaudin._exact_kernels.solve_states`): per orbit the integrals ``κ``, the branch points'
     largest modulus ``R`` (``≥ 1e-6``: ``X = 0`` has every branch point at 0), ``ρ_j``, Newton's method and the
     acceptance, including the check that the continued ``ν`` at each ``η_j`` is the branch rule's (the maps' own
     ``ν``: no branch point near a segment)."""
-    from ._exact_kernels import solve_state, solve_states_batch
+    from ._exact_kernels import solve_states, solve_states_batch
 
     k = H.N - 1 if k is None else k
     X = np.ascontiguousarray(X, dtype=float)
     eta = np.empty((X.shape[0], k), dtype=complex)
     nu = np.empty((X.shape[0], k), dtype=complex)
     out = np.empty((X.shape[0], 4))
-    args = (_field_strength(H), np.asarray(H.weights, dtype=float), float(dt), k, float(rho_factor), _node_scales(k),
-            *_gauss_legendre(_NODES), *_gauss_legendre(_NODES // 2), *_gauss_legendre(_COARSE_NODES), _STAGES,
-            _STEP_TOL, _FOLD, _NEWTON_ITERATIONS, _RES_TOL, _QUAD_TOL, _BRANCH_TOL)
-    if len(X) >= _PARALLEL_FROM:
-        solve_states_batch(X, *args, eta, nu, out)
-    else:  # orbit by orbit on this thread (no thread start-up; the same bits per orbit)
-        for i in range(len(X)):
-            solve_state(X[i], *args, eta[i], nu[i], out[i])
+    solve = solve_states_batch if len(X) >= _PARALLEL_FROM else solve_states  # small: this thread, no start-up
+    solve(X, _field_strength(H), _weights_of(H), float(dt), k, float(rho_factor), _node_scales(k), *_solve_constants(),
+          eta, nu, out)
     return eta, out[:, 3], out[:, 1], out[:, 2], out[:, 0] == 1.0, nu
 
 
