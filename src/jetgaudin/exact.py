@@ -427,19 +427,16 @@ class ExactFlow(FixedStep, Map):
 
     def _run_fused(self, Z: np.ndarray, eta: np.ndarray, theta: np.ndarray, nu: np.ndarray, steps: int,
                    save_every: int, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        from ._exact_loop import rows_batch, rows_single
-        from .backlund._compiled import kernels
+        from ._exact_loop import rows_batch, rows_serial
 
         final = np.empty_like(Z)
         info = np.zeros((Z.shape[0], 2), dtype=np.int64)
-        args = (float(self.b), np.ascontiguousarray(eta), np.ascontiguousarray(nu))
-        if Z.shape[0] == 1:
-            rows_single(Z[0], args[0], args[1][0], args[2][0], float(theta[0]), steps, save_every, self.substeps,
-                        rows[:, 0], final[0], info[0])
-        else:
-            rows_batch(Z, *args, np.ascontiguousarray(theta, dtype=float), steps, save_every, self.substeps, rows,
-                       final, info)
-        if info[:, 0].any():
+        run = rows_serial if Z.shape[0] == 1 else rows_batch  # one orbit: this thread, no thread start-up
+        run(Z, _field_strength(self.H), np.ascontiguousarray(eta), np.ascontiguousarray(nu),
+            np.ascontiguousarray(theta, dtype=float), steps, save_every, self.substeps, rows, final, info)
+        if info[0, 0] or (Z.shape[0] > 1 and info[:, 0].any()):
+            from .backlund._compiled import kernels
+
             i = int(np.flatnonzero(info[:, 0])[0])
             raise kernels().status_error(info[i, 0], info[i, 1], i if Z.shape[0] > 1 else None)
         return rows, final
