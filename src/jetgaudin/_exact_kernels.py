@@ -497,9 +497,20 @@ def integrals_rows(X, b, out):
     """``out[r] = (H_1..H_N, C_1..C_N)`` of every row of ``X`` (R, 3N) in the field ``b e_3`` (reduction (lax2)):
     ``κ_1..κ_{2N}`` of :func:`_kappa`, summed in the order of :func:`jetgaudin.spectral.curve_coefficients` (the
     same bits as :func:`jetgaudin.spectral.integrals`; tested)."""
-    kappa = np.empty(out.shape[1] + 1)
-    xi = np.empty((X.shape[1] // 3 + 1, 3))
+    N = X.shape[1] // 3
+    xi = np.empty((N + 1, 3))
+    xi[0, 0] = 0.0
+    xi[0, 1] = 0.0
+    xi[0, 2] = b
     for r in range(X.shape[0]):
-        _kappa_into(X[r], b, kappa, xi)
-        for m in range(out.shape[1]):
-            out[r, m] = kappa[m + 1]
+        for n in range(N):
+            xi[n + 1, 0] = X[r, 3 * n]
+            xi[n + 1, 1] = X[r, 3 * n + 1]
+            xi[n + 1, 2] = X[r, 3 * n + 2]
+        # κ_m, m ≥ 1: the terms (i, m − i) in the order of i, as the double loop of _kappa_into adds them
+        for m in range(1, 2 * N + 1):
+            acc = 0.0
+            for i in range(max(0, m - N), min(m, N) + 1):
+                j = m - i
+                acc += (xi[i, 0] * xi[j, 0] + xi[i, 1] * xi[j, 1]) + xi[i, 2] * xi[j, 2]
+            out[r, m - 1] = acc

@@ -74,12 +74,12 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
 def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarray]:
     """``(steps, states)``: the states after ``0, every, 2 every, …`` steps and after ``n``."""
     adv = m.advance(X0, None, n, every)
-    idx = list(range(0, n + 1, every))
+    idx = np.arange(0, n + 1, every)
     rows = [X0[None], adv.rows]
     if n % every:
-        idx.append(n)
+        idx = np.append(idx, n)
         rows.append(adv.X[None])
-    return np.array(idx), np.concatenate(rows, axis=0)
+    return idx, np.concatenate(rows, axis=0)
 
 
 def _exact_dense(H: Any, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
