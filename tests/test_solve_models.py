@@ -185,3 +185,19 @@ def test_exact_dense_output_of_a_chain_batch():
     for k in range(2):
         ref = jg.solve(H, Xb[k], (0.0, T), method="dop853", rtol=1e-13, atol=1e-13, t_eval=t).X
         assert np.abs(got[:, k] - ref).max() < 1e-11
+
+
+def test_the_protocol_check_remembered_per_type_still_refuses_other_types():
+    """``methods._is_hamiltonian`` remembers the types that passed the runtime protocol check (issue 33: the check
+    cost 11 µs, twice per solve): after a top and a chain were solved, objects of other types are still refused
+    and only Hamiltonian types are remembered."""
+    from jetgaudin import methods
+
+    H, X, dt = _case("Clebsch top")
+    jg.solve(H, X, (0.0, 0.1), dt=0.05)
+    jg.solve(jg.physical_hamiltonian(3, 1.0), [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0], (0.0, 0.1), dt=0.05)
+    assert {jg.IntegralHamiltonian, type(H)} <= methods._HAMILTONIAN_TYPES
+    for bad in (object(), np.ones(4), "physical"):
+        with pytest.raises(jg.InvalidParameterError, match="H must be a Hamiltonian of a model"):
+            jg.solve(bad, X6, (0.0, 0.1), dt=0.05)
+        assert type(bad) not in methods._HAMILTONIAN_TYPES
