@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ._exact_kernels import solve_states
 from .backlund.kernels._drivers import kernel_module
 
 _n3 = kernel_module("_n3")
@@ -27,7 +28,7 @@ _scale3 = _n3._scale3
 _cdiv = _n3.S._cdiv
 _orbit_generic = kernel_module("_generic").orbit_generic
 
-__all__ = ["rows_single", "rows_batch", "rows_serial"]
+__all__ = ["rows_single", "rows_batch", "rows_serial", "solve_rows"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -219,3 +220,18 @@ def rows_serial(X0, b, eta, nu, theta, steps, save_every, substeps, rows, final,
     here rather than in Python, where each costs a dispatch's type check): every orbit the bits of its single run."""
     for i in range(X0.shape[0]):
         rows_single(X0[i], b, eta[i], nu[i], theta[i], steps, save_every, substeps, rows[:, i], final[i], info[i])
+
+
+@njit(cache=True, error_model="numpy")
+def solve_rows(X0, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, steps, save_every, substeps,
+               eta, nu, out, rows, final, info):
+    """The parameter solve (:func:`jetgaudin._exact_kernels.solve_states`) and, where every orbit's solve is
+    accepted (``out[i, 0] == 1``), the run (:func:`rows_serial` with ``θ = out[:, 3]``) in one call from Python
+    (the every-row call of one orbit: no Python between them); returns whether the run was made.  The same kernels
+    as the two calls made one after the other: the same bits."""
+    solve_states(X0, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out)
+    for i in range(X0.shape[0]):
+        if out[i, 0] != 1.0:
+            return False
+    rows_serial(X0, b, eta, nu, out[:, 3].copy(), steps, save_every, substeps, rows, final, info)
+    return True

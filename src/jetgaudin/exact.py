@@ -441,6 +441,33 @@ class ExactFlow(FixedStep, Map):
             raise kernels().status_error(info[i, 0], info[i, 1], i if Z.shape[0] > 1 else None)
         return rows, final
 
+    def _solve_and_run(self, flat: np.ndarray, steps: int, save_every: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """One orbit's solve and every-row run in one compiled call (:func:`jetgaudin._exact_loop.solve_rows`; the
+        same kernels, so the same bits, as :func:`_accepted` then :meth:`_run_fused`): ``(rows, final)``, or
+        ``None`` where the route is not compiled or the solve is not accepted (the caller then takes the general
+        path, which raises the error naming ``dt_max``)."""
+        if self.resolved_backend(flat, steps) is not Backend.COMPILED:
+            return None
+        from ._exact_loop import solve_rows
+
+        k = self.H.N - 1 if self._maps is None else self._maps
+        Z = np.ascontiguousarray(flat, dtype=float)
+        eta = np.empty((1, k), dtype=complex)
+        nu = np.empty((1, k), dtype=complex)
+        out = np.empty((1, 4))
+        rows = np.empty((steps // save_every,) + Z.shape)
+        final = np.empty_like(Z)
+        info = np.zeros((1, 2), dtype=np.int64)
+        if not solve_rows(Z, _field_strength(self.H), _weights_of(self.H), float(self.dt / self.substeps), k,
+                          float(self.rho_factor), _node_scales(k), *_solve_constants(), steps, save_every,
+                          self.substeps, eta, nu, out, rows, final, info):
+            return None
+        if info[0, 0]:
+            from .backlund._compiled import kernels
+
+            raise kernels().status_error(info[0, 0], info[0, 1], None)
+        return rows, final
+
     def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
         adv = self.advance(X, carry, 1)
         return adv.X, adv.carry, adv.imag_max
@@ -458,6 +485,11 @@ class ExactFlow(FixedStep, Map):
         if steps == 0 or flat.shape[0] == 0:
             rows = np.empty((steps // save_every,) + X.shape)
             return Advance(rows=rows, X=X.copy(), carry=zeros, imag_max=zeros.real)
+        if flat.shape[0] == 1 and save_every * self.substeps <= _FUSED_ROWS:
+            fused = self._solve_and_run(flat, steps, save_every)
+            if fused is not None:
+                return Advance(rows=fused[0].reshape((-1,) + X.shape), X=fused[1].reshape(X.shape), carry=zeros,
+                               imag_max=zeros.real)
         eta, theta, _, _, nu = _accepted(self.H, self.dt / self.substeps, flat, self.rho_factor, self._maps)
         rows, final = self._run(flat, eta, theta, nu, steps, save_every)
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros,

@@ -146,8 +146,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     check_method(H, method.value)  # the route table (jetgaudin.methods): a typed refusal where no route exists
     X0 = np.asarray(H.check_state(X0), dtype=float)
     every = check_count(save_every, "save_every", 1)
-    if dt is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
-        n_out = time_grid(t_span, dt)[2] // every + 2
+    grid = None if dt is None else time_grid(t_span, dt)
+    if grid is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
+        n_out = grid[2] // every + 2
         check_output_size(n_out, 8 * (X0.size + 1 + 2 * (X0.shape[-1] // 3) * max(1, X0.size // X0.shape[-1])),
                           "solve")
     if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
@@ -163,9 +164,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         mth = Method.DOP853 if method is SolveMethod.DOP853 else Method.HEYOKA
         tr = integrate(H, X0, t1 - t0, t_eval=t_eval, method=mth, rtol=rtol, atol=atol)
         return Trajectory(t0 + tr.t, tr.X, tr.integrals, method.value, {"rtol": rtol, "atol": atol})
-    if dt is None:
+    if grid is None:
         raise InvalidParameterError(f"method={method.value!r} is a fixed-step method: give dt")
-    t0, h, n = time_grid(t_span, dt)
+    t0, h, n = grid
     auto = substeps == "auto"
     s = 1 if auto else check_count(substeps, "substeps", 1)
     info: dict = {"dt": h, "steps": n}
