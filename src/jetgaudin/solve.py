@@ -183,9 +183,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         info["substeps"] = s
     # the top's rows through one compiled pass (exact.record_integrals, the same bits as jg.integrals; issue 33)
     recorded = record_integrals(H, Xs) if H.route_kind == "top" else H.record_integrals(Xs)
-    tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
-    if method is SolveMethod.EXACT:
-        tr = replace(tr, dense=_exact_dense(H, s, tr.t, Xs))
+    t = t0 + idx * h
+    tr = Trajectory(t, Xs, np.asarray(recorded, dtype=float), method.value, info,
+                    dense=_exact_dense(H, s, t, Xs) if method is SolveMethod.EXACT else None)
     if t_eval is not None:  # the exact flow's dense output at the requested times
         if tr.dense is None:
             raise InvalidParameterError(f"t_eval needs dense output: method='exact', 'dop853' or 'heyoka', not "
