@@ -96,3 +96,22 @@ def test_rows_are_the_unrotated_orbit_rotated_through_the_accumulated_angle(subs
     assert float(err.max()) <= 8e-16
     if steps % save_every == 0:
         assert np.array_equal(final, rows[-1])
+
+
+def test_two_segments_in_one_loop_are_each_segments_own_bits():
+    """``_weights_two`` (the N = 3 flow's two segments in one node loop) gives each segment's weights, derivatives
+    and end-point ``ν`` bit for bit as ``_weights_one`` (its docstring: the same operations per segment)."""
+    from jetgaudin._exact_kernels import _weights_one, _weights_two
+    from jetgaudin.exact import _gauss_legendre
+
+    x0 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0])
+    kappa = np.empty(7)
+    _kappa(x0, 1.0, kappa)
+    x, w = _gauss_legendre(64)
+    a, h = (5.17, -5.17), (-1.55, -2.8)
+    om, dom, nu = np.zeros((2, 6)), np.zeros((2, 6)), np.zeros(2, complex)
+    _weights_two(kappa, a[0], h[0], a[1], h[1], x, w, om[0], dom[0], om[1], dom[1], nu)
+    for j in range(2):
+        o, d, n = np.zeros(6), np.zeros(6), np.zeros(1, complex)
+        _weights_one(kappa, a[j], h[j], x, w, o, d, n)
+        assert np.array_equal(o, om[j]) and np.array_equal(d, dom[j]) and n[0] == nu[j]

@@ -180,9 +180,11 @@ def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: fl
 
 def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: float, rel: float = 1e-3,
                 k: int | None = None) -> float:
-    """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x`` (3N,), by bisection to ``rel``."""
+    """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x`` (3N,), by bisection to ``rel``;
+    0 where none above ``1e-12 |dt|`` is (at most ~40 halvings: without the floor an orbit where nothing is
+    feasible halved ``hi`` to underflow, ~1000 failing solves)."""
     lo, hi = 0.0, abs(dt)
-    while hi - lo > rel * hi:
+    while hi - lo > rel * hi and hi > 1e-12 * abs(dt):
         mid = 0.5 * (lo + hi)
         if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor, k)[4][0]:
             lo = mid
@@ -338,6 +340,13 @@ class ExactFlow(FixedStep, Map):
         if self.H.c is not None:
             raise InvalidParameterError("ExactFlow supports the reduction (lax2) only (c = None)")
         _field_strength(self.H)
+        k = self.H.N - 1 if self._maps is None else self._maps
+        if not np.any(np.asarray(self.H.weights, dtype=float)[1:k + 1]):
+            raise InvalidParameterError(
+                f"{type(self).__name__} matches the weights of H_2..H_{k + 1} with Bäcklund maps, and H has none "
+                "(those weights are 0): its flow is the rotation about the field, which no such map gives. Use "
+                "jetgaudin.exact.rotate_about_field(X, 2 * b * w_1 * t) (the exact flow of w_1 H_1) or "
+                "method='dop853'")
         object.__setattr__(self, "dt", nonzero_step(self.dt))
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
         self._init_backend()
