@@ -198,3 +198,35 @@ def test_chain_substeps_on_the_compiled_loop(case):
         assert np.max(np.abs(X - _dop(H, X0, dt * (r + 1)))) < 1e-11
     B = np.stack([X0, 0.8 * X0])
     assert np.array_equal(ChainExactFlow(H, dt, substeps=s).advance(B, None, 3, 1).rows[:, 0], rows)
+
+
+def test_a_hamiltonian_without_h2_to_hN_is_refused_at_once_with_the_rotation_named():
+    """H = w_1 H_1 (the weights of H_2..H_N zero) has no Bäcklund parameters (the maps' η would be real): before,
+    ExactFlow searched 32 s for a feasible dt and answered dt_max = 0; now the construction refuses it naming the
+    rotation, and the rotation named is the flow (against DOP853 at rtol 1e-12: 1e-11 after t = 0.7)."""
+    from jetgaudin.exact import MatchedBacklund, rotate_about_field
+
+    X = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0])
+    H = jg.IntegralHamiltonian(1.3, np.array([0.8, 0, 0, 0, 0.5, 0]))  # a Casimir weight changes nothing
+    for cls in (jg.ExactFlow, MatchedBacklund):
+        with pytest.raises(jg.InvalidParameterError, match="rotate_about_field"):
+            cls(H, 0.1)
+    ref = jg.integrate(H, X, 0.7, rtol=1e-12, atol=1e-12).X[-1]
+    assert np.max(np.abs(rotate_about_field(X, 2 * 1.3 * 0.8 * 0.7) - ref)) < 1e-11
+
+
+def test_the_largest_dt_search_stops_where_nothing_is_feasible(monkeypatch):
+    """Where no dt is feasible the bisection for dt_max stops at 1e-12 |dt| (≤ 41 solves) and answers 0 (before:
+    halving to underflow, ~1075 failing solves)."""
+    from jetgaudin import exact
+
+    calls = []
+
+    def never(H, dt, X, rho_factor, k=None):
+        calls.append(dt)
+        return (None, None, None, None, np.array([False]), None)
+
+    monkeypatch.setattr(exact, "_solve_flat", never)
+    H = jg.physical_hamiltonian(3, 1.0)
+    assert exact._largest_dt(H, 0.3, np.ones(9), 1.5) == 0.0
+    assert len(calls) <= 41

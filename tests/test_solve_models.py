@@ -185,3 +185,51 @@ def test_exact_dense_output_of_a_chain_batch():
     for k in range(2):
         ref = jg.solve(H, Xb[k], (0.0, T), method="dop853", rtol=1e-13, atol=1e-13, t_eval=t).X
         assert np.abs(got[:, k] - ref).max() < 1e-11
+
+
+def test_the_protocol_check_remembered_per_type_still_refuses_other_types():
+    """``methods._is_hamiltonian`` remembers the types that passed the runtime protocol check (issue 33: the check
+    cost 11 µs, twice per solve): after a top and a chain were solved, objects of other types are still refused
+    and only Hamiltonian types are remembered."""
+    from jetgaudin import methods
+
+    H, X, dt = _case("Clebsch top")
+    jg.solve(H, X, (0.0, 0.1), dt=0.05)
+    jg.solve(jg.physical_hamiltonian(3, 1.0), [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0], (0.0, 0.1), dt=0.05)
+    assert {jg.IntegralHamiltonian, type(H)} <= methods._HAMILTONIAN_TYPES
+    for bad in (object(), np.ones(4), "physical"):
+        with pytest.raises(jg.InvalidParameterError, match="H must be a Hamiltonian of a model"):
+            jg.solve(bad, X6, (0.0, 0.1), dt=0.05)
+        assert type(bad) not in methods._HAMILTONIAN_TYPES
+
+
+@pytest.mark.parametrize("family", ["rational", "trigonometric", "elliptic"])
+def test_a_chains_recorded_integrals_are_its_integrals(family):
+    """``ChainHamiltonian.record_integrals`` (one compiled pass for the rational and trigonometric families, issue 33)
+    equals ``model.integrals`` on rows ``(T, 3M)`` and batches ``(T, B, 3M)``, to ``n ε Σ|terms|`` per entry
+    (``n = 3M² + 2M + 2`` additions in another order than ``np.einsum``'s; ``Σ|terms|`` the same sums of absolute
+    values), at unit size and at 1e3; the elliptic family takes ``model.integrals`` itself (bit for bit)."""
+    sites = [(0.0, 1), (1.0, 2), (2.5, 1)]
+    kw = {"trigonometric": {"gamma": 0.5}, "elliptic": {"modulus": 0.6}}.get(family, {})
+    b = 0.0 if family == "elliptic" else 0.8  # the elliptic family has no field
+    model = jg.GaudinModel(b, sites, family=family, **kw)
+    H = model.hamiltonian(np.linspace(0.2, 1.0, model.integrals(np.ones(3 * model.M)).shape[-1]))
+    rng = np.random.default_rng(3)
+    for scale in (1.0, 1e3):
+        for shape in ((50, 3 * model.M), (7, 4, 3 * model.M)):
+            X = rng.normal(size=shape) * scale
+            got, ref = H.record_integrals(X), model.integrals(X)
+            assert got.shape == ref.shape
+            if family == "elliptic":
+                assert np.array_equal(got, ref)
+                continue
+            q, lin = model._forms
+            q3 = np.broadcast_to(q, (3,) + q.shape) if q.ndim == 3 else q
+            y = np.abs(X.reshape(X.shape[:-1] + (model.M, 3)))
+            terms = np.einsum("aIcd,...ca,...da->...I", np.abs(q3), y, y) + 2 * b * np.einsum(
+                "Ic,...c->...I", np.abs(lin), y[..., 2])
+            if ref.shape[-1] > terms.shape[-1]:  # the linear extras
+                forms = np.abs(model.family.extra_integrals(model.sites)[1])
+                terms = np.concatenate([terms, np.einsum("Ei,...i->...E", forms, np.abs(X))], axis=-1)
+            n = 3 * model.M ** 2 + 2 * model.M + 2
+            assert np.all(np.abs(got - ref) <= n * 2.3e-16 * terms)

@@ -1,5 +1,5 @@
 r"""Compiled parameter solve of :mod:`jetgaudin.exact` (private): from an orbit's state to its accepted parameters in
-one call (:func:`solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
+one call (:func:`_solve_state`: the integrals, the branch points' largest modulus, the weights ``ω_m(ρ + i h)`` by
 Gauss–Legendre, Newton's method for ``h``, the branch check); a ``prange`` loop over a batch (every orbit gets the
 bits of its single solve).
 
@@ -17,32 +17,122 @@ from numba import njit, prange
 
 
 @njit(cache=True, error_model="numpy")
+def _node(kappa, a, s, prr, pri):
+    """At ``λ = a + i s``: ``z = 1/λ = λ̄/|λ|²`` (one real division, shared by ``ν² = Σ κ_m z^m`` and the powers
+    ``z^m``), ``ν`` the root of ``ν²`` nearer the previous node's ``(prr, pri)`` and ``1/ν = ν̄/|ν|²``; returns
+    ``(zr, zi, νr, νi, (1/ν)r, (1/ν)i)``.  The same quantities as ``1/lam``, ``cmath.sqrt`` and ``1/r`` to
+    round-off (Numba's complex division scales and branches; this is the parameter solve's inner loop)."""
+    M = kappa.shape[0] - 1
+    d = 1.0 / (a * a + s * s)
+    zr = a * d
+    zi = -s * d
+    pr = kappa[M]
+    pi = 0.0
+    for m in range(M - 1, -1, -1):  # Horner: ν² = Σ κ_m z^m
+        t = pr * zr - pi * zi + kappa[m]
+        pi = pr * zi + pi * zr
+        pr = t
+    rr, ri = _csqrt(pr, pi)
+    if (rr * prr + ri * pri) < 0.0:
+        rr = -rr
+        ri = -ri
+    e = 1.0 / (rr * rr + ri * ri)
+    return zr, zi, rr, ri, rr * e, -ri * e
+
+
+@njit(cache=True, error_model="numpy")
 def _weights_one(kappa, a, h, x, w, om, dom, nu_end):
     """``om[m] = ω_{m+1}(a + i h)`` (``m = 0..2N−1``) by the rule ``(x, w)`` on ``[0, 1]``; ``dom[m] = ∂ω/∂h``;
-    returns ``ν`` at the end point (continued from ``+√ν²(a)``)."""
+    returns ``ν`` at the end point (continued from ``+√ν²(a)``), node by node (:func:`_node`); only the real part
+    of ``z^m/ν`` is formed."""
     M = kappa.shape[0] - 1
     for m in range(M):
         om[m] = 0.0
-    prev = complex(np.sqrt(max(_nu2(kappa, complex(a, 0.0)).real, 0.0)), 0.0)
+    prr = np.sqrt(max(_nu2(kappa, complex(a, 0.0)).real, 0.0))
+    pri = 0.0
     n = x.shape[0]
     for q in range(n + 1):
         s = h * x[q] if q < n else h
-        lam = complex(a, s)
-        r = np.sqrt(_nu2(kappa, lam))
-        if (r.real * prev.real + r.imag * prev.imag) < 0.0:
-            r = -r
-        prev = r
-        z = 1.0 / lam
-        zm = z
-        inv = 1.0 / r
-        for m in range(M):
-            f = (zm * inv).real
-            if q < n:
-                om[m] -= h * w[q] * f
-            else:
-                dom[m] = -f
-            zm = zm * z
-    nu_end[0] = prev
+        zr, zi, prr, pri, ir, ii = _node(kappa, a, s, prr, pri)
+        wr = zr
+        wi = zi
+        if q < n:
+            hw = h * w[q]
+            for m in range(M):
+                om[m] -= hw * (wr * ir - wi * ii)
+                t = wr * zr - wi * zi
+                wi = wr * zi + wi * zr
+                wr = t
+        else:
+            for m in range(M):
+                dom[m] = -(wr * ir - wi * ii)
+                t = wr * zr - wi * zi
+                wi = wr * zi + wi * zr
+                wr = t
+    nu_end[0] = complex(prr, pri)
+
+
+@njit(cache=True, error_model="numpy")
+def _weights_two(kappa, a0, h0, a1, h1, x, w, om0, dom0, om1, dom1, NU):
+    """:func:`_weights_one` of two segments in one loop over the nodes (two independent dependency chains the
+    processor overlaps; the exact flow of N = 3 has two maps): the same operations per segment, so the same bits."""
+    M = kappa.shape[0] - 1
+    for m in range(M):
+        om0[m] = 0.0
+        om1[m] = 0.0
+    p0r = np.sqrt(max(_nu2(kappa, complex(a0, 0.0)).real, 0.0))
+    p1r = np.sqrt(max(_nu2(kappa, complex(a1, 0.0)).real, 0.0))
+    p0i = 0.0
+    p1i = 0.0
+    n = x.shape[0]
+    for q in range(n + 1):
+        s0 = h0 * x[q] if q < n else h0
+        s1 = h1 * x[q] if q < n else h1
+        z0r, z0i, p0r, p0i, i0r, i0i = _node(kappa, a0, s0, p0r, p0i)
+        z1r, z1i, p1r, p1i, i1r, i1i = _node(kappa, a1, s1, p1r, p1i)
+        u0r = z0r
+        u0i = z0i
+        u1r = z1r
+        u1i = z1i
+        if q < n:
+            hw0 = h0 * w[q]
+            hw1 = h1 * w[q]
+            for m in range(M):
+                om0[m] -= hw0 * (u0r * i0r - u0i * i0i)
+                om1[m] -= hw1 * (u1r * i1r - u1i * i1i)
+                t0 = u0r * z0r - u0i * z0i
+                u0i = u0r * z0i + u0i * z0r
+                u0r = t0
+                t1 = u1r * z1r - u1i * z1i
+                u1i = u1r * z1i + u1i * z1r
+                u1r = t1
+        else:
+            for m in range(M):
+                dom0[m] = -(u0r * i0r - u0i * i0i)
+                dom1[m] = -(u1r * i1r - u1i * i1i)
+                t0 = u0r * z0r - u0i * z0i
+                u0i = u0r * z0i + u0i * z0r
+                u0r = t0
+                t1 = u1r * z1r - u1i * z1i
+                u1i = u1r * z1i + u1i * z1r
+                u1r = t1
+    NU[0] = complex(p0r, p0i)
+    NU[1] = complex(p1r, p1i)
+
+
+@njit(cache=True, error_model="numpy")
+def _csqrt(pr, pi):
+    """The principal square root of ``pr + i pi`` in real arithmetic (``t = √((|p| + |pr|)/2)``, the other part
+    ``pi/(2t)``: no cancellation), as ``cmath.sqrt`` to round-off; ``|p| = √(pr² + pi²)``, by ``hypot`` only where
+    the squares leave ``[1e-300, 1e300]``."""
+    a2 = pr * pr + pi * pi
+    mod = np.sqrt(a2) if 1e-300 < a2 < 1e300 else np.hypot(pr, pi)  # hypot (slow) only where a2 over/underflows
+    t = np.sqrt(0.5 * (mod + abs(pr)))
+    if t == 0.0:
+        return 0.0, 0.0
+    if pr >= 0.0:
+        return t, 0.5 * pi / t
+    return 0.5 * abs(pi) / t, (t if pi >= 0.0 else -t)
 
 
 @njit(cache=True, error_model="numpy")
@@ -83,6 +173,9 @@ def _gauss_solve(A, b):
 
 @njit(cache=True, error_model="numpy")
 def _eval(kappa, rho, h, x, w, OM, DOM, NU):
+    if rho.shape[0] == 2:
+        _weights_two(kappa, rho[0], h[0], rho[1], h[1], x, w, OM[0], DOM[0], OM[1], DOM[1], NU)
+        return
     for j in range(rho.shape[0]):
         _weights_one(kappa, rho[j], h[j], x, w, OM[j], DOM[j], NU[j:j + 1])
 
@@ -190,8 +283,15 @@ def _kappa(x, b, kappa):
     """``κ_0..κ_{2N}`` of ``ν² = Σ κ_m λ^{-m}`` from the state ``x`` (3N,) in the field ``b e_3``:
     ``κ_{i+j} += ⟨ξ_i, ξ_j⟩`` with ``ξ_0 = b e_3``, ``ξ_{n+1} = y_n`` (reduction (lax2)), summed in the order of
     :func:`jetgaudin.spectral.curve_coefficients` (the same bits)."""
+    _kappa_into(x, b, kappa, np.empty((x.shape[0] // 3 + 1, 3)))
+
+
+@njit(cache=True, error_model="numpy")
+def _kappa_into(x, b, kappa, xi):
+    """:func:`_kappa` with the scratch ``xi`` ``(N + 1, 3)`` given (no allocation per row)."""
     N = x.shape[0] // 3
-    xi = np.zeros((N + 1, 3))
+    xi[0, 0] = 0.0
+    xi[0, 1] = 0.0
     xi[0, 2] = b
     for n in range(N):
         for a in range(3):
@@ -205,15 +305,70 @@ def _kappa(x, b, kappa):
 
 @njit(cache=True, error_model="numpy")
 def _branch_points(kappa):
-    """The roots of ``P(λ) = Σ_m κ_m λ^{2N−m}`` (``κ_0 = b² ≠ 0``): eigenvalues of the companion matrix, as
-    :func:`jetgaudin.spectral._roots`."""
+    """The roots of ``P(λ) = Σ_m κ_m λ^{2N−m}`` (``κ_0 = b² ≠ 0``): :func:`_aberth` (simple roots: ~1 µs), else
+    (a root it does not resolve to round-off, e.g. a double one) the eigenvalues of the companion matrix, as
+    :func:`jetgaudin.spectral._roots` (LAPACK, ~12 µs for N = 3)."""
     deg = kappa.shape[0] - 1
+    roots = np.empty(deg, dtype=np.complex128)
+    if _aberth(kappa, roots):
+        return roots
     comp = np.zeros((deg, deg), dtype=np.complex128)
     for j in range(deg):
         comp[0, j] = -kappa[j + 1] / kappa[0]
     for j in range(deg - 1):
         comp[j + 1, j] = 1.0
     return np.linalg.eigvals(comp)
+
+
+@njit(cache=True, error_model="numpy")
+def _aberth(kappa, z):
+    """The roots ``z`` of ``P(λ) = Σ_m κ_m λ^{deg−m}`` by the Aberth–Ehrlich iteration
+    ``z_i ← z_i − w_i/(1 − w_i Σ_{j≠i} 1/(z_i − z_j))``, ``w_i = P(z_i)/P'(z_i)``, from ``deg`` points on the circle
+    of radius ``|κ_deg/κ_0|^{1/deg}`` (the geometric mean of the roots' moduli; ``B = max_j |κ_j/κ_0|^{1/j}``, half
+    a bound on every root's modulus, where that is 0); converged when every correction is at
+    most ``4e-16 B``, so the root is correct to round-off (quadratic convergence at a simple
+    root: the last step's error is the square of the one before).  ``False`` when that does not happen within 60
+    sweeps (a multiple or nearly multiple root: the caller takes the eigenvalues)."""
+    deg = kappa.shape[0] - 1
+    bound = 0.0
+    for j in range(1, deg + 1):
+        bound = max(bound, abs(kappa[j] / kappa[0]) ** (1.0 / j))
+    if bound == 0.0 or not np.isfinite(bound):
+        return False
+    start = abs(kappa[deg] / kappa[0]) ** (1.0 / deg)  # the geometric mean of the roots' moduli
+    if start == 0.0:
+        start = bound
+    for i in range(deg):
+        z[i] = start * np.exp(complex(0.0, (2.0 * np.pi * i + 0.4) / deg))
+    for _ in range(60):
+        big = 0.0
+        for i in range(deg):
+            zi = z[i]
+            p = complex(kappa[0], 0.0)
+            dp = complex(0.0, 0.0)
+            for m in range(1, deg + 1):
+                dp = dp * zi + p
+                p = p * zi + kappa[m]
+            if dp == 0:
+                return False
+            w = p / dp
+            ar = 0.0
+            ai = 0.0
+            for j in range(deg):  # Σ_{j≠i} 1/(z_i − z_j) = Σ conj(d)/|d|²
+                if j != i:
+                    d = zi - z[j]
+                    e = 1.0 / (d.real * d.real + d.imag * d.imag)
+                    ar += d.real * e
+                    ai -= d.imag * e
+            acc = complex(ar, ai)
+            step = w / (1.0 - w * acc)
+            if not np.isfinite(step.real) or not np.isfinite(step.imag):
+                return False
+            z[i] = zi - step
+            big = max(big, abs(step))
+        if big <= 4e-16 * bound:
+            return True
+    return False
 
 
 @njit(cache=True, error_model="numpy")
@@ -248,7 +403,7 @@ def _branch_ok(kappa, roots, rho, h, nu_end, tol):
 
 
 @njit(cache=True, error_model="numpy")
-def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
+def _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
                  iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
     """One orbit from its state: ``κ`` (:func:`_kappa`), ``ρ_j = c R / t_j``, the solve (:func:`_solve_one`) and the
     acceptance (converged, residual, quadrature estimate, ``h_j ≠ 0``, branch check); ``eta`` (k,) complex,
@@ -287,14 +442,37 @@ def solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc
     out[3] = 2.0 * b * (dt * weights[0] - info[3])
 
 
+@njit(cache=True, error_model="numpy")
+def _solve_packed(x, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`_solve_state` with the constants packed (fewer arguments: Numba's dispatch types each one):
+    ``rules`` the nodes and weights of the fine, estimate and coarse rules one after the other (lengths
+    ``sizes = (n, n₂, n_c)``), ``tols = (step_tol, fold, iterations, res_tol, quad_tol, branch_tol)``."""
+    n, n2, nc = sizes[0], sizes[1], sizes[2]
+    x64 = rules[0:n]
+    w64 = rules[n:2 * n]
+    o = 2 * n
+    x32 = rules[o:o + n2]
+    w32 = rules[o + n2:o + 2 * n2]
+    o += 2 * n2
+    xc = rules[o:o + nc]
+    wc = rules[o + nc:o + 2 * nc]
+    _solve_state(x, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, tols[0], tols[1],
+                 int(tols[2]), tols[3], tols[4], tols[5], eta, nu, out)
+
+
+@njit(cache=True, error_model="numpy")
+def solve_states(X, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`_solve_packed` for every orbit of ``X`` (B, 3N) on this thread (one call from Python: no thread
+    start-up, no per-orbit dispatch); ``eta``, ``nu`` (B, k), ``out`` (B, 4)."""
+    for i in range(X.shape[0]):
+        _solve_packed(X[i], b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta[i], nu[i], out[i])
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
-def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                       iterations, res_tol, quad_tol, branch_tol, eta, nu, out):
-    """:func:`solve_state` for every orbit of ``X`` (B, 3N) on all threads (every orbit the bits of its own; small
-    batches call :func:`solve_state` orbit by orbit: no thread start-up)."""
+def solve_states_batch(X, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out):
+    """:func:`solve_states` on all threads (every orbit the bits of its own solve)."""
     for i in prange(X.shape[0]):
-        solve_state(X[i], b, weights, dt, k, rho_factor, scales, x64, w64, x32, w32, xc, wc, stages, step_tol, fold,
-                     iterations, res_tol, quad_tol, branch_tol, eta[i], nu[i], out[i])
+        _solve_packed(X[i], b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta[i], nu[i], out[i])
 
 
 @njit(cache=True, error_model="numpy")
@@ -319,8 +497,20 @@ def integrals_rows(X, b, out):
     """``out[r] = (H_1..H_N, C_1..C_N)`` of every row of ``X`` (R, 3N) in the field ``b e_3`` (reduction (lax2)):
     ``κ_1..κ_{2N}`` of :func:`_kappa`, summed in the order of :func:`jetgaudin.spectral.curve_coefficients` (the
     same bits as :func:`jetgaudin.spectral.integrals`; tested)."""
-    kappa = np.empty(out.shape[1] + 1)
+    N = X.shape[1] // 3
+    xi = np.empty((N + 1, 3))
+    xi[0, 0] = 0.0
+    xi[0, 1] = 0.0
+    xi[0, 2] = b
     for r in range(X.shape[0]):
-        _kappa(X[r], b, kappa)
-        for m in range(out.shape[1]):
-            out[r, m] = kappa[m + 1]
+        for n in range(N):
+            xi[n + 1, 0] = X[r, 3 * n]
+            xi[n + 1, 1] = X[r, 3 * n + 1]
+            xi[n + 1, 2] = X[r, 3 * n + 2]
+        # κ_m, m ≥ 1: the terms (i, m − i) in the order of i, as the double loop of _kappa_into adds them
+        for m in range(1, 2 * N + 1):
+            acc = 0.0
+            for i in range(max(0, m - N), min(m, N) + 1):
+                j = m - i
+                acc += (xi[i, 0] * xi[j, 0] + xi[i, 1] * xi[j, 1]) + xi[i, 2] * xi[j, 2]
+            out[r, m - 1] = acc

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ._exact_kernels import solve_states
 from .backlund.kernels._drivers import kernel_module
 
 _n3 = kernel_module("_n3")
@@ -27,7 +28,7 @@ _scale3 = _n3._scale3
 _cdiv = _n3.S._cdiv
 _orbit_generic = kernel_module("_generic").orbit_generic
 
-__all__ = ["rows_single", "rows_batch"]
+__all__ = ["rows_single", "rows_batch", "rows_serial", "solve_rows"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -51,13 +52,56 @@ def _rotate3_into(x, angle, out):
         out[3 * n + 2] = x[3 * n + 2]
 
 
+#: rows of the N = 3 loop whose rotation angle is a multiple of this many sub-steps take ``cos``/``sin`` directly;
+#: the rows between them combine that with a table (:func:`_angle_cs`)
+_ANCHOR = 16
+
+
+@njit(cache=True, error_model="numpy")
+def _angle_table(theta, substeps, ct, st):
+    """``ct[k], st[k] = cos, sin((k s) θ)`` for ``k < _ANCHOR`` (``s`` the sub-steps)."""
+    for k in range(ct.shape[0]):
+        a = (k * substeps) * theta
+        ct[k] = np.cos(a)
+        st[k] = np.sin(a)
+
+
+@njit(cache=True, error_model="numpy")
+def _anchor_cs(j, theta, substeps):
+    """``cos, sin((_ANCHOR j s) θ)``: the anchor of rows ``_ANCHOR j … _ANCHOR j + _ANCHOR − 1``."""
+    a = ((_ANCHOR * j) * substeps) * theta
+    return np.cos(a), np.sin(a)
+
+
+@njit(cache=True, error_model="numpy")
+def _rotate3_cs(x, c, s, out):
+    """:func:`_rotate3_into` with ``cos``, ``sin`` of the angle given."""
+    for n in range(3):
+        out[3 * n] = c * x[3 * n] - s * x[3 * n + 1]
+        out[3 * n + 1] = s * x[3 * n] + c * x[3 * n + 1]
+        out[3 * n + 2] = x[3 * n + 2]
+
+
+@njit(cache=True, error_model="numpy")
+def _angle_cs(cb, sb, k, ct, st):
+    """``cos, sin`` of the angle ``(m s) θ``, ``m = _ANCHOR j + k``, from the anchor's ``(cb, sb)`` and the table
+    (the addition theorem: a few ulps, not accumulated, ``c² + s² − 1 = O(ε)`` at every row); ``k = 0``: the
+    anchor itself (``cos``/``sin`` of the angle)."""
+    if k == 0:
+        return cb, sb
+    return cb * ct[k] - sb * st[k], sb * ct[k] + cb * st[k]
+
+
 @njit(cache=True, error_model="numpy")
 def _rows3(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
     """:func:`rows_single` for ``N = 3`` and ``k ≤ 2`` maps (the exact flow's two, the matched map's one): the N = 3
     kernel's step (:func:`jetgaudin.backlund.kernels._n3._step3`, inlined) on the state as a tuple, with each map's
     per-run constants (``_constants3``) and scale (``_scale3``: a power of two from the state's size, which the step's
     bits do not depend on) computed once per call instead of once per step (``orbit3`` with one step did both at
-    every step).  The same arithmetic as :func:`~jetgaudin.backlund.kernels._n3.orbit3` step by step: the same bits."""
+    every step).  The same arithmetic as :func:`~jetgaudin.backlund.kernels._n3.orbit3` step by step: the same bits
+    of the unrotated orbit ``Z_n``.  Row ``m`` is ``Z_m`` rotated through ``(m s) θ`` with ``cos``/``sin`` by
+    :func:`_angle_cs` (the anchor ``(16 j s) θ``, ``j = ⌊m/16⌋``, and a table of ``(k s) θ``, ``k < 16``: two
+    trigonometric calls per 16 rows instead of two per row, ~5 µs of 417 rows); the final state as its row."""
     k = eta.shape[0]
     c0 = _constants3(eta[0])
     c1 = _constants3(eta[k - 1])
@@ -69,6 +113,12 @@ def _rows3(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info
     info[1] = 0
     left = save_every
     r = 0
+    ctab = np.empty(_ANCHOR)
+    stab = np.empty(_ANCHOR)
+    _angle_table(theta, substeps, ctab, stab)
+    jb = -1  # the anchor (cb, sb) held
+    cb = 1.0
+    sb = 0.0
     for n in range(steps):
         for p in range(substeps):
             newton = n > 0 or p > 0
@@ -88,9 +138,18 @@ def _rows3(x0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info
         left -= 1
         if left == 0:
             left = save_every
-            _rotate3_into(x, ((n + 1) * substeps) * theta, rows[r])
+            j = (n + 1) // _ANCHOR
+            if j != jb:
+                cb, sb = _anchor_cs(j, theta, substeps)
+                jb = j
+            cr, sr = _angle_cs(cb, sb, (n + 1) - _ANCHOR * j, ctab, stab)
+            _rotate3_cs(x, cr, sr, rows[r])
             r += 1
-    _rotate3_into(x, (steps * substeps) * theta, final)
+    j = steps // _ANCHOR
+    if j != jb:
+        cb, sb = _anchor_cs(j, theta, substeps)
+    cr, sr = _angle_cs(cb, sb, steps - _ANCHOR * j, ctab, stab)
+    _rotate3_cs(x, cr, sr, final)
 
 
 @njit(cache=True, error_model="numpy")
@@ -153,3 +212,26 @@ def rows_batch(X0, b, eta, nu, theta, steps, save_every, substeps, rows, final, 
     ``rows`` (S, B, 3N), ``info`` (B, 2)): every orbit the bits of its single run."""
     for i in prange(X0.shape[0]):
         rows_single(X0[i], b, eta[i], nu[i], theta[i], steps, save_every, substeps, rows[:, i], final[i], info[i])
+
+
+@njit(cache=True, error_model="numpy")
+def rows_serial(X0, b, eta, nu, theta, steps, save_every, substeps, rows, final, info):
+    """:func:`rows_batch` on this thread (one orbit, or a few: no thread start-up, and the per-orbit views taken
+    here rather than in Python, where each costs a dispatch's type check): every orbit the bits of its single run."""
+    for i in range(X0.shape[0]):
+        rows_single(X0[i], b, eta[i], nu[i], theta[i], steps, save_every, substeps, rows[:, i], final[i], info[i])
+
+
+@njit(cache=True, error_model="numpy")
+def solve_rows(X0, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, steps, save_every, substeps,
+               eta, nu, out, rows, final, info):
+    """The parameter solve (:func:`jetgaudin._exact_kernels.solve_states`) and, where every orbit's solve is
+    accepted (``out[i, 0] == 1``), the run (:func:`rows_serial` with ``θ = out[:, 3]``) in one call from Python
+    (the every-row call of one orbit: no Python between them); returns whether the run was made.  The same kernels
+    as the two calls made one after the other: the same bits."""
+    solve_states(X0, b, weights, dt, k, rho_factor, scales, rules, sizes, stages, tols, eta, nu, out)
+    for i in range(X0.shape[0]):
+        if out[i, 0] != 1.0:
+            return False
+    rows_serial(X0, b, eta, nu, out[:, 3].copy(), steps, save_every, substeps, rows, final, info)
+    return True

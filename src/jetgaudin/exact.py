@@ -138,37 +138,53 @@ def _field_strength(H: IntegralHamiltonian) -> float:
     return float(bvec[2])
 
 
+@cache
+def _solve_constants() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The solve's constants packed for :func:`jetgaudin._exact_kernels.solve_states`: the nodes and weights of the
+    ``_NODES``-, ``_NODES // 2``- and ``_COARSE_NODES``-point rules one after the other, their sizes, the
+    continuation stages and the tolerances."""
+    sizes = np.array([_NODES, _NODES // 2, _COARSE_NODES], dtype=np.int64)
+    rules = np.concatenate([a for n in sizes for a in _gauss_legendre(int(n))])
+    tols = np.array([_STEP_TOL, _FOLD, _NEWTON_ITERATIONS, _RES_TOL, _QUAD_TOL, _BRANCH_TOL])
+    return rules, sizes, _STAGES, tols
+
+
+def _weights_of(H: IntegralHamiltonian) -> np.ndarray:
+    """``H.weights`` as a contiguous float array (itself when it is one: the kernels only read it)."""
+    w = H.weights
+    if type(w) is np.ndarray and w.dtype == np.float64 and w.flags.c_contiguous:
+        return w
+    return np.ascontiguousarray(w, dtype=float)
+
+
 def _solve_flat(H: IntegralHamiltonian, dt: float, X: np.ndarray, rho_factor: float, k: int | None = None):
     """The parameters for a flat batch ``X`` (B, 3N): ``(eta, theta, residual, quad_error, ok, nu)`` (``nu``: the
     maps' ``ν(η_j)`` on the checked branch, their first ``ν1``); ``k`` maps
     (default ``N − 1``) matching the weights of ``H_2..H_{k+1}`` (fewer than ``N − 1``: not the exact flow).  One
-    compiled call (:func:`jetgaudin._exact_kernels.solve_state`): per orbit the integrals ``κ``, the branch points'
+    compiled call (:func:`jetgaudin._exact_kernels.solve_states`): per orbit the integrals ``κ``, the branch points'
     largest modulus ``R`` (``≥ 1e-6``: ``X = 0`` has every branch point at 0), ``ρ_j``, Newton's method and the
     acceptance, including the check that the continued ``ν`` at each ``η_j`` is the branch rule's (the maps' own
     ``ν``: no branch point near a segment)."""
-    from ._exact_kernels import solve_state, solve_states_batch
+    from ._exact_kernels import solve_states, solve_states_batch
 
     k = H.N - 1 if k is None else k
     X = np.ascontiguousarray(X, dtype=float)
     eta = np.empty((X.shape[0], k), dtype=complex)
     nu = np.empty((X.shape[0], k), dtype=complex)
     out = np.empty((X.shape[0], 4))
-    args = (_field_strength(H), np.asarray(H.weights, dtype=float), float(dt), k, float(rho_factor), _node_scales(k),
-            *_gauss_legendre(_NODES), *_gauss_legendre(_NODES // 2), *_gauss_legendre(_COARSE_NODES), _STAGES,
-            _STEP_TOL, _FOLD, _NEWTON_ITERATIONS, _RES_TOL, _QUAD_TOL, _BRANCH_TOL)
-    if len(X) >= _PARALLEL_FROM:
-        solve_states_batch(X, *args, eta, nu, out)
-    else:  # orbit by orbit on this thread (no thread start-up; the same bits per orbit)
-        for i in range(len(X)):
-            solve_state(X[i], *args, eta[i], nu[i], out[i])
+    solve = solve_states_batch if len(X) >= _PARALLEL_FROM else solve_states  # small: this thread, no start-up
+    solve(X, _field_strength(H), _weights_of(H), float(dt), k, float(rho_factor), _node_scales(k), *_solve_constants(),
+          eta, nu, out)
     return eta, out[:, 3], out[:, 1], out[:, 2], out[:, 0] == 1.0, nu
 
 
 def _largest_dt(H: IntegralHamiltonian, dt: float, x: np.ndarray, rho_factor: float, rel: float = 1e-3,
                 k: int | None = None) -> float:
-    """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x`` (3N,), by bisection to ``rel``."""
+    """The largest ``|dt'| ≤ |dt|`` (sign of ``dt``) solvable on the orbit ``x`` (3N,), by bisection to ``rel``;
+    0 where none above ``1e-12 |dt|`` is (at most ~40 halvings: without the floor an orbit where nothing is
+    feasible halved ``hi`` to underflow, ~1000 failing solves)."""
     lo, hi = 0.0, abs(dt)
-    while hi - lo > rel * hi:
+    while hi - lo > rel * hi and hi > 1e-12 * abs(dt):
         mid = 0.5 * (lo + hi)
         if _solve_flat(H, math.copysign(mid, dt), x[None], rho_factor, k)[4][0]:
             lo = mid
@@ -324,6 +340,13 @@ class ExactFlow(FixedStep, Map):
         if self.H.c is not None:
             raise InvalidParameterError("ExactFlow supports the reduction (lax2) only (c = None)")
         _field_strength(self.H)
+        k = self.H.N - 1 if self._maps is None else self._maps
+        if not np.any(np.asarray(self.H.weights, dtype=float)[1:k + 1]):
+            raise InvalidParameterError(
+                f"{type(self).__name__} matches the weights of H_2..H_{k + 1} with Bäcklund maps, and H has none "
+                "(those weights are 0): its flow is the rotation about the field, which no such map gives. Use "
+                "jetgaudin.exact.rotate_about_field(X, 2 * b * w_1 * t) (the exact flow of w_1 H_1) or "
+                "method='dop853'")
         object.__setattr__(self, "dt", nonzero_step(self.dt))
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
         self._init_backend()
@@ -413,21 +436,45 @@ class ExactFlow(FixedStep, Map):
 
     def _run_fused(self, Z: np.ndarray, eta: np.ndarray, theta: np.ndarray, nu: np.ndarray, steps: int,
                    save_every: int, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        from ._exact_loop import rows_batch, rows_single
-        from .backlund._compiled import kernels
+        from ._exact_loop import rows_batch, rows_serial
 
         final = np.empty_like(Z)
         info = np.zeros((Z.shape[0], 2), dtype=np.int64)
-        args = (float(self.b), np.ascontiguousarray(eta), np.ascontiguousarray(nu))
-        if Z.shape[0] == 1:
-            rows_single(Z[0], args[0], args[1][0], args[2][0], float(theta[0]), steps, save_every, self.substeps,
-                        rows[:, 0], final[0], info[0])
-        else:
-            rows_batch(Z, *args, np.ascontiguousarray(theta, dtype=float), steps, save_every, self.substeps, rows,
-                       final, info)
-        if info[:, 0].any():
+        run = rows_serial if Z.shape[0] == 1 else rows_batch  # one orbit: this thread, no thread start-up
+        run(Z, _field_strength(self.H), np.ascontiguousarray(eta), np.ascontiguousarray(nu),
+            np.ascontiguousarray(theta, dtype=float), steps, save_every, self.substeps, rows, final, info)
+        if info[0, 0] or (Z.shape[0] > 1 and info[:, 0].any()):
+            from .backlund._compiled import kernels
+
             i = int(np.flatnonzero(info[:, 0])[0])
             raise kernels().status_error(info[i, 0], info[i, 1], i if Z.shape[0] > 1 else None)
+        return rows, final
+
+    def _solve_and_run(self, flat: np.ndarray, steps: int, save_every: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """One orbit's solve and every-row run in one compiled call (:func:`jetgaudin._exact_loop.solve_rows`; the
+        same kernels, so the same bits, as :func:`_accepted` then :meth:`_run_fused`): ``(rows, final)``, or
+        ``None`` where the route is not compiled or the solve is not accepted (the caller then takes the general
+        path, which raises the error naming ``dt_max``)."""
+        if self.resolved_backend(flat, steps) is not Backend.COMPILED:
+            return None
+        from ._exact_loop import solve_rows
+
+        k = self.H.N - 1 if self._maps is None else self._maps
+        Z = np.ascontiguousarray(flat, dtype=float)
+        eta = np.empty((1, k), dtype=complex)
+        nu = np.empty((1, k), dtype=complex)
+        out = np.empty((1, 4))
+        rows = np.empty((steps // save_every,) + Z.shape)
+        final = np.empty_like(Z)
+        info = np.zeros((1, 2), dtype=np.int64)
+        if not solve_rows(Z, _field_strength(self.H), _weights_of(self.H), float(self.dt / self.substeps), k,
+                          float(self.rho_factor), _node_scales(k), *_solve_constants(), steps, save_every,
+                          self.substeps, eta, nu, out, rows, final, info):
+            return None
+        if info[0, 0]:
+            from .backlund._compiled import kernels
+
+            raise kernels().status_error(info[0, 0], info[0, 1], None)
         return rows, final
 
     def step(self, X: np.ndarray, carry: Any = None) -> tuple[np.ndarray, Any, np.ndarray]:
@@ -447,6 +494,11 @@ class ExactFlow(FixedStep, Map):
         if steps == 0 or flat.shape[0] == 0:
             rows = np.empty((steps // save_every,) + X.shape)
             return Advance(rows=rows, X=X.copy(), carry=zeros, imag_max=zeros.real)
+        if flat.shape[0] == 1 and save_every * self.substeps <= _FUSED_ROWS:
+            fused = self._solve_and_run(flat, steps, save_every)
+            if fused is not None:
+                return Advance(rows=fused[0].reshape((-1,) + X.shape), X=fused[1].reshape(X.shape), carry=zeros,
+                               imag_max=zeros.real)
         eta, theta, _, _, nu = _accepted(self.H, self.dt / self.substeps, flat, self.rho_factor, self._maps)
         rows, final = self._run(flat, eta, theta, nu, steps, save_every)
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros,

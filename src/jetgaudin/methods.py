@@ -158,8 +158,22 @@ ROUTES: dict[tuple[str, str], Route] = {
 }
 
 
+#: the types already found to be :class:`SolveHamiltonian` (the runtime protocol check walks its members: ~11 µs a
+#: call, twice per ``jg.solve``; the members are the classes' own methods, properties and class variables)
+_HAMILTONIAN_TYPES: set[type] = set()
+
+
+def _is_hamiltonian(H) -> bool:
+    if type(H) in _HAMILTONIAN_TYPES:
+        return True
+    if isinstance(H, SolveHamiltonian):
+        _HAMILTONIAN_TYPES.add(type(H))
+        return True
+    return False
+
+
 def _route(H, method: str) -> Route:
-    if not isinstance(H, SolveHamiltonian):
+    if not _is_hamiltonian(H):
         raise InvalidParameterError("H must be a Hamiltonian of a model: an IntegralHamiltonian (e.g. "
                                     "jg.physical_hamiltonian(N, b)) or a chain's model.hamiltonian(weights)")
     route = ROUTES.get((H.route_kind, method))

@@ -74,12 +74,12 @@ def time_grid(t_span, dt) -> tuple[float, float, int]:
 def _orbit(m, X0: np.ndarray, n: int, every: int) -> tuple[np.ndarray, np.ndarray]:
     """``(steps, states)``: the states after ``0, every, 2 every, …`` steps and after ``n``."""
     adv = m.advance(X0, None, n, every)
-    idx = list(range(0, n + 1, every))
+    idx = np.arange(0, n + 1, every)
     rows = [X0[None], adv.rows]
     if n % every:
-        idx.append(n)
+        idx = np.append(idx, n)
         rows.append(adv.X[None])
-    return np.array(idx), np.concatenate(rows, axis=0)
+    return idx, np.concatenate(rows, axis=0)
 
 
 def _exact_dense(H: Any, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
@@ -146,8 +146,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     check_method(H, method.value)  # the route table (jetgaudin.methods): a typed refusal where no route exists
     X0 = np.asarray(H.check_state(X0), dtype=float)
     every = check_count(save_every, "save_every", 1)
-    if dt is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
-        n_out = time_grid(t_span, dt)[2] // every + 2
+    grid = None if dt is None else time_grid(t_span, dt)
+    if grid is not None:  # the output's size, refused past the cap before anything is allocated (maps.MAX_OUTPUT_BYTES)
+        n_out = grid[2] // every + 2
         check_output_size(n_out, 8 * (X0.size + 1 + 2 * (X0.shape[-1] // 3) * max(1, X0.size // X0.shape[-1])),
                           "solve")
     if method in (SolveMethod.DOP853, SolveMethod.HEYOKA):
@@ -163,9 +164,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         mth = Method.DOP853 if method is SolveMethod.DOP853 else Method.HEYOKA
         tr = integrate(H, X0, t1 - t0, t_eval=t_eval, method=mth, rtol=rtol, atol=atol)
         return Trajectory(t0 + tr.t, tr.X, tr.integrals, method.value, {"rtol": rtol, "atol": atol})
-    if dt is None:
+    if grid is None:
         raise InvalidParameterError(f"method={method.value!r} is a fixed-step method: give dt")
-    t0, h, n = time_grid(t_span, dt)
+    t0, h, n = grid
     auto = substeps == "auto"
     s = 1 if auto else check_count(substeps, "substeps", 1)
     info: dict = {"dt": h, "steps": n}
@@ -182,9 +183,9 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
         info["substeps"] = s
     # the top's rows through one compiled pass (exact.record_integrals, the same bits as jg.integrals; issue 33)
     recorded = record_integrals(H, Xs) if H.route_kind == "top" else H.record_integrals(Xs)
-    tr = Trajectory(t0 + idx * h, Xs, np.asarray(recorded, dtype=float), method.value, info)
-    if method is SolveMethod.EXACT:
-        tr = replace(tr, dense=_exact_dense(H, s, tr.t, Xs))
+    t = t0 + idx * h
+    tr = Trajectory(t, Xs, np.asarray(recorded, dtype=float), method.value, info,
+                    dense=_exact_dense(H, s, t, Xs) if method is SolveMethod.EXACT else None)
     if t_eval is not None:  # the exact flow's dense output at the requested times
         if tr.dense is None:
             raise InvalidParameterError(f"t_eval needs dense output: method='exact', 'dop853' or 'heyoka', not "

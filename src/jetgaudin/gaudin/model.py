@@ -549,8 +549,32 @@ class ChainHamiltonian:
         return self.model.vector_field(self.gradient(X), X)
 
     def record_integrals(self, X) -> np.ndarray:
-        """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``)."""
-        return self.model.integrals(X)
+        """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``): for real
+        finite float rows of the rational and trigonometric families one compiled pass over the rows
+        (:mod:`jetgaudin.gaudin._record`, the model's quadratic forms; equal to
+        :meth:`GaudinModel.integrals` to round-off), else :meth:`GaudinModel.integrals` (which also refuses an
+        overflow)."""
+        m = self.model
+        X = np.asarray(X)
+        if (X.dtype == np.float64 and X.ndim >= 1 and X.size and X.shape[-1] == 3 * m.M
+                and getattr(m.family, "name", None) in ("rational", "trigonometric") and np.ndim(m.b) == 0
+                and np.isfinite(X).all()):
+            from ._record import chain_integrals, chain_integrals_gram
+
+            q, lin = m._forms
+            flat = np.ascontiguousarray(X.reshape(-1, X.shape[-1]))
+            lin = np.ascontiguousarray(lin, dtype=float)
+            if q.ndim == 3:  # the rational forms: one q for the three components (the Gram matrix once per row)
+                out = np.empty((flat.shape[0], q.shape[0]))
+                chain_integrals_gram(flat, np.ascontiguousarray(q, dtype=float), lin, float(m.b), out)
+            else:
+                forms = np.asarray(m.family.extra_integrals(m.sites)[1], dtype=float).reshape(-1, X.shape[-1])
+                out = np.empty((flat.shape[0], q.shape[1] + forms.shape[0]))
+                chain_integrals(flat, np.ascontiguousarray(q, dtype=float), lin, float(m.b),
+                                np.ascontiguousarray(forms), out)
+            if np.isfinite(out).all():
+                return out.reshape(X.shape[:-1] + out.shape[-1:])
+        return m.integrals(X)
 
     def as_top(self):
         """The top's :class:`jetgaudin.IntegralHamiltonian` ``Σ w_m κ_m`` (the same weights: one site at 0 has
