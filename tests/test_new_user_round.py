@@ -102,3 +102,12 @@ def test_orbit_resume_refuses_another_algebra(capsys, tmp_path, extra):
 def test_ensemble_resume_refuses_another_model(capsys, tmp_path, extra):
     code, _, err = run_cli(capsys, "ensemble", "--resume", tmp_path, *extra)
     assert one_line_error(code, err, extra[0], "drop"), err
+
+
+def test_su3_weight_count_error_names_su3_integrals():
+    with pytest.raises(jg.InvalidParameterError) as ei:
+        MODEL.hamiltonian([1.0, 2.0, 3.0])
+    msg = str(ei.value)
+    assert "length 10" in msg and "tr l^k/k" in msg and "and J" not in msg and "2M" not in msg
+    with pytest.raises(jg.InvalidParameterError, match=r"length 4 \(2M = 4 h_\(i,m\):"):  # su(2): unchanged
+        jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1)]).hamiltonian([1.0, 2.0, 3.0])
