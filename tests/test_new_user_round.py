@@ -111,3 +111,49 @@ def test_su3_weight_count_error_names_su3_integrals():
     assert "length 10" in msg and "tr l^k/k" in msg and "and J" not in msg and "2M" not in msg
     with pytest.raises(jg.InvalidParameterError, match=r"length 4 \(2M = 4 h_\(i,m\):"):  # su(2): unchanged
         jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1)]).hamiltonian([1.0, 2.0, 3.0])
+
+
+@pytest.mark.parametrize("method", ["exact", "midpoint"])
+def test_solve_refuses_an_unknown_backend_on_a_chain(method):
+    # ChainExactFlow has no backend choice: solve(..., backend="cuda") used to run silently
+    H = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1)]).hamiltonian([1.0, 0.0, 1.0, 0.0])
+    with pytest.raises(jg.InvalidParameterError, match="backend"):
+        jg.solve(H, np.array([1.0, 0, 0, 0, 1.0, 0]), (0, 0.2), dt=0.1, method=method, backend="cuda")
+
+
+def test_su3_chain_figure_names_its_projection_axes():
+    # the left panels of an su(3) chain's y_0 figure project on the λ₁, λ₂ components: not labelled e₁, e₂ (su(2))
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from jetgaudin.plotting._chains import figure_chain_y0
+
+    X = MODEL.two_point_backlund(0.4 + 0.1j).iterate(X0, 3)
+    fig = figure_chain_y0(MODEL, X)
+    left = fig.axes[0]
+    assert "λ₁" in left.get_xlabel() and "λ₂" in left.get_ylabel()
+    plt.close(fig)
+    su2 = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1)])
+    fig = figure_chain_y0(su2, su2.two_point_backlund(0.4 + 0.1j).iterate(np.array([1.0, 0, 0, 0, 1.0, 0]), 3))
+    assert fig.axes[0].get_xlabel() == "e₁"
+    plt.close(fig)
+
+
+def test_plot_titles_an_exact_step_run_as_such(capsys, tmp_path):
+    # `jetgaudin plot` of an `orbit --dt` run (su(3) chain or top) titled it "Real two-point Bäcklund map ...
+    # η = (none)": an exact-step run has a time step and no η
+    from jetgaudin.plotting._files import run_title
+    from jetgaudin.plotting._runs import open_run
+
+    code, _, err = run_cli(capsys, "orbit", *SU3, "--dt", "0.1", "--hamiltonian", WEIGHTS, "--steps", 2,
+                           "--backend", "numpy", "--no-plots", "--no-progress", "--out", tmp_path / "sx")
+    assert code == 0, err
+    code, _, err = run_cli(capsys, "orbit", "--dt", "0.05", "--steps", 2, "--no-plots", "--no-progress",
+                           "--out", tmp_path / "tx")
+    assert code == 0, err
+    for d, dt in (("sx", "0.1"), ("tx", "0.05")):
+        title = run_title(open_run(tmp_path / d))
+        assert "Exact time steps" in title and f"dt = {dt}" in title, title
+        assert "Bäcklund" not in title and "η" not in title, title
