@@ -90,8 +90,8 @@ def flow(
     algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
     kernel: Annotated[
         Kernel, typer.Option("--backend", "--kernel",
-                             help="the route of --method exact on a top: 'compiled' (Numba kernels), 'numpy' "
-                             "(reference) or 'auto' (compiled); the other methods have one route (NumPy/SciPy, "
+                             help="the route of --method exact on a top or an su(3) chain: 'compiled' (Numba kernels), "
+                             "'numpy' (reference) or 'auto' (compiled); the other methods have one route (NumPy/SciPy, "
                              "heyoka) and refuse 'compiled'; --kernel is an alias")
     ] = Kernel.auto,
 ) -> None:
