@@ -199,4 +199,7 @@ def method_map(H, method: str, dt: float, substeps: int = 1, backend: str = "aut
         route.check(H)
     if route.build is None:
         raise InvalidParameterError(f"method={method!r} is adaptive (jetgaudin.integrate), not a map of a time step")
+    from .maps import Backend
+
+    Backend.parse(backend)  # an unknown name is refused on every route (a route without a choice used to ignore it)
     return route.build(H, dt, substeps, backend)

@@ -14,7 +14,8 @@ import numpy as np
 from ._common import MAX_N, CliInputError, blame, complex_text, one_line, parse_b, to_float
 
 SITES_HELP = ('chain sites "λ1:N1,λ2:N2,..." (distinct real positions, integer orders N_i >= 1), e.g. '
-              '"-1:2,0.5:3,2:1"; --init then takes 3M numbers, M = N1 + N2 + ... [default: one site 0:N, '
+              '"-1:2,0.5:3,2:1"; --init then takes 3M numbers (--algebra suN: (N²−1)M), M = N1 + N2 + ... '
+              '[default: one site 0:N, '
               "N = len(--init)/3]")
 
 

@@ -90,8 +90,8 @@ def flow(
     algebra: Annotated[str | None, typer.Option("--algebra", help=_chains.ALGEBRA_HELP)] = None,
     kernel: Annotated[
         Kernel, typer.Option("--backend", "--kernel",
-                             help="the route of --method exact on a top: 'compiled' (Numba kernels), 'numpy' "
-                             "(reference) or 'auto' (compiled); the other methods have one route (NumPy/SciPy, "
+                             help="the route of --method exact on a top or an su(3) chain: 'compiled' (Numba kernels), "
+                             "'numpy' (reference) or 'auto' (compiled); the other methods have one route (NumPy/SciPy, "
                              "heyoka) and refuse 'compiled'; --kernel is an alias")
     ] = Kernel.auto,
 ) -> None:
@@ -268,7 +268,12 @@ def _flow_map(H, dt: float, method: Method, rtol: float, substeps: int, X0, mode
         from ..methods import method_map
 
         with cm.blame("--backend"):
-            return method_map(H, "midpoint", dt, backend=kernel)
+            mp = method_map(H, "midpoint", dt, backend=kernel)
+        try:  # one step on X0 first, as exact_map does: a dt too large is one line (exit 2), not a failed run
+            mp.step(np.asarray(X0, dtype=float))
+        except jg.IntegrationError as exc:
+            raise cm.CliInputError(f"--dt: {exc}") from None  # names dt and says: give a smaller dt
+        return mp
     if kernel == "compiled":
         raise cm.CliInputError(f"--backend compiled: --method {method.value} has no compiled route (an adaptive "
                                "integrator); give --backend auto or numpy, or --method exact")
@@ -285,7 +290,7 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
     over ``dt``, solved once on ``X0`` so that an infeasible ``dt`` is one line before the run."""
     if isinstance(model, jg.SunGaudinModel) and model.n != 3:  # issue 32: the exact step is built for su(3)
         raise cm.CliInputError(f"--dt: an exact time step of an {model.algebra.name} chain is built for su(3) only "
-                               "(docs/sun.md §5); use --method DOP853, or `orbit --eta`")
+                               "(docs/sun.md §5); use `jetgaudin flow --method DOP853`, or `orbit --eta`")
     if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
         raise cm.CliInputError(f"--substeps: must be an integer >= 1, got {substeps!r}")
     fm: jg.ExactFlow | jg.ChainExactFlow | Any

@@ -233,6 +233,8 @@ def orbit(
                 raise CliInputError("--init-from starts a new run; it cannot be combined with --resume")
             if sites is not None or family is not None or gamma is not None or modulus is not None:
                 raise CliInputError("--sites: a resumed run keeps its recorded sites; drop --sites with --resume")
+            if algebra is not None:
+                raise CliInputError("--algebra: a resumed run keeps its recorded algebra; drop --algebra with --resume")
             out_dir = resume_dir(resume)
             if not (out_dir / runlayer.RUN_JSON).exists():
                 raise CliInputError(f"--resume: {out_dir} holds no run.json; not a jetgaudin run directory")
@@ -350,8 +352,9 @@ def _exact(timed: tuple[float, str, int], X0: np.ndarray, b: float, model, kerne
 
     dt, text, substeps = timed
     if model is not None and text == "physical":
-        raise CliInputError("--hamiltonian: a chain (--sites) has no physical default; give its 2M weights "
-                            "'w_1,...' (the h_(i,m) in the order of `jetgaudin info --sites`)")
+        n = int(model.n_integrals)  # su(2): 2M (+ the family's J or c0); su(3): 5M
+        raise CliInputError(f"--hamiltonian: a chain (--sites) has no physical default; give its {n} weights "
+                            f"'w_1,...,w_{n}' (the integrals in the order of `jetgaudin info --sites`)")
     _, weights = parse_hamiltonian(text, X0, b, model)
     if weights is None:
         raise CliInputError("--hamiltonian: 'interpolating' is G_η of --eta, whose time-1 flow is the map itself: "

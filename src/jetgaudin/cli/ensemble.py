@@ -184,6 +184,12 @@ def ensemble_command(
         common: dict[str, Any] = dict(max_drift=runlayer.DEFAULT_MAX_DRIFT if max_drift is None else max_drift,
                       checkpoint_seconds=checkpoint_seconds, scheduler=scheduler, chunk_size=chunk,
                       backend=None if backend is None else backend.value)
+        if resume is not None:  # as `orbit --resume`: the recorded model, never silently another one
+            given = [o for o, v in (("--sites", sites), ("--family", family), ("--gamma", gamma),
+                                    ("--modulus", modulus), ("--algebra", algebra), ("--b", b)) if v is not None]
+            if given:
+                raise CliInputError(f"{given[0]}: a resumed ensemble keeps its recorded model (sites, family, algebra, "
+                                    f"b); drop {', '.join(given)} with --resume")
         source = None  # a chain continues as that chain: its sites and family
         if resume is None and sites is None and init_from_dir is not None and str(init_from_dir).strip():
             source = runlayer.read_run(init_from_dir)

@@ -511,9 +511,10 @@ class ChainHamiltonian:
             raise InvalidParameterError(f"weights must be real numbers, got {self.weights!r}") from None
         n = self.model.n_integrals
         if w.ndim == 0 or w.shape[-1] != n:
+            what = (f"2M = {2 * self.model.M} h_(i,m){' and J' if n > 2 * self.model.M else ''}"
+                    if getattr(self.model, "dim", 3) == 3 else f"the h^(k)_(j,m) of tr l^k/k, k = 2..{self.model.n}")
             raise InvalidParameterError(
-                f"weights must have a trailing axis of length {n} (2M = {2 * self.model.M} h_(i,m)"
-                f"{' and J' if n > 2 * self.model.M else ''}: one per integral "
+                f"weights must have a trailing axis of length {n} ({what}: one per integral "
                 f"{', '.join(self.model.integral_labels()[:3])}, ...), got shape {w.shape}"
             )
         if not np.all(np.isfinite(w)):

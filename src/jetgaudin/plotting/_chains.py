@@ -47,9 +47,9 @@ MAX_SITES = 6
 
 def figure_chain_y0(model, X, *, title: str = "", n=None):
     """Each site's ``y_0`` along the orbit, one row of panels per site (at most :data:`MAX_SITES`): left, its
-    projection on the e₁–e₂ plane coloured by the step (colour bar), the start ringed; right, its three
-    components ``y_0^1, y_0^2, y_0^3`` against the step.  (A 3D cloud of all sites hides both the order of the
-    points and which site moves how.)
+    projection on the e₁–e₂ plane (su(n): the components along λ₁, λ₂) coloured by the step (colour bar), the start
+    ringed; right, its three (su(n): n² − 1) components ``y_0^1, y_0^2, …`` against the step.  (A 3D cloud of all
+    sites hides both the order of the points and which site moves how.)
 
     Parameters
     ----------
@@ -77,8 +77,9 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
         sc = ax.scatter(P[:, 0], P[:, 1], c=n, cmap="viridis", s=max(0.5, min(8.0, 1500.0 / len(P))), linewidths=0)
         ax.scatter(*P[0, :2], s=60, facecolors="none", edgecolors="red", linewidths=1.2, label="start")
         ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel(AXIS_LABELS[0], fontsize=8)
-        ax.set_ylabel(AXIS_LABELS[1], fontsize=8)
+        su2 = P.shape[-1] == 3  # su(n), n ≥ 3: the components along the Gell-Mann λ₁, λ₂, not e₁, e₂
+        ax.set_xlabel(AXIS_LABELS[0] if su2 else "y_0^1 (along λ₁)", fontsize=8)
+        ax.set_ylabel(AXIS_LABELS[1] if su2 else "y_0^2 (along λ₂)", fontsize=8)
         ax.tick_params(labelsize=7)
         ax.set_title(f"y_0 of {_site_name(model, i)}", fontsize=8)
         cb = fig.colorbar(sc, ax=ax, shrink=0.85)

@@ -48,6 +48,9 @@ def run_title(run: RunRows) -> str:
     inp = run.inputs
     x0 = inp.get("init")
     start = f"; start (y₀, y₁, …) = ({', '.join(f'{v:g}' for v in x0)})" if x0 is not None and len(x0) <= 12 else ""
+    if run.kind == "orbit" and run.dt is not None:  # orbit --dt: exact time steps of H, no η
+        what = f"Exact time steps of H (run.json: its weights), dt = {run.dt:g}"
+        return f"{what} (N = {run.N}): b = {run.b:g}, {_steps_text(inp.get('steps'))} steps{start}"
     if run.kind in ("orbit", "ensemble", "map"):
         what = "Real two-point Bäcklund map"
         if run.kind == "ensemble":

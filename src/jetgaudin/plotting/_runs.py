@@ -45,6 +45,8 @@ class RunRows:
     #: the map description of a chain run (``run.json`` ``"map"``, kind ``chain_*``: ``b``, ``sites``, ``family``,
     #: ``gamma``), else ``None``; :meth:`model` builds its :class:`jetgaudin.GaudinModel`
     chain: dict | None = None
+    #: the time step of an exact-flow orbit run (``orbit --dt``: ``run.json`` ``"map"`` ``"dt"``), else ``None``
+    dt: float | None = None
 
     def model(self):
         """The :class:`jetgaudin.GaudinModel` of a chain run (``None`` for a run of the top)."""
@@ -148,7 +150,8 @@ def open_run(run_dir, *, orbit: int | None = None, map_of_flow: bool = False) ->
         except (TypeError, ValueError):
             raise RecordingError(f"{run_dir}/run.json names no field b and parameter eta; cannot draw it") from None
         return RunRows(kind="orbit", path=run_dir / rec.ORBIT_H5, dataset="X", index_name="n", rows=safe,
-                       N=int(inp["N"]), b=b_run, eta=eta, orbit=None, **common)
+                       N=int(inp["N"]), b=b_run, eta=eta, orbit=None,
+                       dt=float(described["dt"]) if "dt" in described else None, **common)
     if program == "jetgaudin ensemble":
         from ..ensemble_recording import ENSEMBLE_H5
 

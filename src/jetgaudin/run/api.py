@@ -30,7 +30,7 @@ from .files import (
 )
 from .health import Health
 from .replay import replay
-from .spec import HealthLimits, Layout, RunSpec, RunStatus, block_size
+from .spec import HealthLimits, Layout, RunSpec, RunStatus, block_size, model_of
 from .store import EnsembleStore, OrbitStore, Store, now, read_checkpoint_npz
 
 __all__ = ["RunResult", "start", "resume"]
@@ -204,6 +204,8 @@ def _version() -> str:
 def _open_store(spec: RunSpec, out_dir: Path, run: dict, fresh: bool, check_only: bool = False) -> Store:
     if spec.layout is Layout.ORBIT:
         labels = getattr(spec.map, "state_labels", None)  # a map may name the state's components (the chains)
+        if labels is None and model_of(spec.map) is not None:  # a map of a chain's Hamiltonian (midpoint)
+            labels = model_of(spec.map).labels
         return OrbitStore(out_dir, run, spec.n_state, fresh=fresh, csv=spec.csv, stem=_stem(spec),
                           time_step=_time_step(spec.map),
                           columns=list(labels()) if callable(labels) else None, check_only=check_only)

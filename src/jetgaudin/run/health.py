@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..maps import Map
-from .spec import HealthLimits, block_size, integral_names
+from .spec import HealthLimits, block_size, integral_names, model_of
 
 
 @dataclass
@@ -35,6 +35,8 @@ class Health:
         self.imag = 0.0
         k = self.I0.shape[-1]
         named = getattr(map_, "integral_names", None)  # a map may name its integrals (the chains: h{i},{m})
+        if named is None and model_of(map_) is not None:  # a map of a chain's Hamiltonian (midpoint): the model's
+            named = model_of(map_).integral_labels
         self.names = list(named()) if callable(named) else (
             integral_names(k // 2) if k % 2 == 0 else [f"I_{i + 1}" for i in range(k)])
 

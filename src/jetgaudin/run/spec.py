@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import StrEnum
+from typing import Any
 
 import numpy as np
 
@@ -71,12 +72,20 @@ class Layout(StrEnum):
     ENSEMBLE = "ensemble"
 
 
+def model_of(m: object) -> Any:
+    """The chain model of the map ``m`` (or of the inner map of a wrapper, or of its Hamiltonian ``H``: a map of one
+    Hamiltonian such as :class:`jetgaudin.midpoint.ImplicitMidpoint`), ``None`` for a top."""
+    inner = getattr(m, "inner", None)
+    base = inner if isinstance(inner, Map) else m
+    model = getattr(base, "model", None)
+    return model if model is not None else getattr(getattr(base, "H", None), "model", None)
+
+
 def block_size(m: object) -> int:
     """Components per site and jet order of the states of the map ``m`` (or of the inner map of a wrapper): the
     model's ``dim`` (an su(n) chain: ``n² − 1``), else 3 (the tops and the su(2) chains).  The run layer's one
     source of the state layout: ``n_state // block_size(m)`` blocks ``y_k``."""
-    inner = getattr(m, "inner", None)
-    d = getattr(getattr(inner if isinstance(inner, Map) else m, "model", None), "dim", None)
+    d = getattr(model_of(m), "dim", None)
     return d if isinstance(d, int) and not isinstance(d, bool) and d > 0 else 3
 
 
