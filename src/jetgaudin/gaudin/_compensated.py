@@ -12,7 +12,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc"]
+__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc", "scaled_two_point_K0"]
 
 
 def two_prod(a, b):
@@ -140,3 +140,27 @@ def family_site_series(model, c: np.ndarray, xi: complex) -> list | None:
         det = _series.mul(Dt[..., 0, 0], Dt[..., 1, 1], N) - _series.mul(Dt[..., 0, 1], Dt[..., 1, 0], N)
         out.append((list(Dt), list(At), _series.inv(det, N)))
     return out
+
+
+def scaled_two_point_K0(eta: complex, k1, k2) -> tuple:
+    r"""``(n2 M0, n2)``: ``M0`` of :func:`jetgaudin.backlund._dressing.real_two_point_M0` times ``n2 = |k|²``, with
+    ``k`` first scaled by a power of two (exact) to ``n2`` in ``[1/4, 1)``, computed without a division:
+    ``n2 M0 = −n2 diag(η, η̄) + 2i Im η [[|k_2|², −k_1 k̄_2], [−k̄_1 k_2, −|k_2|²]]`` (the compiled kernel's
+    arithmetic, :func:`jetgaudin.gaudin._kernels._step`).
+
+    Why (``docs/reliability.md``, "Drift like round-off"): the normalised ``M0`` divides by ``n2`` and
+    adds ``−η`` to a rounded quotient; its rounding errors, carried into ``K = n2 (λ + M0)``, are biased (measured:
+    the NumPy rational chain's drift grew like ``n^0.85`` with it), where ``n2 M0`` formed directly rounds
+    ``−η n2`` and ``2i Im η |k_2|²``, products that vary with the step."""
+    n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
+    p2 = np.ldexp(1.0, -((np.frexp(n2)[1] + 1) // 2))
+    k1, k2 = k1 * p2, k2 * p2
+    n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
+    t = 2j * complex(eta).imag
+    ak2 = np.abs(k2) ** 2
+    K0 = np.empty(np.shape(k1) + (2, 2), dtype=complex)
+    K0[..., 0, 0] = -eta * n2 + t * ak2
+    K0[..., 0, 1] = -t * k1 * np.conj(k2)
+    K0[..., 1, 0] = -t * np.conj(k1) * k2
+    K0[..., 1, 1] = -np.conj(eta) * n2 - t * ak2
+    return K0, n2
