@@ -1,8 +1,9 @@
 r"""Compensated arithmetic with two-word constants for the chain maps (issue 33; ``docs/reliability.md``, "Drift like
 round-off"): a constant rounded once puts the same relative error into every step, which the integrals then show as a
 linear drift.  The kernels' constants are therefore kept as two words ``hi + lo`` (:func:`exact_tables`, 40-digit
-:mod:`mpmath` from the families' ``mp_*`` functions) and every sum of products with them is compensated and rounded
-once (:func:`acc` here for the NumPy routes, :func:`jetgaudin.gaudin._kernels._acc` in the compiled kernels).
+:mod:`mpmath` from the families' ``mp_*`` functions).  The NumPy routes compensate every sum of products with them
+and round it once (:func:`acc` here); the compiled kernels round each product with a two-word constant once, low word
+counted, and sum plainly (:func:`jetgaudin.gaudin._kernels._tw`, ``_ctw``: the bias is the constant's, not the sum's).
 Numba-free: the NumPy routes import it without loading the kernels.
 """
 
@@ -12,7 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc"]
+__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc", "scaled_two_point_K0"]
 
 
 def two_prod(a, b):
@@ -140,3 +141,28 @@ def family_site_series(model, c: np.ndarray, xi: complex) -> list | None:
         det = _series.mul(Dt[..., 0, 0], Dt[..., 1, 1], N) - _series.mul(Dt[..., 0, 1], Dt[..., 1, 0], N)
         out.append((list(Dt), list(At), _series.inv(det, N)))
     return out
+
+
+def scaled_two_point_K0(eta: complex, k1, k2) -> tuple:
+    r"""``(n2 M0, n2)``: ``M0`` of :func:`jetgaudin.backlund._dressing.real_two_point_M0` times ``n2 = |k|²``, with
+    ``k`` first scaled by a power of two (exact) to ``n2`` in ``[1/4, 1)``, computed without a division:
+    ``n2 M0 = −n2 diag(η, η̄) + 2i Im η [[|k_2|², −k_1 k̄_2], [−k̄_1 k_2, −|k_2|²]]`` (the compiled kernel's
+    arithmetic, :func:`jetgaudin.gaudin._kernels._step`).
+
+    Why (``docs/reliability.md``, "Drift like round-off"): with the normalised ``M0``, ``Re M0_00 = −Re η``
+    exactly (the added term is imaginary), so ``Re(λ_i + M0_00)`` is the constant ``λ_i − Re η`` rounded once, with
+    the same error at every step (a linear drift: ``n^0.93`` over ``10^3 … 10^5``, and none at a site where
+    ``λ_i − Re η`` is exact); ``n2 M0 + n2 λ_i`` rounds the products ``n2 Re η`` and ``n2 λ_i``, which vary with
+    the step."""
+    n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
+    p2 = np.ldexp(1.0, -((np.frexp(n2)[1] + 1) // 2))
+    k1, k2 = k1 * p2, k2 * p2
+    n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
+    t = 2j * complex(eta).imag
+    ak2 = np.abs(k2) ** 2
+    K0 = np.empty(np.shape(k1) + (2, 2), dtype=complex)
+    K0[..., 0, 0] = -eta * n2 + t * ak2
+    K0[..., 0, 1] = -t * k1 * np.conj(k2)
+    K0[..., 1, 0] = -t * np.conj(k1) * k2
+    K0[..., 1, 1] = -np.conj(eta) * n2 - t * ak2
+    return K0, n2

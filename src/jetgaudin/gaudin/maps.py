@@ -40,7 +40,7 @@ from ..lax import ell_coefficients, state_from_ell
 from ..lax import ell_from_xi as _matrix
 from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, check_gpu, register_map, step_loop
 from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
-from ._compensated import acc, family_lax, family_site_series
+from ._compensated import acc, family_lax, family_site_series, scaled_two_point_K0
 from ._curve import nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
 from .model import GaudinModel
@@ -149,7 +149,7 @@ def dress_sites(model, parts, series):
     return out
 
 
-def monic_series(model, M0, A0, scale=None):
+def monic_series(model, M0, A0, scale=None, *, scaled=False):
     r"""The Taylor series at every site of ``K = s(λ + M0)``, ``adj K = s(λ + A0)`` and ``1/det K`` for
     :func:`dress_sites` (the dressing ``K ℓ adj K / det K`` does not depend on the factor ``s``, ``scale`` ``(B,)``,
     default 1), with ``1/det K`` from the computed ``K`` itself: ``det K(λ_i + z) = d_0 + d_1 z + s² z²``,
@@ -161,13 +161,20 @@ def monic_series(model, M0, A0, scale=None):
     ``det(λ + M0) = (λ − η)(λ − η̄)`` is such a constant (and the rounded ``1/((λ_i − η)(λ_i − η̄))`` used before
     multiplied each site's Casimir by the same ``1 + δ`` at every step), and so are ``d_1 g_0`` and ``s² g_0``.  With
     ``s`` varying along the orbit (the two-point map passes ``|k|²`` of its eigenvector) and the products grouped as
-    above, every rounded quantity varies from step to step: the rounding errors add up as a random walk."""
+    above, every rounded quantity varies from step to step: the rounding errors add up as a random walk.
+
+    ``scaled=True``: ``M0``, ``A0`` are already ``s M0``, ``s A0`` (``K(λ_i) = M0 + (s λ_i)``, the compiled kernel's
+    form, :func:`jetgaudin.gaudin._compensated.scaled_two_point_K0`: no normalised ``M0`` is ever rounded)."""
     s = np.ones(M0.shape[:-2]) if scale is None else np.asarray(scale, dtype=float)
     sI = s[..., None, None] * _ID
     series = []
     for lam_i, N in model.sites:
-        K = s[..., None, None] * (M0 + lam_i * _ID)
-        A = s[..., None, None] * (A0 + lam_i * _ID)
+        if scaled:
+            K = M0 + (s * lam_i)[..., None, None] * _ID
+            A = A0 + (s * lam_i)[..., None, None] * _ID
+        else:
+            K = s[..., None, None] * (M0 + lam_i * _ID)
+            A = s[..., None, None] * (A0 + lam_i * _ID)
         g0 = 1.0 / (K[..., 0, 0] * K[..., 1, 1] - K[..., 0, 1] * K[..., 1, 0])
         d1 = s * (K[..., 0, 0] + K[..., 1, 1])
         g = [g0]
@@ -551,12 +558,10 @@ class ChainTwoPointBacklund(_ChainMap):
                 f"two-point Bäcklund step of the chain: the pole at eta does not cancel (relative residue "
                 f"{np.max(res):.2e}); eta is numerically at a branch point; change eta"
             )
-        if series is None:
-            k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)  # |k|²: a factor varying per step
-            kk = np.abs(k1) ** 2 + np.abs(k2) ** 2
-            m, e = np.frexp(kk)  # |k|² scaled by a power of two to [1/4, 1): its mantissa, K of size 1
-            kk = np.ldexp(m, e - 2 * ((e + 1) // 2))
-            new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, M0, A0, kk))
+        if series is None:  # K = n2 (λ + M0), formed without the normalised M0 (scaled_two_point_K0; issue 33)
+            k1, k2 = eigenvector(L[..., 0, 0], L[..., 0, 1], L[..., 1, 0], nu1)
+            K0, n2 = scaled_two_point_K0(self.eta, k1, k2)
+            new = dress_sites(self.model, ell[..., 1:, :, :], monic_series(self.model, K0, adj(K0), n2, scaled=True))
         else:
             new = dress_sites(self.model, ell[..., 1:, :, :], series)
         Xc = state_from_ell(np.concatenate([ell[..., :1, :, :], new], axis=-3))
