@@ -157,3 +157,15 @@ def test_plot_titles_an_exact_step_run_as_such(capsys, tmp_path):
         title = run_title(open_run(tmp_path / d))
         assert "Exact time steps" in title and f"dt = {dt}" in title, title
         assert "Bäcklund" not in title and "η" not in title, title
+
+
+def test_solve_takes_the_maps_alias_kernel():
+    """``jg.solve(..., kernel=...)`` is the alias of ``backend=`` as on every map (a bare TypeError before): the same
+    trajectory, bit for bit, and two different concrete choices refused with the typed error."""
+    H = jg.physical_hamiltonian(3, 1.0)
+    X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
+    a = jg.solve(H, X0, (0.0, 1.0), dt=0.25, method="bt", backend="numpy")
+    b = jg.solve(H, X0, (0.0, 1.0), dt=0.25, method="bt", kernel="numpy")
+    assert np.array_equal(a.X, b.X)
+    with pytest.raises(jg.InvalidParameterError, match="kernel"):
+        jg.solve(H, X0, (0.0, 1.0), dt=0.25, method="bt", backend="numpy", kernel="compiled")

@@ -34,7 +34,7 @@ from ._errors import InvalidParameterError, StepTooLargeError
 from ._validate import parse_choice, real_number
 from .exact import record_integrals
 from .flows import Method, Trajectory, integrate
-from .maps import check_count, check_output_size
+from .maps import backend_option, check_count, check_output_size
 from .methods import check_method, method_map
 
 __all__ = ["SolveMethod", "solve", "time_grid"]
@@ -111,7 +111,7 @@ def _exact_dense(H: Any, substeps: int, t_grid: np.ndarray, X_grid: np.ndarray):
 
 def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMethod.EXACT,
           rtol: float = 1e-12, atol: float = 1e-12, save_every: int = 1, substeps: int | str = "auto",
-          backend: str = "auto", t_eval=None) -> Trajectory:
+          backend: str = "auto", t_eval=None, kernel: str | None = None) -> Trajectory:
     r"""The flow of ``Ẋ = Π(X) ∇H`` (eq. (LP)) for ``H`` a top's :class:`~jetgaudin.IntegralHamiltonian` or a chain's
     ``model.hamiltonian(weights)`` of any family or algebra (every method for every model where the route table
     :data:`jetgaudin.methods.ROUTES` has a map; elsewhere :class:`jetgaudin.InvalidParameterError` naming why and the
@@ -123,7 +123,8 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     ``dt``: the time step (required by ``"exact"``, ``"bt"``, ``"midpoint"``; for ``"dop853"``/``"heyoka"`` the
     output spacing, default: the end points only).  ``substeps``: for ``"exact"``/``"bt"``, ``"auto"`` (split a step
     the leaf cannot take at once; :class:`jetgaudin.StepTooLargeError` never reaches you) or an integer (an
-    infeasible step then raises).  ``backend``: ``"auto"``/``"compiled"``/``"numpy"`` for the map methods.
+    infeasible step then raises).  ``backend`` (alias ``kernel``, as on the maps): ``"auto"``/``"compiled"``/``"numpy"``
+    for the map methods.
     ``t_eval``: sample times (absolute) instead of the grid -- ``"dop853"``/``"heyoka"`` sample there, ``"exact"``
     steps on the ``dt`` grid and reaches each ``t`` by one exact step from the nearest grid state
     (:meth:`Trajectory.at`, kept on the result for ``"exact"``).  ``H`` may be a physical top
@@ -137,6 +138,8 @@ def solve(H: Any, X0, t_span, *, dt=None, method: SolveMethod | str = SolveMetho
     >>> tr.t.tolist(), bool(tr.drift.max() < 1e-13)
     ([0.0, 0.25, 0.5, 0.75, 1.0], True)
     """
+    chosen = backend_option(backend, kernel)  # the maps' alias rule (two different concrete choices are refused)
+    backend = "auto" if chosen is None else chosen.value
     if getattr(H, "is_physical_top", False):  # jg.heavy_top, jg.kirchhoff_clebsch (issue 34)
         from .physical import solve_physical
 
