@@ -99,18 +99,24 @@ def psi_values(fid: int, fp: np.ndarray, lam: np.ndarray, site_pos: np.ndarray, 
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_many(fid, fp, lam, site_pos, site_n):
-    n2 = 0
+def _psi_scratch(site_pos, site_n):
+    """The scratch of :func:`_psi_point`: the series buffers ``s, c, r, d`` (the largest ``2 N_j``) and the per-site
+    cache ``xcache``."""
     nmax = 1
     for i in range(site_n.shape[0]):
-        n2 += 2 * site_n[i]
         nmax = max(nmax, 2 * site_n[i])
+    return (np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
+            np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
+            np.zeros((site_pos.shape[0], 8)))
+
+
+@njit(cache=True, error_model="numpy")
+def _psi_many(fid, fp, lam, site_pos, site_n):
+    n2 = 0
+    for i in range(site_n.shape[0]):
+        n2 += 2 * site_n[i]
     out = np.empty((lam.shape[0], n2), dtype=np.complex128)
-    s = np.empty(nmax, dtype=np.complex128)
-    c = np.empty(nmax, dtype=np.complex128)
-    r = np.empty(nmax, dtype=np.complex128)
-    d = np.empty(nmax, dtype=np.complex128)
-    xcache = np.zeros((site_pos.shape[0], 8))
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
     for q in range(lam.shape[0]):
         _psi_point(fid, fp, lam[q], site_pos, site_n, out[q], s, c, r, d, xcache)
     return out
@@ -197,15 +203,8 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     nk = kidx.shape[0]
     ne = E.shape[1]
     n2 = hI.shape[0]
-    nmax = 1
-    for i in range(site_n.shape[0]):
-        nmax = max(nmax, 2 * site_n[i])
     psi = np.empty(n2, dtype=np.complex128)
-    s = np.empty(nmax, dtype=np.complex128)
-    c = np.empty(nmax, dtype=np.complex128)
-    r = np.empty(nmax, dtype=np.complex128)
-    d = np.empty(nmax, dtype=np.complex128)
-    xcache = np.zeros((site_pos.shape[0], 8))
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
@@ -289,15 +288,8 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
         if abs(r - np.rint(r)) < 1e-14:
             return False, 0j
     n2 = hI.shape[0]
-    nmax = 1
-    for i in range(site_n.shape[0]):
-        nmax = max(nmax, 2 * site_n[i])
     psi = np.empty(n2, dtype=np.complex128)
-    s = np.empty(nmax, dtype=np.complex128)
-    c = np.empty(nmax, dtype=np.complex128)
-    r = np.empty(nmax, dtype=np.complex128)
-    d = np.empty(nmax, dtype=np.complex128)
-    xcache = np.zeros((site_pos.shape[0], 8))
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
     n = n0
     while n <= n_max:
         ok = True

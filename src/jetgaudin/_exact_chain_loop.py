@@ -32,13 +32,7 @@ def rows_rational(x0, b, eta, nu, F, G, site_pos, site_off, site_n, theta, steps
     M = n // 3
     x = x0.copy()
     y = np.empty(n)
-    Nmax = 1
-    for i in range(site_n.shape[0]):
-        Nmax = max(Nmax, site_n[i])
-    w0 = np.empty((Nmax, 4), dtype=np.complex128)
-    w1 = np.empty((Nmax, 4), dtype=np.complex128)
-    wp = np.empty((Nmax, 4), dtype=np.complex128)
-    gs = np.empty(Nmax, dtype=np.complex128)
+    w0, w1, wp, gs = _rk.step_scratch(site_n)
     left = save_every
     r = 0
     for s in range(steps):

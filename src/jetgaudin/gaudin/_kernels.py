@@ -215,6 +215,17 @@ def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0,
 
 
 @njit(cache=True)
+def step_scratch(site_n):
+    """The scratch of :func:`_step` for sites of orders ``site_n``: ``w0, w1, wp`` (Nmax, 4) and ``gs`` (Nmax,)
+    (complex), ``Nmax`` the largest order (shared with the exact chain loop, ``jetgaudin._exact_chain_loop``)."""
+    Nmax = 1
+    for i in range(site_n.shape[0]):
+        Nmax = max(Nmax, site_n[i])
+    return (np.empty((Nmax, 4), dtype=np.complex128), np.empty((Nmax, 4), dtype=np.complex128),
+            np.empty((Nmax, 4), dtype=np.complex128), np.empty(Nmax, dtype=np.complex128))
+
+
+@njit(cache=True)
 def run_orbit(x0, b, eta, nu0, f, flo, site_pos, site_off, site_n, steps, save_every):
     """``steps`` steps from ``x0``; returns ``(rows (steps//save_every + 1, 3M), final state (3M,), last ν1)``."""
     n = x0.shape[0]
@@ -223,13 +234,7 @@ def run_orbit(x0, b, eta, nu0, f, flo, site_pos, site_off, site_n, steps, save_e
     rows[0] = x0
     x = x0.copy()
     y = np.empty(n)
-    Nmax = 1
-    for i in range(site_n.shape[0]):
-        Nmax = max(Nmax, site_n[i])
-    w0 = np.empty((Nmax, 4), dtype=np.complex128)
-    w1 = np.empty((Nmax, 4), dtype=np.complex128)
-    wp = np.empty((Nmax, 4), dtype=np.complex128)
-    gs = np.empty(Nmax, dtype=np.complex128)  # per step: 1/det K at a site
+    w0, w1, wp, gs = step_scratch(site_n)  # gs, per step: 1/det K at a site
     nu = nu0
     for s in range(steps):
         nu = _step(x, y, b, eta, nu, f, flo, gs, site_pos, site_off, site_n, M, w0, w1, wp)
