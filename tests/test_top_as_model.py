@@ -45,8 +45,11 @@ def test_integrals_and_vector_field_equal_the_tops(N):
 
 
 def test_refusals_name_why():
-    with pytest.raises(jg.InvalidParameterError, match="jet constants c"):
-        jg.IntegralHamiltonian(B, np.ones(6), c=[-1.0, 0.5]).as_model()
+    # jet constants are a site option (tests/test_site_constants.py); c_1 = 0 (T singular) and complex c are refused
+    with pytest.raises(jg.InvalidParameterError, match="c_1 = 0 makes the jet matrix T singular"):
+        jg.IntegralHamiltonian(B, np.ones(6), c=[0.0, 0.5]).as_model()
+    with pytest.raises(jg.InvalidParameterError, match="must be real"):
+        jg.IntegralHamiltonian(B, np.ones(6), c=[-1.0, 0.5j]).as_model()
     with pytest.raises(jg.InvalidParameterError, match="b e_3"):
         jg.IntegralHamiltonian([1.0, 0.0, 1.0], np.ones(4)).as_model()
     for model in (jg.GaudinModel(B, [(0.5, 2)]), jg.GaudinModel(B, [(0.0, 1), (1.0, 1)]),

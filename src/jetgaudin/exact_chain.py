@@ -223,6 +223,9 @@ class ChainExactFlow(StepByAdvance, Map):
         if model is None or not callable(getattr(model, "two_point_backlund", None)) or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("H must be a chain Hamiltonian model.hamiltonian(weights) with one set of "
                                         "weights (shape (2M,))")
+        if getattr(model, "constants", None) is not None:  # issue 33: conjugated by the route table (methods.py)
+            raise InvalidParameterError("ChainExactFlow: this model's sites carry jet constants; use jg.solve(H, X0, "
+                                        "t_span, dt=..., method='exact') (the reduced model's flow conjugated by T)")
         object.__setattr__(self, "dt", nonzero_step(self.dt))
         rf = real_number(self.rho_factor, "rho_factor")
         if rf <= 1:

@@ -113,19 +113,17 @@ class IntegralHamiltonian:
         return np.asarray(integrals(self._check(X), self.b, self.c), dtype=float)
 
     def as_model(self):
-        """The same Hamiltonian on the one-site model ``GaudinModel(b, [(0, N)])`` (a
+        """The same Hamiltonian on the one-site model ``GaudinModel(b, [(0, N, c)])`` (a
         :class:`jetgaudin.ChainHamiltonian` with the same weights: ``h_m = H_m``, ``h_{N+k} = C_k``; integrals,
-        vector field and maps equal to round-off, ``tests/test_top_as_model.py``).  Needs the reduction (lax2)
-        (``c = None``) and a field along ``e_3``; otherwise :class:`InvalidParameterError` naming which."""
-        if self.c is not None:
-            raise InvalidParameterError("as_model: the jet constants c of eq. (lax) are not a site option of "
-                                        "GaudinModel; only the reduction (lax2), c = None, is a one-site model")
+        vector field and maps equal to round-off, ``tests/test_top_as_model.py``; with the jet constants ``c`` of eq.
+        (lax) as the site's option, ``tests/test_site_constants.py``).  Needs a field along ``e_3`` and real ``c``
+        with ``c_1 ≠ 0``; otherwise :class:`InvalidParameterError` naming which."""
         bv = field_vector(self.b)
         if bv[0] != 0.0 or bv[1] != 0.0:
             raise InvalidParameterError(f"as_model: a model's field is b e_3; this Hamiltonian's is {bv.tolist()}")
         # by name, as the map registry does (jetgaudin.maps): the system layer imports no method-layer module
         GaudinModel = importlib.import_module("jetgaudin.gaudin.model").GaudinModel  # noqa: N806
-        return GaudinModel(float(bv[2]), [(0.0, self.N)]).hamiltonian(self.weights)
+        return GaudinModel(float(bv[2]), [(0.0, self.N)], constants=[self.c]).hamiltonian(self.weights)
 
     def _check(self, X):
         X, N = as_state(X)

@@ -89,6 +89,10 @@ def _top_view(H):
 
 
 def _exact_chain(H, dt, substeps, backend):
+    if H.model.constants is not None:  # sites with jet constants: the reduced model's step conjugated by T
+        from .gaudin._site_constants import conjugated
+
+        return conjugated(H.model, _exact_chain(H.model.reduced.hamiltonian(H.weights), dt, substeps, backend))
     top = _top_view(H)
     if top is not None:  # the route table's top entry: the top's ExactFlow and its kernels
         return _exact_top(top, dt, substeps, backend)
@@ -106,7 +110,7 @@ def chain_maps_per_step(H) -> int:
     """``k``: the two-point maps of one exact step of the chain Hamiltonian ``H`` (module doc)."""
     from .exact_chain import ChainExactFlow
 
-    keep, E, _ = ChainExactFlow(H, 1.0)._design
+    keep, E, _ = ChainExactFlow(H.model.reduced.hamiltonian(H.weights), 1.0)._design
     return int(keep.sum()) - int(E.shape[1])
 
 

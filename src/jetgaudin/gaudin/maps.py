@@ -70,6 +70,9 @@ def _check_model(model) -> None:
     if model.algebra != "su(2)":  # an su(n) model: its own maps (jetgaudin.gaudin.sun_maps)
         raise InvalidParameterError(f"the su(2) chain maps take su(2) models; an {model.algebra} model has "
                                     "model.two_point_backlund(eta, branch=r)")
+    if model.constants is not None:  # issue 33: the reduced model's map conjugated (gaudin._site_constants)
+        raise InvalidParameterError("this model's sites carry jet constants: build its maps with "
+                                    "model.two_point_backlund(eta) / model.one_point_backlund(eta)")
 
 
 def _check_eta(model: GaudinModel, eta) -> complex:

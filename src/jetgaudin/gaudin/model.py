@@ -27,7 +27,7 @@ structure (er) of the sum).  One site at 0 gives ``h_m = H_m`` and ``h_{N+k} = C
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from math import comb
 from typing import TYPE_CHECKING, Any
@@ -38,7 +38,8 @@ from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..algebra import structure_constants
 from ..families import make_family
-from ..maps import Backend, Branch
+from ..maps import Backend, Branch, map_from_description, register_map
+from . import _site_constants as _jc
 from .hamiltonian import ChainHamiltonian
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -149,6 +150,11 @@ class GaudinModel:
     modulus : float, optional
         The modulus ``k ∈ [0, 1)`` of the elliptic (XYZ) family (required by it; ``b`` must be 0 there,
         :mod:`jetgaudin.families.elliptic`).
+    constants : sequence, optional
+        The jet constants of eq. (lax) per site: ``None`` (the reduction (lax2)) or the real ``c_1, …, c_{N_s−1}``
+        (``c_1 ≠ 0``); a site may also be given as ``(λ_s, N_s, c)``.  A site with constants is the reduced site in
+        ``Y = T^T y`` (:mod:`jetgaudin.gaudin._site_constants`, ``docs/chains.md``): :meth:`to_reduced`,
+        :attr:`reduced`.
     algebra : str or jetgaudin.lie.SU, optional
         ``"su(2)"`` (default: this class) or ``"su(n)"`` / ``"sun"`` / ``jg.su(n)``, ``n ≥ 3``: the su(n) chain of
         :class:`jetgaudin.gaudin.sun.SunGaudinModel` (rational family; ``b`` a float along ``λ_3``, ``n² − 1``
@@ -168,6 +174,7 @@ class GaudinModel:
     gamma: float | None = None
     modulus: float | None = None
     algebra: Any = "su(2)"
+    constants: tuple | None = None
 
     def __new__(cls, *args, **kwargs):
         """``algebra`` other than su(2): a :class:`jetgaudin.gaudin.sun.SunGaudinModel` (issue 32)."""
@@ -195,7 +202,9 @@ class GaudinModel:
         if not np.isfinite(b):
             raise InvalidParameterError(f"the field strength b must be finite, got {b}")
         object.__setattr__(self, "b", b)
-        object.__setattr__(self, "sites", _check_sites(self.sites))
+        sites, constants = _jc.split_sites(self.sites, self.constants)
+        object.__setattr__(self, "sites", _check_sites(sites))
+        object.__setattr__(self, "constants", _jc.normalise(self.sites, constants))
         fam = make_family(self.family, gamma=self.gamma, modulus=self.modulus)
         fam.check(b, self.sites)
         object.__setattr__(self, "family", fam)
@@ -242,8 +251,11 @@ class GaudinModel:
         return X
 
     def describe(self) -> dict:
-        """``{"b", "sites"}`` and, for a family other than the rational one, ``"family"`` and its parameters."""
+        """``{"b", "sites"}`` and, for a family other than the rational one, ``"family"`` and its parameters; a model
+        with jet constants: ``"constants"`` (one ``null`` or list per site)."""
         d: dict = {"b": self.b, "sites": [[p, N] for p, N in self.sites]}
+        if self.constants is not None:
+            d["constants"] = [None if c is None else list(c) for c in self.constants]
         if self.family.name != "rational":
             d.update({"family": self.family.name, **self.family.describe()})
         return d
@@ -251,15 +263,48 @@ class GaudinModel:
     @classmethod
     def from_description(cls, d: dict) -> GaudinModel:
         """The model :meth:`describe` (or a map's description) describes."""
-        extra = {k: d[k] for k in ("gamma", "modulus", "algebra") if k in d}
+        extra = {k: d[k] for k in ("gamma", "modulus", "algebra", "constants") if k in d}
         return cls(d["b"], tuple((float(p), int(N)) for p, N in d["sites"]), d.get("family", "rational"), **extra)
+
+    # ---- jet constants: the reduced model in Y = T^T y (jetgaudin.gaudin._site_constants) ----------------
+
+    @cached_property
+    def reduced(self) -> GaudinModel:
+        """This model without its jet constants (itself when it has none): the model in the variables ``Y``."""
+        return self if self.constants is None else replace(self, constants=None)
+
+    @cached_property
+    def jet_matrix(self) -> np.ndarray:
+        """``S`` ``(M, M)``: ``Y = S y`` per component (block diagonal, ``T_s^T`` at a site with constants, else the
+        identity; :func:`jetgaudin.gaudin._site_constants.jet_matrix`), read-only."""
+        return _jc.jet_matrix(self)
+
+    def to_reduced(self, X) -> np.ndarray:
+        """The state of :attr:`reduced` for ``X`` ``(..., 3M)``: every site's ``Y_n = Σ_i T[i, n] y_i`` (a Poisson
+        isomorphism: the module doc of :mod:`jetgaudin.gaudin._site_constants`)."""
+        X = self.check_state(X, allow_complex=True)
+        return X if self.constants is None else _jc.apply(self.jet_matrix, X)
+
+    def from_reduced(self, X) -> np.ndarray:
+        """The inverse of :meth:`to_reduced` (a triangular solve per site)."""
+        X = self.check_state(X, allow_complex=True)
+        return X if self.constants is None else _jc.apply(self._inverse_jet_matrix, X)
+
+    @cached_property
+    def _inverse_jet_matrix(self) -> np.ndarray:
+        S = np.linalg.inv(self.jet_matrix)
+        S.setflags(write=False)
+        return S
 
     # ---- integrals as quadratic forms --------------------------------------------------------
 
     @cached_property
     def _forms(self):
         """The integrals as forms in the ``y``'s: today's closed formula for the rational family, the generic
-        Laurent tables of :mod:`jetgaudin.gaudin._forms` for the others."""
+        Laurent tables of :mod:`jetgaudin.gaudin._forms` for the others; with jet constants the reduced model's
+        forms in ``Y = S y`` (``q → S^T q S``; the family's linear extras involve only the ``y_0 = Y_0``)."""
+        if self.constants is not None:
+            return _jc.forms(self.jet_matrix, *self.reduced._forms)
         if self.family.uniform:
             return self._rational_forms
         from ._forms import generic_forms
@@ -400,7 +445,12 @@ class GaudinModel:
         """``ξ(λ)`` (the coefficient vector of ``L``), shape ``(..., 3)``."""
         from ._curve import lax_vector
 
-        return lax_vector(self, X, lam)
+        return lax_vector(*self._curve_args(X), lam)
+
+    def _curve_args(self, X) -> tuple[GaudinModel, Any]:
+        """``(model, X)`` for the spectral-curve functions: the reduced model at ``P X`` where the sites carry jet
+        constants (the Lax matrix is the reduced one's in ``Y``), else ``(self, X)``."""
+        return (self, X) if self.constants is None else (self.reduced, self.to_reduced(X))
 
     def nu_squared(self, X, lam) -> np.ndarray:
         """``ν²(λ) = u² + vw = ⟨ξ(λ), ξ(λ)⟩`` evaluated directly, shape ``(...)``."""
@@ -412,7 +462,7 @@ class GaudinModel:
         :func:`jetgaudin.gaudin._curve.nu`."""
         from ._curve import nu
 
-        return nu(self, X, eta, sheet=sheet)
+        return nu(*self._curve_args(X), eta, sheet=sheet)
 
     def branch_points(self, X) -> np.ndarray:
         """The zeros of ``ν²``: roots of ``D(λ)² ν²(λ)``, ``D = Π (λ − λ_i)^{N_i}``, shape ``(..., 2M)``
@@ -421,7 +471,7 @@ class GaudinModel:
         uniformizer: none (``(..., 0)``; its branch rule is numerical)."""
         from ._curve import branch_points
 
-        r = branch_points(self, X)
+        r = branch_points(*self._curve_args(X))
         return r if self.family.uniform else self.family.uniformizer_inverse(r)
 
     def hamiltonian(self, weights) -> ChainHamiltonian:
@@ -440,13 +490,13 @@ class GaudinModel:
         r"""``G_η(X) = i∫_{η̄}^{η} ν dλ = −2∫_0^{Im η} Re ν(Re η + is) ds``, shape ``(...)``."""
         from ._curve import interpolating_hamiltonian
 
-        return interpolating_hamiltonian(self, X, eta)
+        return interpolating_hamiltonian(*self._curve_args(X), eta)
 
     def interpolating_weights(self, X, eta) -> np.ndarray:
         r"""``ω_{i,m} = ∂G_η/∂h_{i,m} = −2∫_0^{Im η} Re[(λ − λ_i)^{-m} / (2ν(λ))] ds``, shape ``(..., 2M)``."""
         from ._curve import interpolating_weights
 
-        return interpolating_weights(self, X, eta)
+        return interpolating_weights(*self._curve_args(X), eta)
 
     def interpolating_flow_hamiltonian(self, X, eta) -> ChainHamiltonian:
         """``Σ ω_{i,m}(X) h_{i,m}``: its flow from ``X`` is the flow of ``G_η`` (the ``ω`` are constant on it)."""
@@ -459,7 +509,8 @@ class GaudinModel:
         """One rational site at ``λ = 0`` in a nonzero field: the ``N``-th top of the paper
         (:class:`jetgaudin.GaudinTop` ``(N, b)``, Lax matrix (lax2)), whose integrals, bracket and maps this model's
         equal to round-off, and whose hand-tuned kernels are a route of its maps (``docs/architecture.md``)."""
-        return self.family.name == "rational" and len(self.sites) == 1 and self.sites[0][0] == 0.0 and self.b != 0.0
+        return (self.family.name == "rational" and len(self.sites) == 1 and self.sites[0][0] == 0.0 and self.b != 0.0
+                and self.constants is None)
 
     def as_top(self):
         """The top this one-site model is (:class:`jetgaudin.GaudinTop`); :class:`InvalidParameterError` for any
@@ -480,6 +531,8 @@ class GaudinModel:
         ``backend`` / its alias ``kernel``: the route of ``advance`` / ``iterate``, default ``"auto"``)."""
         from .maps import ChainTwoPointBacklund
 
+        if self.constants is not None:  # the reduced model's map conjugated by P (jetgaudin.gaudin._site_constants)
+            return _jc.conjugated(self, self.reduced.two_point_backlund(eta, branch, backend, kernel))  # type: ignore
         return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend), kernel)
 
     def one_point_backlund(
@@ -490,7 +543,17 @@ class GaudinModel:
         ``b ≠ 0``, trigonometric with ``b + iγJ ≠ 0`` (``docs/families.md`` §3.1); the elliptic family has none."""
         from ._one_point import ChainOnePointBacklund
 
+        if self.constants is not None:  # the reduced model's map conjugated by P
+            return _jc.conjugated(self, self.reduced.one_point_backlund(  # type: ignore[return-value]
+                eta, branch, inverse_map, backend, kernel))
         return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
+
+
+def _site_constants_map(d: dict) -> _jc.SiteConstantsMap:
+    return _jc.SiteConstantsMap(GaudinModel.from_description(d["model"]), map_from_description(d["map"]))
+
+
+register_map("site_constants", _site_constants_map)
 
 
 def _uniform(b, positions, N, name):
