@@ -18,8 +18,9 @@ makes ``Y_{N−1}`` vanish for ``N ≥ 3``: the site is then not ``g^(N)`` in ``
 
 Hence, for a model with constants (``P = ⊕_s T_s^T ⊗ 1_3``, :func:`jet_matrix`): its integrals are the reduced
 model's at ``P X`` (quadratic forms ``q ↦ S^T q S``), its Hamiltonian vector fields those of the reduced model
-conjugated by ``P``, and every map of the reduced model ``B`` gives the map ``X ↦ P^{-1} B(P X)`` (:class:`SiteConstantsMap`):
-it preserves the integrals, is Poisson, and is the time-1 flow of the same ``G_η`` where ``B`` is.
+conjugated by ``P``, and every map of the reduced model ``B`` gives the map ``X ↦ P^{-1} B(P X)``
+(:class:`SiteConstantsMap`): it preserves the integrals, is Poisson, and is the time-1 flow of the same ``G_η``
+where ``B`` is.
 """
 
 from __future__ import annotations
