@@ -45,10 +45,10 @@ def _site_constants(c, lam: float, N: int) -> tuple[float, ...] | None:
         return None
     try:
         cc = jet_constants(c, N)
+    except InvalidParameterError as exc:  # (a ValueError: first)
+        raise InvalidParameterError(f"the site at {lam} (order {N}): {exc}") from None
     except (TypeError, ValueError):
         raise InvalidParameterError(f"the jet constants of the site at {lam} must be numbers, got {c!r}") from None
-    except InvalidParameterError as exc:
-        raise InvalidParameterError(f"the site at {lam} (order {N}): {exc}") from None
     if np.any(cc.imag != 0):
         raise InvalidParameterError(
             f"the jet constants of the site at {lam} must be real (a model's states and maps are real), got {c!r}; "
@@ -61,7 +61,7 @@ def _site_constants(c, lam: float, N: int) -> tuple[float, ...] | None:
     return None if out == (-1.0,) + (0.0,) * (N - 2) else out
 
 
-def split_sites(sites, constants) -> tuple[list, tuple | None]:
+def split_sites(sites, constants) -> tuple[Any, list | None]:
     """``(pairs, constants)``: the sites as ``(position, order)`` pairs and the normalised constants (a tuple with one
     entry per site, ``None`` or ``N − 1`` real floats; ``None`` overall when no site has constants).  A site may be
     given as ``(position, order, c)``; ``constants`` (one entry per site) is the keyword form.  Both at once is
@@ -160,10 +160,15 @@ class SiteConstantsMap(Map):
         return self.inner.has_gpu
 
     def __getattr__(self, name: str):
-        """The inner map's parameters (``eta``, ``branch``, ``dt``, …)."""
+        """The inner map's parameters (``eta``, ``branch``, ``dt``, …); not its methods, which take the reduced
+        model's states (call them on :attr:`inner` with ``model.to_reduced(X)``)."""
         if name.startswith("_") or name in ("model", "inner", "backend"):
             raise AttributeError(name)
-        return getattr(self.inner, name)
+        value = getattr(self.inner, name)
+        if callable(value):
+            raise AttributeError(f"{name}: a method of the reduced model's map; call map.inner.{name} with "
+                                 "map.model.to_reduced(X)")
+        return value
 
     def _inner(self) -> Map:
         return self.inner if self.backend is self.inner.backend else self.inner.with_backend(self.backend)

@@ -271,7 +271,7 @@ class GaudinModel:
     @cached_property
     def reduced(self) -> GaudinModel:
         """This model without its jet constants (itself when it has none): the model in the variables ``Y``."""
-        return self if self.constants is None else replace(self, constants=None)
+        return self if self.constants is None else replace(self, constants=None, gamma=None, modulus=None)
 
     @cached_property
     def jet_matrix(self) -> np.ndarray:
