@@ -3,7 +3,8 @@ map registry, ``maps.py`` ↔ ``backlund``, ``gaudin``, ``exact``, ``flows``, ``
 from the sources' AST: an edge ``a → b`` for every ``import``/``from ... import`` of a ``jetgaudin`` module that runs
 when ``a`` is imported (module level, including ``try``/``if`` blocks, but not inside functions or classes, whose
 imports run on use, nor under ``if TYPE_CHECKING:``), a package standing for its ``__init__``: the circles that
-decide whether a module can be imported on its own and in which order the package loads."""
+decide whether a module can be imported on its own and in which order the package loads.  A second graph adds the
+imports inside functions (``import_graph(functions=True)``): no circle through more than two files there either."""
 
 from __future__ import annotations
 
@@ -45,8 +46,22 @@ def _import_time_nodes(body):
             yield from _import_time_nodes(getattr(node, field, []) or [])
 
 
-def import_graph(lazy: bool = False) -> dict[str, set[str]]:
-    """The import-time graph (module docstring); ``lazy=True``: every import at any depth (functions included)."""
+def _run_nodes(body):
+    """Every statement of ``body`` that may ever run, at any depth (function and class bodies included), except the
+    body of ``if TYPE_CHECKING:`` (it never runs)."""
+    for node in body:
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            yield from _run_nodes(node.orelse)
+            continue
+        yield node
+        for name in ("body", "orelse", "finalbody", "handlers", "cases"):
+            yield from _run_nodes(getattr(node, name, []) or [])
+
+
+def import_graph(lazy: bool = False, functions: bool = False) -> dict[str, set[str]]:
+    """The import-time graph (module docstring); ``functions=True``: with the imports inside functions too (they run on
+    use), not those under ``if TYPE_CHECKING:``; ``lazy=True``: every import at any depth (``TYPE_CHECKING``
+    included)."""
     mods = _modules()
     graph: dict[str, set[str]] = {m: set() for m in mods}
 
@@ -58,7 +73,8 @@ def import_graph(lazy: bool = False) -> dict[str, set[str]]:
     for mod, path in mods.items():
         is_pkg = path.name == "__init__.py"
         tree = ast.parse(path.read_text())
-        for node in (ast.walk(tree) if lazy else _import_time_nodes(tree.body)):
+        nodes = ast.walk(tree) if lazy else _run_nodes(tree.body) if functions else _import_time_nodes(tree.body)
+        for node in nodes:
             targets = []
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
@@ -126,6 +142,36 @@ def test_no_import_cycle_through_more_than_two_modules():
         "jetgaudin.backlund"}
     big = [c for c in strongly_connected(graph) if len(c) > 2]
     assert not big, "import cycles through more than two modules:\n" + "\n".join(" <-> ".join(c) for c in big)
+
+
+def test_no_circle_through_more_than_two_files_function_level_imports_included():
+    """Issue 33: "no import circle larger than two files", counting the imports inside functions (they run on use: a
+    circle through them decides what a module drags in and hides layering mistakes).  ``jetgaudin.gaudin`` had a
+    7-module circle (``model`` → ``maps``, ``_one_point``, ``sun`` on use; ``sun`` → ``sun_maps``, ``sun_exact``),
+    broken by the registry of ``gaudin._model_map``; ``plotting`` a 4-module one (``_files`` ↔ ``_chains``,
+    ``_compare``, ``_ensemble`` through ``save_figure``), broken by moving it below them (``plotting._save``)."""
+    graph = import_graph(functions=True)
+    assert "jetgaudin.gaudin.sun_maps" in graph["jetgaudin.gaudin.sun_exact"]  # the walk reaches module level
+    assert "jetgaudin.lax" in graph["jetgaudin.gaudin.model"]  # and inside methods (model.lax_matrix)
+    big = [c for c in strongly_connected(graph) if len(c) > 2]
+    assert not big, "import cycles through more than two files:\n" + "\n".join(" <-> ".join(c) for c in big)
+
+
+def test_the_function_level_walk_sees_nested_imports_and_skips_type_checking(tmp_path):
+    """The walk that the test above relies on: an import in a method of a class, in a nested ``try``/``with``, is an
+    edge; one under ``if TYPE_CHECKING:`` is not (a planted 3-cycle through a method is found)."""
+    src = (
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    import jetgaudin.c\n"
+        "class A:\n    def f(self):\n        try:\n            with open('x'):\n                from . import b\n"
+        "        except OSError:\n            pass\n"
+    )
+    nodes = list(_run_nodes(ast.parse(src).body))
+    names = [n.module if isinstance(n, ast.ImportFrom) else n.names[0].name
+             for n in nodes if isinstance(n, ast.Import | ast.ImportFrom)]
+    assert names == ["typing", None] and sum(isinstance(n, ast.ImportFrom) and n.level == 1 for n in nodes) == 1
+    g = {"a": {"b"}, "b": {"c"}, "c": {"a"}}
+    assert [c for c in strongly_connected(g) if len(c) > 2] == [["a", "b", "c"]]
 
 
 def test_the_map_interface_imports_none_of_its_implementations():

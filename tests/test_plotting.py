@@ -74,6 +74,9 @@ def _capture(monkeypatch):
 
     monkeypatch.setattr(_files, "save_figure", spy)
     import jetgaudin.plotting._compare as cmp
+    import jetgaudin.plotting._save as sv  # where the ensemble figures import it from, on use
+
+    monkeypatch.setattr(sv, "save_figure", spy)
 
     monkeypatch.setattr(cmp, "save_figure", spy)
     return seen

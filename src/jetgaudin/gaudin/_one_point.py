@@ -41,6 +41,7 @@ from ..backlund._dressing import adj, spectral_s
 from ..lax import ell_coefficients, ell_from_xi, state_from_ell
 from ..maps import Backend, Branch, MapProperties, register_map
 from ._dressing import dressing_at, site_series
+from ._model_map import register_model_map
 from .maps import (
     _RESIDUAL_TOL,
     _ChainMap,
@@ -207,3 +208,4 @@ def _one_point_from(d: dict) -> ChainOnePointBacklund:
 
 
 register_map("chain_one_point", _one_point_from)
+register_model_map("chain_one_point", ChainOnePointBacklund)  # model.one_point_backlund (gaudin._model_map)

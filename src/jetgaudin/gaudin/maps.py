@@ -43,6 +43,7 @@ from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
 from ._compensated import acc, family_lax, family_site_series, scaled_two_point_K0
 from ._curve import nu_with_roots
 from ._dressing import dressing_at, real_coefficients, site_series
+from ._model_map import register_model_map
 from .model import GaudinModel
 
 __all__ = ["ChainTwoPointBacklund", "monic_series"]  # ChainOnePointBacklund: module __getattr__ (gaudin._one_point)
@@ -585,6 +586,7 @@ def _two_point_from(d: dict) -> ChainTwoPointBacklund:
 
 
 register_map("chain_two_point", _two_point_from)
+register_model_map("chain_two_point", ChainTwoPointBacklund)  # model.two_point_backlund (gaudin._model_map)
 
 
 def __getattr__(name: str):

@@ -40,6 +40,7 @@ from ..algebra import structure_constants
 from ..families import make_family
 from ..maps import Backend, Branch, map_from_description, register_map
 from . import _site_constants as _jc
+from ._model_map import model_map
 from .hamiltonian import ChainHamiltonian
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -182,9 +183,7 @@ class GaudinModel:
             from ..lie import parse_algebra
 
             if parse_algebra(kwargs.get("algebra", args[5] if len(args) > 5 else "su(2)")).n != 2:
-                from .sun import SunGaudinModel
-
-                cls = SunGaudinModel
+                cls = model_map("sun_model")  # jetgaudin.gaudin.sun.SunGaudinModel (registered: no import circle)
         return object.__new__(cls)
 
     def __post_init__(self):
@@ -529,11 +528,9 @@ class GaudinModel:
                            kernel: Backend | str | None = None) -> ChainTwoPointBacklund:
         """The real two-point Bäcklund map of the chain (:class:`~jetgaudin.gaudin.maps.ChainTwoPointBacklund`;
         ``backend`` / its alias ``kernel``: the route of ``advance`` / ``iterate``, default ``"auto"``)."""
-        from .maps import ChainTwoPointBacklund
-
         if self.constants is not None:  # the reduced model's map conjugated by P (jetgaudin.gaudin._site_constants)
             return _jc.conjugated(self, self.reduced.two_point_backlund(eta, branch, backend, kernel))  # type: ignore
-        return ChainTwoPointBacklund(self, eta, Branch.parse(branch), Backend.parse(backend), kernel)
+        return model_map("chain_two_point")(self, eta, Branch.parse(branch), Backend.parse(backend), kernel)
 
     def one_point_backlund(
         self, eta, branch: Branch | str = "default", inverse_map: bool = False, backend: Backend | str = "auto",
@@ -541,12 +538,11 @@ class GaudinModel:
     ) -> ChainOnePointBacklund:
         """The complex one-point map (:class:`~jetgaudin.gaudin.ChainOnePointBacklund`): rational family with
         ``b ≠ 0``, trigonometric with ``b + iγJ ≠ 0`` (``docs/families.md`` §3.1); the elliptic family has none."""
-        from ._one_point import ChainOnePointBacklund
-
         if self.constants is not None:  # the reduced model's map conjugated by P
             return _jc.conjugated(self, self.reduced.one_point_backlund(  # type: ignore[return-value]
                 eta, branch, inverse_map, backend, kernel))
-        return ChainOnePointBacklund(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend), kernel)
+        return model_map("chain_one_point")(self, eta, Branch.parse(branch), inverse_map, Backend.parse(backend),
+                                            kernel)
 
 
 def _site_constants_map(d: dict) -> _jc.SiteConstantsMap:

@@ -40,6 +40,7 @@ from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..families import make_family
 from ..lie import SU, parse_algebra
+from ._model_map import model_map, register_model_map
 from .model import ChainHamiltonian, GaudinModel, _check_sites, _taylor_coefficient
 
 __all__ = ["SunGaudinModel", "SunHamiltonian", "field_components"]
@@ -342,9 +343,7 @@ class SunGaudinModel(GaudinModel):
 
     def exact_flow(self, H, dt: float, substeps: int = 1, backend="auto"):
         """The exact time-``dt`` flow of ``H`` (``n = 3``; :class:`jetgaudin.gaudin.sun_exact.SunExactFlow`)."""
-        from .sun_exact import SunExactFlow
-
-        return SunExactFlow(H, dt, substeps, backend)
+        return model_map("sun_exact")(H, dt, substeps, backend)  # SunExactFlow (registered: no import circle)
 
     def hamiltonian(self, weights) -> SunHamiltonian:
         """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""
@@ -352,9 +351,7 @@ class SunGaudinModel(GaudinModel):
 
     def two_point_backlund(self, eta, branch=0, backend="auto", kernel=None):  # type: ignore[override]
         """The real two-point map ``B^{(r)}_η`` (:class:`jetgaudin.gaudin.sun_maps.SunTwoPointBacklund`)."""
-        from .sun_maps import SunTwoPointBacklund
-
-        return SunTwoPointBacklund(self, eta, branch, backend, kernel=kernel)
+        return model_map("sun_two_point")(self, eta, branch, backend, kernel=kernel)  # SunTwoPointBacklund
 
     # ---- su(2)-only surface ------------------------------------------------------------------------------
 
@@ -394,3 +391,6 @@ class SunHamiltonian(ChainHamiltonian):
         from .sun_solve import heyoka_integrator
 
         return heyoka_integrator(self, rtol)
+
+
+register_model_map("sun_model", SunGaudinModel)  # GaudinModel(..., algebra="su(n)") builds it

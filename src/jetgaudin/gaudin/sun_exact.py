@@ -40,7 +40,7 @@ import numpy as np
 from .._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from .._validate import real_number
 from ..maps import Advance, Backend, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
-from ._model_map import ModelMap
+from ._model_map import ModelMap, register_model_map
 from .sun import SunGaudinModel
 from .sun_maps import SunTwoPointBacklund
 
@@ -391,3 +391,4 @@ def _from(d: dict) -> SunExactFlow:
 
 
 register_map("sun_exact", _from)
+register_model_map("sun_exact", SunExactFlow)  # model.exact_flow (gaudin._model_map)

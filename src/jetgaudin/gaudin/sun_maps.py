@@ -35,7 +35,7 @@ import numpy as np
 from .._errors import InvalidParameterError, SingularStepError
 from .._validate import spectral_parameter
 from ..maps import Advance, Backend, Map, MapProperties, check_count, register_map
-from ._model_map import ModelMap
+from ._model_map import ModelMap, register_model_map
 from .sun import SunGaudinModel
 from .sun_spectral import _GAP_TOL, branch_index, check_start, eigenvalue_branch
 
@@ -240,3 +240,4 @@ def _from(d: dict) -> SunTwoPointBacklund:
 
 
 register_map("sun_two_point", _from)
+register_model_map("sun_two_point", SunTwoPointBacklund)  # model.two_point_backlund (gaudin._model_map)

@@ -14,8 +14,8 @@ import numpy as np
 from matplotlib import colormaps
 from matplotlib.ticker import FuncFormatter
 
-from ._files import save_figure
 from ._orbit import AXIS_LABELS, count_text, mark_dimensionless, new_figure, step_axis
+from ._save import save_figure
 
 __all__ = ["site_y0", "figure_chain_y0", "figure_chain_integral_drift", "save_chain_figures"]
 

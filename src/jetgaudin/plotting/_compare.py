@@ -13,8 +13,8 @@ import numpy as np
 
 import jetgaudin as jg
 
-from ._files import save_figure
 from ._orbit import integral_labels, mark_dimensionless, new_figure, step_axis
+from ._save import save_figure
 
 __all__ = ["figure_compare_drift", "figure_map_flow_distance", "save_compare_figures"]
 

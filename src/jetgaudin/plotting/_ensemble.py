@@ -126,7 +126,7 @@ def figure_ensemble_orbits(orbits, *, title: str = "", drift=None):
 
 def save_drift_histogram(out_dir, drift, names=None, *, title: str = "", dpi: int = 130, fmt: str = "png") -> Path:
     """Write ``drift_hist.<fmt>`` (:func:`figure_drift_histogram`) into ``out_dir``; return its path."""
-    from ._files import save_figure
+    from ._save import save_figure
 
     return save_figure(figure_drift_histogram(drift, names, title=title), Path(out_dir) / f"drift_hist.{fmt}", dpi)
 
@@ -159,8 +159,8 @@ def _ensemble_drift(run) -> np.ndarray:
 def save_ensemble_figures(run, out_dir, *, max_points: int, dpi: int, fmt: str, title: str) -> list[Path]:
     """``plot`` of an ensemble: ``ensemble_orbits`` (up to nine orbits spread over the ensemble) and
     ``drift_hist`` (the per-orbit drift over the saved rows) into ``out_dir``."""
-    from ._files import save_figure
     from ._runs import open_run, thinned_rows
+    from ._save import save_figure
 
     drift = _ensemble_drift(run)
     picks = spread_orbits(int(run.inputs["B"]))

@@ -8,7 +8,6 @@ computed block by block.
 
 from __future__ import annotations
 
-from enum import StrEnum
 from pathlib import Path
 
 import numpy as np
@@ -18,19 +17,12 @@ import jetgaudin as jg
 from .._errors import InvalidParameterError
 from ._orbit import count_text, figure_integral_drift, figure_points_3d, figure_projection
 from ._runs import RunRows, open_run, thin_step, thinned_rows
+from ._save import FigureFormat, save_figure  # below the figure modules (no import circle): re-exported here
 
 __all__ = ["FigureFormat", "save_orbit_figures", "save_run_figures", "run_title", "save_figure", "DEFAULT_MAX_POINTS"]
 
 DEFAULT_MAX_POINTS = 20_000
 _BLOCK_ROWS = 1 << 14  # rows read at a time for the drift envelope (9 columns: ~1.2 MB)
-
-
-class FigureFormat(StrEnum):
-    """File format of the written figures."""
-
-    png = "png"
-    pdf = "pdf"
-    svg = "svg"
 
 
 def _eta_text(eta: complex | None) -> str:
@@ -63,22 +55,6 @@ def run_title(run: RunRows) -> str:
         f"Flow of {ham} (N = {run.N}): b = {run.b:g}{eta}, dt = {inp.get('dt', 1):g}, {_steps_text(inp.get('steps'))} "
         f"samples{start}"
     )
-
-
-def save_figure(fig, path, dpi: int) -> Path:
-    """Write ``fig`` to ``path`` durably and atomically, never through a symlink (rendered in memory, then
-    :func:`jetgaudin._fs.atomic_write_bytes`: a ``.tmp`` created with ``O_EXCL|O_NOFOLLOW``, fsynced, renamed)."""
-    import io
-
-    from .. import _fs
-
-    path = Path(path)
-    if path.suffix.lower().lstrip(".") not in {f.value for f in FigureFormat}:
-        raise InvalidParameterError(f"the figure file must end in .png, .pdf or .svg, got {path.name!r}")
-    buf = io.BytesIO()
-    fig.savefig(buf, dpi=dpi, bbox_inches="tight", format=path.suffix.lower().lstrip("."))
-    _fs.atomic_write_bytes(path.parent, path.name, buf.getvalue())
-    return path
 
 
 def save_orbit_figures(
