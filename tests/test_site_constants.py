@@ -153,7 +153,7 @@ def test_the_reduction_and_the_constructions_agree():
     assert "constants" not in jg.GaudinModel(B, [(0.0, 4)]).describe()
     top = jg.GaudinModel(B, [(0.0, 3, (-0.5, 0.2))])
     assert not top.is_top
-    with pytest.raises(jg.InvalidParameterError, match="not a top"):
+    with pytest.raises(jg.InvalidParameterError, match="not a top.*with jet constants"):
         top.as_top()
 
 
@@ -265,3 +265,21 @@ def test_solve_exact_with_constants_equals_dop853():
     ex = jg.solve(H, X, (0.0, 0.5), dt=0.25, method="exact", backend="numpy")
     ref = jg.solve(H, X, (0.0, 0.5), method="dop853", rtol=1e-13, atol=1e-13)
     assert np.abs(ex.X[-1] - ref.X[-1]).max() < 1e-9
+
+
+def test_a_run_of_the_conjugated_map_is_recorded_and_described(tmp_path):
+    """The run layer records the map of a model with constants like any map: completed, ``run.json`` holds its
+    description (kind ``site_constants``, which rebuilds it) and the model's integral names; the recorded orbit equals
+    the map's own ``iterate`` to 1e-12 (chunked: one conversion to ``Y`` and back per chunk, round-off)."""
+    from jetgaudin import run as rl
+
+    model = _two_site()
+    Bm = model.two_point_backlund(0.6 + 0.35j, backend="numpy")
+    X0 = _state(model.n_state, 13, 0.5)
+    res = rl.start(rl.RunSpec(Bm, X0, 12, 3, checkpoint_seconds=0.0), tmp_path / "o", max_chunk_steps=5)
+    assert res.state is rl.RunStatus.COMPLETED
+    d = rl.load(tmp_path / "o")
+    assert np.abs(d.X - Bm.iterate(X0, 12)[d.n]).max() < 1e-12
+    run = rl.read_run(tmp_path / "o")
+    assert run["map"] == Bm.describe() and run["integral_names"] == model.integral_labels()
+    assert map_from_description(run["map"]) == Bm

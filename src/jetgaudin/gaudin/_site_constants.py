@@ -26,7 +26,7 @@ where ``B`` is.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -135,6 +135,8 @@ class SiteConstantsMap(Map):
     model: Any
     inner: Map
     backend: Backend = field(default=Backend.AUTO)
+    #: one conversion each way per ``advance`` call: a run cut into other chunks differs in the last bits
+    chunk_invariant: ClassVar[bool] = False
 
     def __post_init__(self):
         if self.model.constants is None or self.inner.n_state not in (None, self.model.n_state):
@@ -185,6 +187,14 @@ class SiteConstantsMap(Map):
 
     def integrals(self, X) -> np.ndarray:
         return self.model.integrals(X)
+
+    def integral_names(self) -> list[str]:
+        """The model's integral labels (the run layer's reports)."""
+        return self.model.integral_labels()
+
+    def state_labels(self) -> list[str]:
+        """The model's state labels (the run layer's ``orbit.csv`` columns)."""
+        return self.model.labels()
 
     def start(self, X) -> np.ndarray:
         return self._inner().start(self.model.to_reduced(X))

@@ -72,7 +72,8 @@ def _check_sites(sites) -> tuple[tuple[float, int], ...]:
         try:
             lam, N = s
         except (TypeError, ValueError):
-            raise InvalidParameterError(f"each site must be a pair (position, order), got {s!r}") from None
+            raise InvalidParameterError(f"each site must be a pair (position, order) or (position, order, c), "
+                                        f"got {s!r}") from None
         if isinstance(lam, (complex, np.complexfloating)) and complex(lam).imag != 0:
             raise InvalidParameterError(f"site positions must be real (the poles of L lie on the real axis), "
                                         f"got {lam!r}")
@@ -517,7 +518,9 @@ class GaudinModel:
         if not self.is_top:
             raise InvalidParameterError(
                 f"this model is not a top: a top is one rational site at 0 in a nonzero field b, this one has "
-                f"{self.family.name} sites {list(self.sites)} and b = {self.b:g}")
+                f"{self.family.name} sites {list(self.sites)} and b = {self.b:g}"
+                + ("" if self.constants is None else " with jet constants (the top's kernels take none: its maps are "
+                   "the reduced model's, conjugated)"))
         from ..systems import GaudinTop
 
         return GaudinTop(self.orders[0], self.b)
