@@ -168,6 +168,8 @@ def test_the_refusals_name_the_quantity_and_the_fix():
         jg.GaudinModel(B, [(0.0, 3, (-1.0, 0.5))], constants=[None])
     with pytest.raises(jg.InvalidParameterError, match="one entry per site"):
         jg.GaudinModel(B, [(0.0, 3), (1.0, 1)], constants=[(-1.0, 0.5)])
+    with pytest.raises(jg.InvalidParameterError, match="su\\(3\\) models take no jet constants"):
+        jg.GaudinModel(B, [(0.0, 3)], algebra="su(3)", constants=[(-0.5, 0.2)])
     model = jg.GaudinModel(B, [(0.0, 3, (-0.5, 0.2)), (1.5, 1)])
     with pytest.raises(jg.InvalidParameterError, match="model.two_point_backlund"):
         jg.ChainTwoPointBacklund(model, 0.5 + 0.4j)

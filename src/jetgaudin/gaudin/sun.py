@@ -101,6 +101,8 @@ class SunGaudinModel(GaudinModel):
             raise InvalidParameterError(
                 f"{alg.name} models are rational only (family='rational', no gamma/modulus); the trigonometric and "
                 "elliptic su(n) families are not implemented (docs/sun.md says what they need)")
+        if self.constants is not None:  # (a field of GaudinModel: the su(2) sites' jet constants, issue 33)
+            raise InvalidParameterError(f"{alg.name} models take no jet constants (su(2) sites only: docs/chains.md)")
         object.__setattr__(self, "family", make_family("rational"))
         object.__setattr__(self, "sites", _check_sites(self.sites))
         object.__setattr__(self, "b", field_components(self.b, alg))
