@@ -214,7 +214,7 @@ class SiteConstantsMap(Map):
         return SiteConstantsMap(self.model, self.inner.inverse())
 
     def describe(self) -> dict:
-        return {"kind": "site_constants", "model": self.model.describe(), "map": self.inner.describe()}
+        return {"kind": "site_constants", "model": self.model.describe(), "map": self._inner().describe()}
 
 
 def conjugated(model, inner: Map) -> SiteConstantsMap:
