@@ -286,7 +286,7 @@ class GaudinModel:
         return X if self.constants is None else _jc.apply(self.jet_matrix, X)
 
     def from_reduced(self, X) -> np.ndarray:
-        """The inverse of :meth:`to_reduced` (a triangular solve per site)."""
+        """The inverse of :meth:`to_reduced` (``S^{-1}``, block triangular: ``T_s`` has the diagonal ``(−c_1)^n``)."""
         X = self.check_state(X, allow_complex=True)
         return X if self.constants is None else _jc.apply(self._inverse_jet_matrix, X)
 
