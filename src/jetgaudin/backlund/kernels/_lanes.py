@@ -82,10 +82,10 @@ _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
 # the power of two q of _n3._scale3 (per orbit and call)
 _Q = _ALIVE + 4
-# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch, the residual
-# tolerance
+# scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
+# eigenvector valid), the residual tolerance
 _MID = _ALIVE + 5
-_ROWS = _MID + 10
+_ROWS = _MID + 6
 
 
 @block()
@@ -104,17 +104,22 @@ def _lanes_pass(buf, newton):
                        buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[12 * L + l],
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
                        buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
-        buf[M + l] = r[0].real
-        buf[M + L + l] = r[0].imag
-        buf[M + 2 * L + l] = r[1]
-        buf[M + 3 * L + l] = r[2]
-        buf[M + 4 * L + l] = r[3]
-        buf[M + 5 * L + l] = r[4]
-        buf[M + 6 * L + l] = S._sel(r[5], 1.0, 0.0)
-        buf[M + 7 * L + l] = S._sel(r[6], 1.0, 0.0)
-        buf[M + 8 * L + l] = S._sel(r[7], 1.0, 0.0)
+        # a lane alive and not to be redone takes its new ν1 (in place) and, if its eigenvector failed, the status;
+        # the others keep their values.  The dressing gets one flag: the lane steps, its eigenvector valid
+        alive = buf[_ALIVE * L + l] != 0.0
+        take = S._sel(alive, not r[5], False)
+        buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
+        buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
+        pre = S._sel(r[6], float(STATUS_NONFINITE), S._sel(r[7], float(STATUS_BRANCH), 0.0))
+        buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
+        buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
+        buf[M + l] = r[1]
+        buf[M + L + l] = r[2]
+        buf[M + 2 * L + l] = r[3]
+        buf[M + 3 * L + l] = r[4]
+        buf[M + 4 * L + l] = S._sel(S._sel(take, not (r[6] | r[7]), False), 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
-        buf[M + 9 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+        buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
@@ -123,19 +128,15 @@ def _lanes_pass(buf, newton):
                buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-        alive = buf[_ALIVE * L + l] != 0.0
-        Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l], buf[M + 3 * L + l],
-                  buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
-        redo_root = buf[M + 6 * L + l] != 0.0
-        redo = S._sel(alive, redo_root, False)
-        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
-                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 9 * L + l], buf[M + 7 * L + l] != 0.0,
-                        buf[M + 8 * L + l] != 0.0)
-        # in place: the state of a lane that is alive, not to be redone and stepped without failure; ν1 and the
-        # status of a lane that is alive and not to be redone; any other lane keeps its values (selects of the old
-        # values, stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
-        take = S._sel(alive, not redo_root, False)
-        new = S._sel(take, r[10], False)
+        go = buf[M + 4 * L + l] != 0.0
+        Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l], buf[M + L + l],
+                  buf[M + 2 * L + l], buf[M + 3 * L + l], cst)
+        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l],
+                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 5 * L + l], False, False)
+        # in place: the state of a lane that steps (``go``: alive, not to be redone, its eigenvector valid) without
+        # failure, and the status of a lane that steps; any other lane keeps its values (selects of the old values,
+        # stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
+        new = S._sel(go, r[10], False)
         buf[l] = S._sel(new, r[1], x0)
         buf[L + l] = S._sel(new, r[2], x1)
         buf[2 * L + l] = S._sel(new, r[3], x2)
@@ -145,10 +146,7 @@ def _lanes_pass(buf, newton):
         buf[6 * L + l] = S._sel(new, r[7], x6)
         buf[7 * L + l] = S._sel(new, r[8], x7)
         buf[8 * L + l] = S._sel(new, r[9], x8)
-        buf[9 * L + l] = S._sel(take, buf[M + l], buf[9 * L + l])
-        buf[10 * L + l] = S._sel(take, buf[M + L + l], buf[10 * L + l])
-        buf[_STATUS * L + l] = S._sel(take, float(r[0]), buf[_STATUS * L + l])
-        buf[_REDO * L + l] = S._sel(redo, 1.0, 0.0)
+        buf[_STATUS * L + l] = S._sel(go, float(r[0]), buf[_STATUS * L + l])
 
 
 @block()
