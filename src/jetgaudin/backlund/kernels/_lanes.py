@@ -88,7 +88,7 @@ _MID = _ALIVE + 5
 _ROWS = _MID + 6
 
 
-@block()
+@block(inline="always")
 def _lanes_pass(buf, newton):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
     the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
@@ -149,7 +149,7 @@ def _lanes_pass(buf, newton):
         buf[_STATUS * L + l] = S._sel(go, float(r[0]), buf[_STATUS * L + l])
 
 
-@block()
+@block(inline="always")
 def _any_row(buf, start):
     """Whether the row ``buf[start : start + LANES]`` (holding 0.0 or a positive flag/status) has a nonzero entry:
     an OR of the bits, which vectorises (a floating-point reduction would not), in place of a scalar loop with a
