@@ -94,9 +94,11 @@ def _lanes_pass(buf, newton):
     the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
     in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
     are those of :func:`._n3._step3`.  A lane that is not alive, or is to be redone, keeps its values and status,
-    and so does the state of a lane whose step failed (selects in the dressing loop: on Zen 4 a blend or masked
-    move costs no FMA-pipe cycle, a 512-bit store ~1.5: writing the new values elsewhere and copying them back
-    cost 11 stores per 8 lanes more, docs/performance.md, "a third session")."""
+    and so does the state of a lane whose step failed (selects of the old values: on Zen 4 a blend, masked move or
+    masked store costs no FMA-pipe cycle, a comparison one, a 512-bit store ~1.6, ``benchmarks/fp_ports.py``;
+    writing the new values elsewhere and copying them back cost 13 stores per 8 lanes more).  Inlined by Numba
+    into the step loop: as a call it cost an NRT incref/decref of ``buf`` per step (docs/performance.md, issue 36,
+    "a third session")."""
     L = LANES
     M = _MID * L
     for l in range(L):
