@@ -412,8 +412,8 @@ def test_lanes_redo_path_equals_the_single_orbit(rel):
 
 
 def test_lanes_with_failed_members_equal_their_single_orbits():
-    # a block of lanes with a failed member takes the lane-by-lane path at every later step (the usual step copies
-    # the new values as they are): every member, failed or not, equals its single-orbit run bit for bit, and a
+    # a block of lanes with a failed member (the lanes' selects keep a failed or dead lane's state, ν1 and status in
+    # place): every member, failed or not, equals its single-orbit run bit for bit, and a
     # failed member keeps its last good state.  40 orbits: a block of 32 lanes with failures and redone lanes, and
     # a block of 8 without
     from jetgaudin.backlund.kernels import _drivers

@@ -59,12 +59,14 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
 def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, bad_scale, branch):
     """Second half of :func:`._n3._step3` without data-dependent branches: the dressing (:func:`._n3._solve3`) from
     the axis ``n'``, ``r`` and ``Z'`` of :func:`._n3._zed3`.  Returns ``(status, y0, …, y8)``, the new state
-    whatever the status (the caller keeps the old state on a failed step, as :func:`._n3._step3` does)."""
+    whatever the status (the caller keeps the old state on a failed step, as :func:`._n3._step3` does), and whether
+    the step succeeded (``status == 0``, from the flags: no comparison of the status)."""
     r = _solve3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t)
     nonfinite = not _finite9(r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
     st = S._sel(nonfinite, STATUS_NONFINITE, 0)
     st = S._sel(bad_scale, STATUS_NONFINITE, S._sel(branch, STATUS_BRANCH, S._sel(not r[0], STATUS_RESIDUAL, st)))
-    return (st, r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9])
+    good = S._sel(bad_scale | branch, False, S._sel(r[0], not nonfinite, False))
+    return (st, r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], good)
 
 
 #: orbits per lock-stepped block.  A compile-time constant: with the rows of the block at constant offsets
@@ -80,24 +82,23 @@ _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
 # the power of two q of _n3._scale3 (per orbit and call)
 _Q = _ALIVE + 4
-# scratch rows between the two halves of a step: ν1 (2), n' (3), r, need_root, nonfinite, branch, the residual
-# tolerance
+# scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
+# eigenvector valid), the residual tolerance
 _MID = _ALIVE + 5
-# the new state (9 rows) and the step's status, copied back by a loop of their own (a select stored in place
-# becomes a masked store, vmaskmovpd, slow on AMD Zen: writing elsewhere and copying was 15-20 % faster, one thread)
-_NEW = _MID + 10
-_ROWS = _NEW + 10
+_ROWS = _MID + 6
 
 
-@block()
+@block(inline="always")
 def _lanes_pass(buf, newton):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
-    the lanes (the axis ``n'``, then the dressing) joined by scratch rows, then the new values copied into the
-    state rows.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
+    the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
+    in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
     are those of :func:`._n3._step3`.  A lane that is not alive, or is to be redone, keeps its values and status,
-    and so does the state of a lane whose step failed: the usual step (every lane alive, none to redo, none failed:
-    three vectorised tests of whole rows) copies the new values as they are, any other step keeps values lane by
-    lane (:func:`_keep_unstepped`; no selects in the dressing loop: 12 fewer per lane, 4-7 % faster)."""
+    and so does the state of a lane whose step failed (selects of the old values: on Zen 4 a blend, masked move or
+    masked store costs no FMA-pipe cycle, a comparison one, a 512-bit store ~1.6, ``benchmarks/fp_ports.py``;
+    writing the new values elsewhere and copying them back cost 13 stores per 8 lanes more).  Inlined by Numba
+    into the step loop: as a call it cost an NRT incref/decref of ``buf`` per step (docs/performance.md, issue 36,
+    "a third session")."""
     L = LANES
     M = _MID * L
     for l in range(L):
@@ -105,17 +106,22 @@ def _lanes_pass(buf, newton):
                        buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[12 * L + l],
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
                        buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
-        buf[M + l] = r[0].real
-        buf[M + L + l] = r[0].imag
-        buf[M + 2 * L + l] = r[1]
-        buf[M + 3 * L + l] = r[2]
-        buf[M + 4 * L + l] = r[3]
-        buf[M + 5 * L + l] = r[4]
-        buf[M + 6 * L + l] = S._sel(r[5], 1.0, 0.0)
-        buf[M + 7 * L + l] = S._sel(r[6], 1.0, 0.0)
-        buf[M + 8 * L + l] = S._sel(r[7], 1.0, 0.0)
+        # a lane alive and not to be redone takes its new ν1 (in place) and, if its eigenvector failed, the status;
+        # the others keep their values.  The dressing gets one flag: the lane steps, its eigenvector valid
+        alive = buf[_ALIVE * L + l] != 0.0
+        take = S._sel(alive, not r[5], False)
+        buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
+        buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
+        pre = S._sel(r[6], float(STATUS_NONFINITE), S._sel(r[7], float(STATUS_BRANCH), 0.0))
+        buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
+        buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
+        buf[M + l] = r[1]
+        buf[M + L + l] = r[2]
+        buf[M + 2 * L + l] = r[3]
+        buf[M + 3 * L + l] = r[4]
+        buf[M + 4 * L + l] = S._sel(S._sel(take, not (r[6] | r[7]), False), 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
-        buf[M + 9 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+        buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
@@ -124,72 +130,28 @@ def _lanes_pass(buf, newton):
                buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-        alive = buf[_ALIVE * L + l] != 0.0
-        Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l], buf[M + 3 * L + l],
-                  buf[M + 4 * L + l], buf[M + 5 * L + l], cst)
-        redo = S._sel(alive, buf[M + 6 * L + l] != 0.0, False)
-        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + 2 * L + l],
-                        buf[M + 3 * L + l], buf[M + 5 * L + l], Z, cst, buf[M + 9 * L + l], buf[M + 7 * L + l] != 0.0,
-                        buf[M + 8 * L + l] != 0.0)
-        N = _NEW * L
-        buf[N + l] = r[1]
-        buf[N + L + l] = r[2]
-        buf[N + 2 * L + l] = r[3]
-        buf[N + 3 * L + l] = r[4]
-        buf[N + 4 * L + l] = r[5]
-        buf[N + 5 * L + l] = r[6]
-        buf[N + 6 * L + l] = r[7]
-        buf[N + 7 * L + l] = r[8]
-        buf[N + 8 * L + l] = r[9]
-        buf[N + 9 * L + l] = float(r[0])
-        buf[_REDO * L + l] = S._sel(redo, 1.0, 0.0)
-    if _all_row(buf, _ALIVE * L) and not _any_row(buf, _REDO * L) and not _any_row(buf, (_NEW + 9) * L):
-        # every lane stepped and none failed (the usual step): the new values as they are, ν1 from the scratch rows
-        for i in range(9):
-            for l in range(L):
-                buf[i * L + l] = buf[(_NEW + i) * L + l]
-        for i in range(2):
-            for l in range(L):
-                buf[(9 + i) * L + l] = buf[(_MID + i) * L + l]
-        return
-    _keep_unstepped(buf)
+        go = buf[M + 4 * L + l] != 0.0
+        Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l], buf[M + L + l],
+                  buf[M + 2 * L + l], buf[M + 3 * L + l], cst)
+        r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l],
+                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 5 * L + l], False, False)
+        # in place: the state of a lane that steps (``go``: alive, not to be redone, its eigenvector valid) without
+        # failure, and the status of a lane that steps; any other lane keeps its values (selects of the old values,
+        # stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
+        new = S._sel(go, r[10], False)
+        buf[l] = S._sel(new, r[1], x0)
+        buf[L + l] = S._sel(new, r[2], x1)
+        buf[2 * L + l] = S._sel(new, r[3], x2)
+        buf[3 * L + l] = S._sel(new, r[4], x3)
+        buf[4 * L + l] = S._sel(new, r[5], x4)
+        buf[5 * L + l] = S._sel(new, r[6], x5)
+        buf[6 * L + l] = S._sel(new, r[7], x6)
+        buf[7 * L + l] = S._sel(new, r[8], x7)
+        buf[8 * L + l] = S._sel(new, r[9], x8)
+        buf[_STATUS * L + l] = S._sel(go, float(r[0]), buf[_STATUS * L + l])
 
 
-@block()
-def _keep_unstepped(buf):
-    """The end of a step of :func:`_lanes_pass` other than the usual one: lane by lane, a lane that is alive and
-    not to be redone takes its new ``ν1`` and status, and its new state if the step succeeded; any other lane keeps
-    its values.  Rare (a failed lane, a lane to redo), hence a plain loop with branches (it compiles faster)."""
-    L = LANES
-    for l in range(L):
-        if buf[_ALIVE * L + l] == 0.0 or buf[_REDO * L + l] != 0.0:
-            continue
-        st = buf[(_NEW + 9) * L + l]
-        buf[_STATUS * L + l] = st
-        buf[9 * L + l] = buf[_MID * L + l]
-        buf[10 * L + l] = buf[(_MID + 1) * L + l]
-        if st == 0.0:
-            for i in range(9):
-                buf[i * L + l] = buf[(_NEW + i) * L + l]
-
-
-@block()
-def _all_row(buf, start):
-    """Whether every entry of the row ``buf[start : start + LANES]`` (holding 0.0 or 1.0) is 1.0: an AND of the
-    bits, which vectorises (as :func:`_any_row`).  The row is given by its offset, an ordinary integer (a row
-    number passed as a module constant is a literal type to Numba: one compile per row)."""
-    bits = buf.view(np.int64)
-    acc = -1
-    for l in range(start, start + LANES):
-        acc &= bits[l]
-    return acc == _ONE_BITS
-
-
-#: the bits of 1.0 (a compile-time constant of :func:`_all_row`)
-_ONE_BITS = int(np.float64(1.0).view(np.int64))
-
-
-@block()
+@block(inline="always")
 def _any_row(buf, start):
     """Whether the row ``buf[start : start + LANES]`` (holding 0.0 or a positive flag/status) has a nonzero entry:
     an OR of the bits, which vectorises (a floating-point reduction would not), in place of a scalar loop with a
