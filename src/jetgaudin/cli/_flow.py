@@ -301,8 +301,12 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
             fm = jg.ChainExactFlow(H, dt, substeps=substeps)
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
-    try:
-        fm.parameters(np.asarray(X0, dtype=float))
+    try:  # su(3): solved here once for the run (bind_run), not again at every chunk
+        bind = getattr(fm, "bind_run", None)
+        if bind is not None:
+            fm = bind(np.asarray(X0, dtype=float))
+        else:
+            fm.parameters(np.asarray(X0, dtype=float))
     except jg.StepTooLargeError as exc:
         dmax = getattr(exc, "dt_max", None)
         if dmax is None:
