@@ -3,6 +3,8 @@
 * su(3) exact runs (``orbit --algebra su3 --dt``, ``flow --algebra su3 --method exact``) solved the per-orbit
   parameters of the exact step again at every saved chunk (a Newton solve each time): now once per run, and once
   more on a resume (bit for bit: the parameters are solved at the run's initial state, read back from run.json);
+* ``flow --compare`` on a chain wrote none of the top's comparison figures: now the chain's y_0 figure with the
+  map's points over the flow's lines, compare_drift.png (the chain's own integrals) and compare_distance.png;
 """
 
 from __future__ import annotations
@@ -17,6 +19,10 @@ import jetgaudin as jg
 from jetgaudin import run as rl
 from jetgaudin.gaudin import sun_exact
 from test_run import run_cli
+
+TRIG = jg.GaudinModel(0.5, [(0.0, 2), (1.0, 1)], family="trigonometric", gamma=0.7)
+TRIG_ARGS = ["--sites", "0:2,1:1", "--family", "trigonometric", "--gamma", "0.7", "--b", "0.5"]
+TRIG_X0 = np.array([0.3, 0.2, 0.9, 0.1, -0.2, 0.05, 0.5, 0.4, 0.6])
 
 MODEL = jg.GaudinModel(0.5, [(0.0, 1), (1.0, 1)], algebra="su3")
 X0 = np.round(np.random.default_rng(1).normal(size=16) * 0.5, 3)
@@ -96,3 +102,65 @@ def test_library_run_solves_once_and_is_the_one_call_orbit(tmp_path, monkeypatch
     a = bound.advance(X0, None, 200, 100)
     b = bound.advance(a.X, None, 200, 100)
     assert np.array_equal(rl.load(tmp_path / "lib").X, np.concatenate([X0[None], a.rows, b.rows]))
+
+
+# ---- 2. flow --compare on a chain draws the comparison -----------------------------------------------------------
+
+def _capture(monkeypatch) -> dict:
+    """Every figure the plotting package saves, by file name (checked, then saved as usual)."""
+    import jetgaudin.plotting._chains as pch
+    import jetgaudin.plotting._compare as pcmp
+    from jetgaudin.plotting import _files
+
+    seen, real = {}, _files.save_figure
+
+    def spy(fig, path, dpi):
+        seen[path.name] = fig
+        return real(fig, path, dpi)
+
+    for mod in (_files, pch, pcmp):
+        monkeypatch.setattr(mod, "save_figure", spy)
+    return seen
+
+
+def test_flow_compare_on_a_jet_chain_draws_the_map_against_the_flow(capsys, tmp_path, monkeypatch):
+    """A trigonometric chain with an order-2 site: the four figures are written and listed in run.json; each
+    compare_drift panel holds the drift of that chain integral (model.integrals, not the top's), the flow's as a
+    line and the map's as points, exactly the values of the stored orbits; chain_y0 draws the map's points over the
+    flow's lines (the same rows); compare_distance is |X_map − X_flow| of the stored orbits."""
+    seen = _capture(monkeypatch)
+    init = ",".join(repr(float(v)) for v in TRIG_X0)
+    out = tmp_path / "c"
+    code, _, err = run_cli(capsys, "flow", *TRIG_ARGS, "--init", init, "--eta", "0.4+0.3i", "--compare", "--steps",
+                           "12", "--no-progress", "--out", out)
+    assert code == 0, err
+    names = {"chain_y0.png", "chain_integrals.png", "compare_drift.png", "compare_distance.png"}
+    run = json.loads((out / "run.json").read_text())
+    assert names <= set(run["files"]) and names <= set(seen)
+    assert all((out / n).stat().st_size > 10_000 for n in names)  # a drawn PNG, not an empty one
+    flow = rl.load(out).X
+    orbit = np.loadtxt(out / "orbit.csv", delimiter=",", skiprows=1)[:, 1:]
+    assert orbit.shape == flow.shape
+    fig = seen["compare_drift.png"]
+    panels = [ax for ax in fig.axes if ax.get_visible()]
+    labels = TRIG.integral_labels()
+    assert [ax.get_title().split(" ")[0] for ax in panels] == labels  # 7 integrals: h1,1 ... J
+    df = np.abs(TRIG.integrals(flow) - TRIG.integrals(flow[0]))
+    dm = np.abs(TRIG.integrals(orbit) - TRIG.integrals(orbit[0]))
+    for k, ax in enumerate(panels):
+        fl, mp = ax.lines
+        assert fl.get_linestyle() == "-" and mp.get_marker() == "."
+        np.testing.assert_array_equal(fl.get_ydata(), df[df[:, k] > 0, k])
+        np.testing.assert_array_equal(mp.get_ydata(), dm[dm[:, k] > 0, k])
+    assert any("drift of the 7 integrals" in t.get_text() for t in fig.texts)
+    dist = np.linalg.norm(orbit - flow, axis=-1)
+    np.testing.assert_array_equal(seen["compare_distance.png"].axes[0].lines[0].get_ydata(), dist[dist > 0])
+    # the flow is the map's interpolation: DOP853 at rtol 1e-12 over 12 time units (measured 9e-12; 1e-8 leaves room)
+    assert dist.max() < 1e-8
+    comp = seen["chain_y0.png"].axes[1]  # site 1's components: each a line (flow) then dots (map)
+    y0_flow, y0_map = flow[:, :3], orbit[:, :3]
+    for a in range(3):
+        line, dots = comp.lines[2 * a], comp.lines[2 * a + 1]
+        np.testing.assert_array_equal(line.get_ydata(), y0_flow[:, a])
+        np.testing.assert_array_equal(dots.get_ydata(), y0_map[:, a])
+        assert dots.get_linestyle() == "None"
