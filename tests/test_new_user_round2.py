@@ -5,6 +5,12 @@
   more on a resume (bit for bit: the parameters are solved at the run's initial state, read back from run.json);
 * ``flow --compare`` on a chain wrote none of the top's comparison figures: now the chain's y_0 figure with the
   map's points over the flow's lines, compare_drift.png (the chain's own integrals) and compare_distance.png;
+* ``ensemble --algebra su3 --n`` ignored --n silently (as every chain, --input, --init-from and --resume did):
+  refused in one line where nothing reads it;
+* ``orbit --backend gpu`` was refused in a validation library's words ("Value error, 'gpu' is not one of ..."): one
+  plain line naming the option, what the command takes and where the GPU is (``ensemble --backend gpu``); every other
+  bad choice is worded the same way;
+* ``--init``'s metavar and help said 3N on su(n) runs: the help gives the count of a top, an su(2) chain and su(3).
 """
 
 from __future__ import annotations
@@ -13,11 +19,14 @@ import json
 import os
 import signal
 
+import h5py
 import numpy as np
+import pytest
 
 import jetgaudin as jg
 from jetgaudin import run as rl
 from jetgaudin.gaudin import sun_exact
+from test_cli_chains import one_line_error
 from test_run import run_cli
 
 TRIG = jg.GaudinModel(0.5, [(0.0, 2), (1.0, 1)], family="trigonometric", gamma=0.7)
@@ -164,3 +173,75 @@ def test_flow_compare_on_a_jet_chain_draws_the_map_against_the_flow(capsys, tmp_
         np.testing.assert_array_equal(line.get_ydata(), y0_flow[:, a])
         np.testing.assert_array_equal(dots.get_ydata(), y0_map[:, a])
         assert dots.get_linestyle() == "None"
+
+
+# ---- 3. ensemble --n is honoured or refused -----------------------------------------------------------------------
+
+@pytest.mark.parametrize("extra, words", [
+    (["--sites", "0:1,1:1", "--algebra", "su3"], ["--n", "--sites", "drop --n"]),
+    (["--sites", "0:2,1:1"], ["--n", "--sites"]),
+    (["--resume", "RUN"], ["--n", "--resume", "drop --n"]),
+    (["--input", "STATES"], ["--n", "--input", "drop --n"]),
+    ([], ["--n", ">= 1"]),  # --n 0 below
+])
+def test_ensemble_n_is_refused_where_nothing_reads_it(capsys, tmp_path, extra, words):
+    (tmp_path / "states.csv").write_text("1,0,0,0,1,0\n")
+    extra = [str(tmp_path / "states.csv") if a == "STATES" else str(tmp_path / "run") if a == "RUN" else a
+             for a in extra]
+    out = tmp_path / "e"
+    code, _, err = run_cli(capsys, "ensemble", *extra, "--n", "0" if not extra else "2", "--orbits", "2",
+                           "--steps", "2", "--out", out)
+    assert one_line_error(code, err, *words), err
+    assert not out.exists()  # refused before anything is written
+
+
+def test_ensemble_n_sets_the_sampled_order(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "ensemble", "--n", "2", "--casimirs", "1,2", "--orbits", "3", "--steps", "2",
+                           "--no-progress", "--out", tmp_path / "e")
+    assert code == 0, err
+    with h5py.File(tmp_path / "e" / "ensemble.h5") as f:
+        assert f["X0"].shape == (3, 6)  # N = 2: 3N = 6 components
+        assert np.allclose(jg.integrals(np.array(f["X0"]), 1.0)[:, 2:], [1.0, 2.0], rtol=1e-12)  # on the leaf
+
+
+# ---- 4. orbit/flow --backend gpu: one plain line naming where the GPU is ------------------------------------------
+
+@pytest.mark.parametrize("command, given", [("orbit", ["--backend", "gpu"]), ("orbit", ["--kernel=gpu"]),
+                                            ("flow", ["--backend", "gpu"])])
+def test_backend_gpu_outside_ensemble_is_one_plain_line(capsys, tmp_path, command, given):
+    code, _, err = run_cli(capsys, command, *given, "--steps", "2", "--out", tmp_path / "o")
+    opt = given[0].split("=")[0]
+    assert one_line_error(code, err, opt, f"{command} takes auto, compiled or numpy", "ensemble --backend gpu"), err
+    assert "Value error" not in err and "Invalid value" not in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_other_bad_choices_name_what_the_command_takes(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "flow", "--method", "dop853", "--out", tmp_path / "f")
+    assert one_line_error(code, err, "--method", "DOP853, heyoka, exact or midpoint", "'dop853'"), err
+    code, _, err = run_cli(capsys, "ensemble", "--backend", "cuda", "--out", tmp_path / "e")
+    assert one_line_error(code, err, "--backend", "auto, compiled, numpy or gpu"), err
+    assert "ensemble --backend gpu (" not in err  # ensemble has the GPU: no pointer to itself
+
+
+# ---- 5. --init's help is right for a top and for both algebras ----------------------------------------------------
+
+@pytest.mark.parametrize("command", ["orbit", "flow", "info"])
+def test_init_help_gives_the_count_of_every_model(command):
+    import typer
+
+    from jetgaudin.cli._app import app
+
+    opt = next(p for p in typer.main.get_command(app).commands[command].params if "--init" in p.opts)
+    assert "3N" not in (opt.metavar or "")  # an su(3) state has 8M numbers, not 3N
+    help_text = " ".join(opt.help.split())
+    su2 = jg.GaudinModel(1.0, [(0.0, 2), (1.0, 1)])
+    assert su2.n_state == 3 * su2.M and "with --sites 3M (M = N_1 + N_2 + ..." in help_text
+    assert MODEL.n_state == 8 * MODEL.M and "--algebra su3 8M" in help_text
+    assert "3N for a top of jet order N" in help_text
+
+
+def test_su3_init_errors_do_not_ask_for_3n(capsys, tmp_path):
+    code, _, err = run_cli(capsys, "orbit", *SU3[:-1], "1,2,x", "--eta", "0.4+0.1i", "--out", tmp_path / "o")
+    assert one_line_error(code, err, "--init", "value 3"), err
+    assert "3N" not in err

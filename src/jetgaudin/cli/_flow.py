@@ -48,8 +48,8 @@ def flow(
             help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
     steps: Annotated[str, typer.Option("--steps", metavar="INTEGER",
             help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
-    init: Annotated[str | None, typer.Option("--init", metavar="X1,...,X3N",
-            help="3N comma-separated numbers y_0, y_1, ... [default: Appendix 2]")] = None,
+    init: Annotated[str | None, typer.Option("--init", metavar=_chains.INIT_METAVAR,
+            help=_chains.INIT_HELP + " [default: Appendix 2]")] = None,
     hamiltonian: Annotated[
         str,
         typer.Option(

@@ -116,9 +116,8 @@ def orbit(
     init: Annotated[
         str | None,
         typer.Option(
-            "--init", metavar="X1,...,X3N",
-            help="3N comma-separated numbers y_0, y_1, ... (N inferred), e.g. "
-            f"--init={APPENDIX2_INIT} [default: Appendix 2]",
+            "--init", metavar=_chains.INIT_METAVAR,
+            help=_chains.INIT_HELP + f", e.g. --init={APPENDIX2_INIT} [default: Appendix 2]",
         ),
     ] = None,
     branch: Annotated[
