@@ -287,6 +287,9 @@ def orbit(
                 spec = runlayer.RunSpec(m, np.array(X0, dtype=float), expect.get("steps", APPENDIX2_STEPS),
                                         expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
                                         **opts)
+            from .. import _fs
+
+            _fs.check_new_run_dir(out_dir, overwrite=overwrite)  # a refusal is one line: before the route notice
             route_notice(spec.map, spec.X0, spec.steps)
             res = run_with_progress("orbit", progress, lambda bar: runlayer.start(
                 spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar,

@@ -331,6 +331,9 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
+    from .. import _fs
+
+    _fs.check_new_run_dir(out_dir, overwrite=overwrite)  # a refusal is one line: before the route notice
     route_notice(m, spec.X0, spec.steps)
     client = None if scheduler is None else ens.dask_client(scheduler)  # one client for the run (the one-body way)
     try:
