@@ -82,7 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        bad = _bad_number(args) or _bad_choice(args)
+        sub = _subcommand(args)
+        bad = _bad_number(args, sub) or _bad_choice(args, sub)
         if bad is not None:
             typer.echo(bad, err=True)
             sys.exit(2)
@@ -124,7 +125,18 @@ def main(argv: list[str] | None = None) -> None:
     sys.exit(code if isinstance(code, int) else 0)
 
 
-def _bad_number(args: list[str]) -> str | None:
+def _subcommand(args: list[str]) -> Any:
+    """The click command of ``args[0]`` (``None``: none, or the lookup failed: the parser then reports it)."""
+    if not args:
+        return None
+    try:
+        cmd = typer.main.get_command(app)
+        return cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001 - the checks are an addition; the parser reports anything else
+        return None
+
+
+def _bad_number(args: list[str], sub: Any) -> str | None:
     """The one-line error for a value of a numeric option (``int``/``float`` typed) that Python's ``float``/``int``
     would read but the command line does not accept: non-ASCII digits (``١.٥``), underscores (``1_``, ``1_0``), or
     a non-finite float (``inf``, ``nan``: every float option wants a finite number); ``None`` if all are fine."""
@@ -132,13 +144,6 @@ def _bad_number(args: list[str]) -> str | None:
 
     from ._common import _NUMBER
 
-    if not args:
-        return None
-    try:
-        cmd = typer.main.get_command(app)
-        sub = cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
-    except Exception:  # noqa: BLE001 - the check is an addition; the parser reports anything else
-        return None
     if sub is None:
         return None
     import typing
@@ -182,20 +187,13 @@ def _values(args: list[str], opts) -> Iterator[tuple[str, str]]:
         i += 1
 
 
-def _bad_choice(args: list[str]) -> str | None:
+def _bad_choice(args: list[str], sub: Any) -> str | None:
     """The one-line error for a value outside an option's choices (``--backend gpu`` on ``orbit``), in words: the
     option, what the command takes and, for the GPU, the command that has it (``ensemble``); the parser's own
     message read like a validation library's ("Value error, 'gpu' is not one of ...")."""
     import enum
     import typing
 
-    if not args:
-        return None
-    try:
-        cmd = typer.main.get_command(app)
-        sub = cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
-    except Exception:  # noqa: BLE001 - the check is an addition; the parser reports anything else
-        return None
     if sub is None:
         return None
     choices: dict[str, list[str]] = {}
