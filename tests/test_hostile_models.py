@@ -31,6 +31,7 @@ import pytest
 import jetgaudin as jg
 from jetgaudin import run as rl
 from test_cli_chains import one_line_error
+from test_data_safety import interrupt_at
 from test_reliability_refusals import age, snapshot
 from test_run import run_cli
 
@@ -149,20 +150,41 @@ def test_planted_symlinks_are_not_followed_by_a_new_run(capsys, tmp_path, name):
         assert not any(p.is_symlink() for p in out.iterdir())
 
 
+def _interrupted(name, out, steps=12):
+    """A run of ``steps`` steps stopped by a real SIGINT after step 4 (tests/test_data_safety.py): resumable."""
+    interrupt_at(out, _map(name), MODELS[name][1], steps, 2, 4)
+    assert 0 < rl.read_run(out)["last_safe_step"] < steps
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_planted_symlinks_are_not_followed_by_a_resume(capsys, tmp_path, name):
+    """The same names planted in a resumable directory (no --overwrite clears them first): the library's and the
+    command line's resume (figures drawn) write their files without writing through a link."""
+    victim = tmp_path / "victim.txt"
+    victim.write_text("precious")
+    for where in ("lib", "cli"):
+        out = tmp_path / where
+        _interrupted(name, out)
+        for p in ("orbit.csv.tmp", "orbit.h5.tmp", "run.json.tmp", "chain_y0.png.tmp", "chain_integrals.png.tmp"):
+            (out / p).symlink_to(victim)
+        if where == "lib":
+            assert rl.resume(out).status == "completed"
+        else:
+            code, _, err = run_cli(capsys, "orbit", "--resume", out, "--no-progress")
+            assert code == 0, err
+            assert not (out / "chain_y0.png").is_symlink() and (out / "chain_y0.png").stat().st_size > 0
+        assert victim.read_text() == "precious"
+        assert not any((out / f).is_symlink() for f in ("orbit.csv", "orbit.h5", "run.json"))
+        assert np.array_equal(rl.load(out).X, _map(name).iterate(MODELS[name][1], 12)[::2])  # completed, same bits
+
+
 @pytest.mark.parametrize("name", NAMES)
 @pytest.mark.parametrize("file", ["orbit.csv", "orbit.h5", "run.json"])
 def test_a_symlinked_run_file_is_refused_and_changes_nothing(capsys, tmp_path, name, file):
     """A run file replaced by a symlink to a copy outside: resume (library and command line) is refused in one line,
     the target is neither read as the run's nor written, and the directory is byte-identical."""
-    _, X0, _, _ = MODELS[name]
     out = tmp_path / "run"
-    res = rl.start(rl.RunSpec(_map(name), X0, 10), out, max_chunk_steps=4)
-    assert res.status == "completed"
-    run = rl.read_run(out)
-    run["status"] = "interrupted"  # resumable, as after a SIGINT (the digest recomputed, as an editor would)
-    from jetgaudin.run.files import write_run
-
-    write_run(out, run)
+    _interrupted(name, out)
     victim = tmp_path / "victim"
     os.replace(out / file, victim)
     (out / file).symlink_to(victim)
