@@ -16,6 +16,7 @@ import contextlib
 import importlib
 import importlib.util
 import sys
+from collections.abc import Iterator
 from typing import Annotated, Any
 
 import typer
@@ -81,7 +82,8 @@ def main(argv: list[str] | None = None) -> None:
     """Console entry point ``jetgaudin`` (also ``python -m jetgaudin``)."""
     args = sys.argv[1:] if argv is None else list(argv)
     try:
-        bad = _bad_number(args)
+        sub = _subcommand(args)
+        bad = _bad_number(args, sub) or _bad_choice(args, sub)
         if bad is not None:
             typer.echo(bad, err=True)
             sys.exit(2)
@@ -123,7 +125,18 @@ def main(argv: list[str] | None = None) -> None:
     sys.exit(code if isinstance(code, int) else 0)
 
 
-def _bad_number(args: list[str]) -> str | None:
+def _subcommand(args: list[str]) -> Any:
+    """The click command of ``args[0]`` (``None``: none, or the lookup failed: the parser then reports it)."""
+    if not args:
+        return None
+    try:
+        cmd = typer.main.get_command(app)
+        return cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
+    except Exception:  # noqa: BLE001 - the checks are an addition; the parser reports anything else
+        return None
+
+
+def _bad_number(args: list[str], sub: Any) -> str | None:
     """The one-line error for a value of a numeric option (``int``/``float`` typed) that Python's ``float``/``int``
     would read but the command line does not accept: non-ASCII digits (``١.٥``), underscores (``1_``, ``1_0``), or
     a non-finite float (``inf``, ``nan``: every float option wants a finite number); ``None`` if all are fine."""
@@ -131,13 +144,6 @@ def _bad_number(args: list[str]) -> str | None:
 
     from ._common import _NUMBER
 
-    if not args:
-        return None
-    try:
-        cmd = typer.main.get_command(app)
-        sub = cmd.commands.get(args[0]) if hasattr(cmd, "commands") else None  # type: ignore[attr-defined]
-    except Exception:  # noqa: BLE001 - the check is an addition; the parser reports anything else
-        return None
     if sub is None:
         return None
     import typing
@@ -151,27 +157,63 @@ def _bad_number(args: list[str]) -> str | None:
             for opt in getattr(p, "opts", []):
                 if opt.startswith("-"):
                     kinds[opt] = kind
+    for opt, value in _values(args, kinds):
+        v = value.strip()
+        ok = bool(_NUMBER.fullmatch(v)) if kinds[opt] == "float" else v.lstrip("+-").isascii() and \
+            v.lstrip("+-").isdigit()
+        if ok and kinds[opt] == "float" and not math.isfinite(float(v)):
+            return f"jetgaudin {args[0]}: error: {opt}: {value!r} is not finite; give a finite number"
+        if not ok:
+            return (f"jetgaudin {args[0]}: error: {opt}: cannot read {value!r} as "
+                    f"{'a number' if kinds[opt] == 'float' else 'an integer'} (ASCII digits 0-9, no '_')")
+    return None
+
+
+def _values(args: list[str], opts) -> Iterator[tuple[str, str]]:
+    """``(option, value)`` of each of ``opts`` given in ``args[1:]`` (``--opt value`` or ``--opt=value``)."""
     i = 1
     while i < len(args):
         a = args[i]
         opt, value = (a.split("=", 1) + [None])[:2] if a.startswith("--") else (a, None)
-        if opt in kinds:
+        if opt is not None and opt in opts:
             if value is None:
                 if i + 1 >= len(args):
-                    return None
+                    return
                 value = args[i + 1]
                 i += 1
-            v = value.strip()
-            ok = bool(_NUMBER.fullmatch(v)) if kinds[opt] == "float" else v.lstrip("+-").isascii() and \
-                v.lstrip("+-").isdigit()
-            if ok and kinds[opt] == "float" and not math.isfinite(float(v)):
-                return f"jetgaudin {args[0]}: error: {opt}: {value!r} is not finite; give a finite number"
-            if not ok:
-                return (f"jetgaudin {args[0]}: error: {opt}: cannot read {value!r} as "
-                        f"{'a number' if kinds[opt] == 'float' else 'an integer'} (ASCII digits 0-9, no '_')")
+            yield opt, value
         elif a == "--":
-            break
+            return
         i += 1
+
+
+def _bad_choice(args: list[str], sub: Any) -> str | None:
+    """The one-line error for a value outside an option's choices (``--backend gpu`` on ``orbit``), in words: the
+    option, what the command takes and, for the GPU, the command that has it (``ensemble``); the parser's own
+    message read like a validation library's ("Value error, 'gpu' is not one of ...")."""
+    import enum
+    import typing
+
+    if sub is None:
+        return None
+    choices: dict[str, list[str]] = {}
+    for p in sub.params:
+        ann = getattr(getattr(p, "type_descriptor", None), "annotation", None)
+        for t in set(typing.get_args(ann)) | {ann}:
+            if isinstance(t, type) and issubclass(t, enum.Enum):
+                for opt in getattr(p, "opts", []):
+                    if opt.startswith("-"):
+                        choices[opt] = [str(m.value) for m in t]
+    for opt, value in _values(args, choices):
+        if value in choices[opt]:
+            continue
+        takes = choices[opt]
+        text = ", ".join(takes[:-1]) + f" or {takes[-1]}" if len(takes) > 1 else takes[0]
+        line = f"jetgaudin {args[0]}: error: {opt}: {args[0]} takes {text}, not {value!r}"
+        if value.strip().lower() in ("gpu", "cuda") and "gpu" not in takes:
+            line += ("; the GPU route is for ensembles of orbits: jetgaudin ensemble --backend gpu (an NVIDIA GPU, "
+                     "pip install 'jetgaudin[gpu]')")
+        return line
     return None
 
 

@@ -24,6 +24,10 @@ FAMILY_HELP = ("the Gaudin family of --sites: 'rational' (XXX, the paper's), 'tr
 GAMMA_HELP = "anisotropy γ > 0 of --family trigonometric (sites distinct modulo π/γ) [default: 1]"
 MODULUS_HELP = ("modulus k in [0, 1) of --family elliptic (sites distinct modulo 2K(k), |Im η| < 0.9 K'(k)); "
                 "required by it")
+#: ``--init`` of orbit, flow and info: the count for a top and for a chain of either algebra
+INIT_METAVAR = "X1,X2,..."
+INIT_HELP = ("the state, comma-separated numbers y_0, y_1, ...: 3N for a top of jet order N (N inferred); with --sites "
+             "3M (M = N_1 + N_2 + ..., site by site); with --algebra su3 8M (suN: N²−1 per site and order)")
 ALGEBRA_HELP = ("the Lie algebra of --sites: su2 (the default) or suN, e.g. su3 (rational family; --init then takes "
                 "(N²−1)M numbers, --b is the field along λ_3; docs/sun.md)")
 

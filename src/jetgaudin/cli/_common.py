@@ -165,15 +165,16 @@ def parse_init(text: str, option: str = "--init", *, multiple: int = 3) -> list[
     """Comma-separated 3N finite numbers (order y_0, y_1, ...); N is inferred from the count (``multiple=1``: any
     count, checked by the caller, e.g. an su(n) chain's (n²−1)M)."""
     parts = [p.strip() for p in str(text).split(",")]
+    what = "3N comma-separated numbers" if multiple == 3 else "comma-separated numbers"  # su(n): (n²−1)M
     if not parts or parts == [""]:
-        raise CliInputError(f"{option}: no numbers given; give 3N comma-separated numbers y_0, y_1, ...")
+        raise CliInputError(f"{option}: no numbers given; give {what} y_0, y_1, ...")
     vals = []
     for i, p in enumerate(parts, 1):
         try:
             v = to_float(p, option)
         except ValueError:
             raise CliInputError(
-                f"{option}: value {i} ({p!r}) is not a number; give 3N comma-separated numbers"
+                f"{option}: value {i} ({p!r}) is not a number; give {what}"
             ) from None
         if not math.isfinite(v):
             raise CliInputError(f"{option}: value {i} ({p!r}) is not finite; give finite numbers")

@@ -48,8 +48,8 @@ def flow(
             help="η of G_η (and of the map for --compare)")] = cm.APPENDIX2_ETA,
     steps: Annotated[str, typer.Option("--steps", metavar="INTEGER",
             help="number of samples after t = 0")] = str(cm.APPENDIX2_STEPS),
-    init: Annotated[str | None, typer.Option("--init", metavar="X1,...,X3N",
-            help="3N comma-separated numbers y_0, y_1, ... [default: Appendix 2]")] = None,
+    init: Annotated[str | None, typer.Option("--init", metavar=_chains.INIT_METAVAR,
+            help=_chains.INIT_HELP + " [default: Appendix 2]")] = None,
     hamiltonian: Annotated[
         str,
         typer.Option(
@@ -98,8 +98,9 @@ def flow(
     """Integrate the continuous flow of G_η (default) or of H_2/2 from the same inputs as `orbit`.
 
     Writes into --out: flow.csv / flow.h5 (columns t, y_0, y_1, ...), figure1.png, figure2.png,
-    integrals.png, run.json; with --compare also orbit.csv / orbit.h5 (the map) and compare.csv
-    (n, |X_map(n) − X_flow(n)|), the orbit drawn as points over the flow drawn as lines.
+    integrals.png (a chain, --sites: chain_y0.png, chain_integrals.png), run.json; with --compare also
+    orbit.csv / orbit.h5 (the map), compare.csv (n, |X_map(n) − X_flow(n)|), compare_drift.png and
+    compare_distance.png, the orbit drawn as points over the flow drawn as lines.
     """
     con = cm.console()
     with cm.reported_errors():
@@ -172,7 +173,8 @@ def flow(
                     f"{i},{v:.17g}\n" for i, v in enumerate(dist)))
                 written.append(out_dir / "compare.csv")
                 extra["compare"] = {"max_distance": float(dist.max()), "final_distance": float(dist[-1]),
-                                    "distance": "Euclidean norm of X_map(n) - X_flow(n) in R^(3N)"}
+                                    "distance": "Euclidean norm of X_map(n) - X_flow(n) in R^"
+                                                + ("(3N)" if model is None else f"{len(X0)}")}
             if not no_plots:
                 from .. import plotting
 
@@ -182,11 +184,13 @@ def flow(
                     f"flow of {what}: b = {bf:g}, "
                     f"η = {eta_c.real:g}{eta_c.imag:+g}i, dt = {dt:g}, {n_steps} samples"
                 )
-                if model is not None:
-                    from .. import plotting
-
-                    written += plotting.save_chain_figures(out_dir, t, data.X, model, title=title,
-                                                                  xlabel="time t")
+                if model is not None:  # --compare: the map's points over the flow, and the top's compare figures
+                    written += plotting.save_chain_figures(
+                        out_dir, t, data.X, model, xlabel="time t", overlay=orbit_X, overlay_label="map, step n",
+                        title=title + (" (dots: map, lines: flow)" if compare else ""))
+                    if compare:
+                        written += plotting.save_compare_figures(out_dir, t, data.X, np.arange(n_steps + 1), orbit_X,
+                                                                 None, title=title, model=model)
                 elif compare:
                     written += plotting.save_orbit_figures(out_dir, np.arange(n_steps + 1), orbit_X, bf,
                                                            title=title + " (points: map, lines: flow)",
@@ -301,8 +305,12 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
             fm = jg.ChainExactFlow(H, dt, substeps=substeps)
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
-    try:
-        fm.parameters(np.asarray(X0, dtype=float))
+    try:  # su(3): solved here once for the run (bind_run), not again at every chunk
+        bind = getattr(fm, "bind_run", None)
+        if bind is not None:
+            fm = bind(np.asarray(X0, dtype=float))
+        else:
+            fm.parameters(np.asarray(X0, dtype=float))
     except jg.StepTooLargeError as exc:
         dmax = getattr(exc, "dt_max", None)
         if dmax is None:

@@ -55,7 +55,7 @@ def info(
     eta: Annotated[str, typer.Option("--eta", metavar="COMPLEX",
             help="spectral parameter η, e.g. 5+0.1i")] = APPENDIX2_ETA,
     init: Annotated[
-        str, typer.Option("--init", metavar="X1,...,X3N", help="the state: 3N comma-separated numbers y_0, y_1, ...")
+        str, typer.Option("--init", metavar=_chains.INIT_METAVAR, help=_chains.INIT_HELP)
     ] = APPENDIX2_INIT,
     tol: Annotated[float, typer.Option("--tol", help="tolerance of the canonical-leaf test")] = 1e-10,
     as_json: Annotated[bool, typer.Option("--json", help="print JSON instead of tables")] = False,

@@ -116,9 +116,8 @@ def orbit(
     init: Annotated[
         str | None,
         typer.Option(
-            "--init", metavar="X1,...,X3N",
-            help="3N comma-separated numbers y_0, y_1, ... (N inferred), e.g. "
-            f"--init={APPENDIX2_INIT} [default: Appendix 2]",
+            "--init", metavar=_chains.INIT_METAVAR,
+            help=_chains.INIT_HELP + f", e.g. --init={APPENDIX2_INIT} [default: Appendix 2]",
         ),
     ] = None,
     branch: Annotated[
@@ -288,6 +287,9 @@ def orbit(
                 spec = runlayer.RunSpec(m, np.array(X0, dtype=float), expect.get("steps", APPENDIX2_STEPS),
                                         expect.get("save_every", 1), limits, csv=not no_csv, program="jetgaudin orbit",
                                         **opts)
+            from .. import _fs
+
+            _fs.check_new_run_dir(out_dir, overwrite=overwrite)  # a refusal is one line: before the route notice
             route_notice(spec.map, spec.X0, spec.steps)
             res = run_with_progress("orbit", progress, lambda bar: runlayer.start(
                 spec, out_dir, overwrite=overwrite, record={"plots": not no_plots}, progress=bar,

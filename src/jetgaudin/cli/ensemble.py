@@ -103,7 +103,8 @@ def ensemble_command(
     ] = None,
     orbits: Annotated[str, typer.Option("--orbits", metavar="INTEGER", help="number of sampled orbits")] = "100",
     seed: Annotated[str, typer.Option("--seed", metavar="INTEGER", help="seed of the sampler (an integer >= 0)")] = "0",
-    n: Annotated[int, typer.Option("--n", help="jet order N of the sampled states")] = 3,
+    n: Annotated[int | None, typer.Option("--n", help="jet order N of the states drawn by --sample (one top; a "
+                                          "chain's orders come from --sites) [default: 3]")] = None,
     casimirs: Annotated[str | None, typer.Option("--casimirs", metavar="C1,...,CN",
             help="C_1,...,C_N of the leaf (C_N > 0)")] = None,
     energy: Annotated[float | None, typer.Option("--energy", help="energy E of the shell H_2/2 = E")] = None,
@@ -197,6 +198,7 @@ def ensemble_command(
             if sites is not None and b is None and "b" in source.get("map", {}):  # its field (0 for elliptic chains)
                 b = repr(float(source["map"]["b"]))
         b = "1.0" if b is None else b
+        n = _jet_order(n, resume, sites, input, init_from_dir)
         if resume is not None:
             if input is not None or sample is not None or init_from_dir is not None:
                 raise CliInputError("--resume continues a recorded ensemble: do not give --input, --sample or "
@@ -263,6 +265,24 @@ def ensemble_command(
             fail(f"run {res.status} (data up to step {res.last_safe_step} kept in {out_dir})", EXIT_FAILED)
 
 
+def _jet_order(n: int | None, resume, sites, input, init_from_dir) -> int:
+    """``--n`` (default 3), refused in one line where nothing reads it (it was ignored silently: a chain's orders
+    come from ``--sites``, those of read states from their file or run)."""
+    if n is None:
+        return 3
+    given = ("--resume" if resume is not None else "--sites" if sites is not None else
+             "--input" if input is not None else "--init-from" if init_from_dir is not None else None)
+    if given == "--sites":
+        raise CliInputError(f"--n: the jet orders of a chain's sites come from --sites (λ:N per site, e.g. "
+                            f"--sites 0:{n},1:1); drop --n")
+    if given is not None:
+        raise CliInputError(f"--n: the jet order of the states of {given} is theirs; drop --n (it sets the order of "
+                            "the states --sample draws)")
+    if n < 1:
+        raise CliInputError(f"--n: the jet order N must be an integer >= 1, got {n}")
+    return n
+
+
 #: the most orbits ``--show`` lists (the drift table; every orbit's drift is in ensemble.h5 and run.json)
 MAX_SHOW = 10**6
 
@@ -311,6 +331,9 @@ def _chain_ensemble(sites, input, sample, init_from_dir, scheduler, b, eta, expe
         spec = runlayer.RunSpec(m, X0, expect.get("steps", 100), expect.get("save_every", 1),
                                 runlayer.HealthLimits(max_drift=common["max_drift"]), csv=False,
                                 program="jetgaudin ensemble", checkpoint_seconds=common["checkpoint_seconds"])
+    from .. import _fs
+
+    _fs.check_new_run_dir(out_dir, overwrite=overwrite)  # a refusal is one line: before the route notice
     route_notice(m, spec.X0, spec.steps)
     client = None if scheduler is None else ens.dask_client(scheduler)  # one client for the run (the one-body way)
     try:

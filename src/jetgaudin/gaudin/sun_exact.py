@@ -239,8 +239,10 @@ class SunExactFlow(ModelMap, StepByAdvance, Map):
     (:func:`jetgaudin.gaudin._sun_kernel.orbit_loop`: the loop of the single map, ``k = K``), a batch on all cores,
     each orbit its own parameters and its single run bit for bit; ``"numpy"`` the maps' NumPy route; ``"auto"`` the
     compiled one from ``AUTO_MIN_WORK`` map steps on.  The run layer cuts it in fixed chunks
-    (``chunk_invariant = False``: the parameters are solved again at every call, from a state whose integrals moved
-    by round-off), so a resumed run meets the same cuts and the same bits."""
+    (``chunk_invariant = False``: each call starts every map's ``μ_r`` by its branch rule), so a resumed run meets
+    the same cuts and the same bits.  A run solves the parameters once (:meth:`bind_run`: at the run's initial
+    states, which a resume reads back from ``run.json``, so a resume solves them once more and gets the same bits);
+    before, every chunk solved them again (~5 % of an orbit's time at ``--save-every 100``, issue 33 follow-up)."""
 
     H: Any
     dt: float
@@ -251,6 +253,8 @@ class SunExactFlow(ModelMap, StepByAdvance, Map):
         default=MapProperties(preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True,
                               interpolates_flow=False), init=False, repr=False, compare=False)
     chunk_invariant: ClassVar[bool] = False
+    #: :meth:`bind_run`'s ``(X0 (B, 8M), maps per orbit)``; ``None``: solved at every :meth:`advance`
+    _bound: ClassVar[Any] = None
 
     def __post_init__(self):
         model = getattr(self.H, "model", None)
@@ -322,6 +326,32 @@ class SunExactFlow(ModelMap, StepByAdvance, Map):
         return [SunTwoPointBacklund(self.model, e, r, Backend.NUMPY) for e, r in zip(etas, branches, strict=True)
                 if abs(e.imag) > _IDENTITY_IM * max(abs(e.real), 1.0)]
 
+    def bind_run(self, X0) -> SunExactFlow:
+        """This map with each orbit's sub-step maps solved once, at the run's initial states ``X0`` ``(8M,)`` or
+        ``(B, 8M)`` (the run layer's :func:`jetgaudin.run.spec.run_map`): its :meth:`advance` of the run's orbits,
+        in order, uses them instead of solving at every call (the parameters are functions of the integrals,
+        constant along each orbit).  Only for the run's own orbits: a batch of ``b ≤ B`` orbits is taken as the
+        run's first ``b`` (the driver's reference step on the first 64), so a map bound here must not be given
+        other states.  The same map (``self``) when already bound at these ``X0``.  Raises what
+        :meth:`parameters` raises (``StepTooLargeError`` with ``dt_max``; ``orbit i:`` named in a batch)."""
+        X0 = np.asarray(self.model.check_state(X0), dtype=float)
+        flat = X0.reshape(-1, X0.shape[-1])
+        if self._bound is not None and np.array_equal(self._bound[0], flat):
+            return self
+        bound = SunExactFlow(self.H, self.dt, self.substeps, self.backend)
+        object.__setattr__(bound, "_bound", (flat.copy(), self._solve(flat)))
+        return bound
+
+    def _solve(self, flat: np.ndarray) -> list[list[SunTwoPointBacklund]]:
+        """The sub-step's maps of each orbit of ``flat`` ``(B, 8M)``."""
+        maps = []
+        for i, x in enumerate(flat):
+            try:
+                maps.append(self._maps(x))
+            except StepTooLargeError as exc:
+                raise StepTooLargeError(f"orbit {i}: {exc}" if len(flat) > 1 else str(exc), dt_max=exc.dt_max) from None
+        return maps
+
     def _auto_backend(self, X, steps) -> Backend:
         from ._backend import AUTO_MIN_WORK
 
@@ -329,15 +359,15 @@ class SunExactFlow(ModelMap, StepByAdvance, Map):
         return Backend.COMPILED if work >= AUTO_MIN_WORK else Backend.NUMPY
 
     def advance(self, X, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        """``steps`` exact steps from ``X`` ``(..., 8M)`` (parameters solved at ``X``, per orbit), rows every
-        ``save_every`` (class doc); ``carry`` is not used (zeros back)."""
+        """``steps`` exact steps from ``X`` ``(..., 8M)`` (parameters solved at ``X``, per orbit, or those of
+        :meth:`bind_run`), rows every ``save_every`` (class doc); ``carry`` is not used (zeros back)."""
         steps, save_every, X, flat, rows, final = per_orbit_buffers(self.model, X, steps, save_every)
-        maps = []
-        for i, x in enumerate(flat):
-            try:
-                maps.append(self._maps(x) if steps else [])
-            except StepTooLargeError as exc:
-                raise StepTooLargeError(f"orbit {i}: {exc}" if len(flat) > 1 else str(exc), dt_max=exc.dt_max) from None
+        if not steps:
+            maps: list[list[SunTwoPointBacklund]] = [[] for _ in flat]
+        elif self._bound is not None and len(flat) <= len(self._bound[1]):
+            maps = self._bound[1][:len(flat)]
+        else:
+            maps = self._solve(flat)
         if (steps and self.resolved_backend(X, steps) is Backend.COMPILED and len(maps[0])
                 and all(len(m) == len(maps[0]) for m in maps)):
             rows, final = self._compiled(flat, maps, steps, save_every)

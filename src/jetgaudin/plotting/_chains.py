@@ -45,7 +45,7 @@ def site_y0(model, X) -> np.ndarray:
 MAX_SITES = 6
 
 
-def figure_chain_y0(model, X, *, title: str = "", n=None):
+def figure_chain_y0(model, X, *, title: str = "", n=None, overlay=None, overlay_label: str = "map"):
     """Each site's ``y_0`` along the orbit, one row of panels per site (at most :data:`MAX_SITES`): left, its
     projection on the e₁–e₂ plane (su(n): the components along λ₁, λ₂) coloured by the step (colour bar), the start
     ringed; right, its three (su(n): n² − 1) components ``y_0^1, y_0^2, …`` against the step.  (A 3D cloud of all
@@ -58,6 +58,10 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
     title : str
     n : array_like, shape (T,), optional
         The step of each row (default ``0, 1, …``).
+    overlay : array_like, shape (T, 3M), optional
+        Another orbit at the same steps (``flow --compare``: the map against the flow ``X``), drawn as black dots
+        over the projection and as dots over each component's line.
+    overlay_label : str
 
     Returns
     -------
@@ -65,8 +69,12 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
     """
     X = np.asarray(X, dtype=float)
     n = np.arange(len(X)) if n is None else np.asarray(n)
+    w = X.shape[-1]
+    if overlay is not None:  # thinned with the same rows as X
+        X = np.concatenate([X, np.asarray(overlay, dtype=float)], axis=-1)
     n, X = _thin(n, X)
-    Y = site_y0(model, X)
+    Y = site_y0(model, X[:, :w])
+    Z = None if overlay is None else site_y0(model, X[:, w:])
     S = min(Y.shape[1], MAX_SITES)
     fig = new_figure(figsize=(10, 2.9 * S + 0.9))
     axes = np.asarray(fig.subplots(S, 2, squeeze=False, gridspec_kw={"width_ratios": (1, 1.6)}))
@@ -75,6 +83,8 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
         P = Y[:, i]
         ax, ax_t = axes[i]
         sc = ax.scatter(P[:, 0], P[:, 1], c=n, cmap="viridis", s=max(0.5, min(8.0, 1500.0 / len(P))), linewidths=0)
+        if Z is not None:
+            ax.plot(Z[:, i, 0], Z[:, i, 1], ".", color="black", markersize=2, label=overlay_label)
         ax.scatter(*P[0, :2], s=60, facecolors="none", edgecolors="red", linewidths=1.2, label="start")
         ax.set_aspect("equal", adjustable="datalim")
         su2 = P.shape[-1] == 3  # su(n), n ≥ 3: the components along the Gell-Mann λ₁, λ₂, not e₁, e₂
@@ -88,13 +98,17 @@ def figure_chain_y0(model, X, *, title: str = "", n=None):
         cb.formatter = FuncFormatter(lambda v, _pos: count_text(v))
         cb.update_ticks()
         for a in range(P.shape[-1]):  # su(n): all n² − 1 components
-            ax_t.plot(n, P[:, a], linewidth=0.9, color=comp_colors[a] if a < 3 else colormaps["tab10"](a % 10),
-                      label=f"y_0^{a + 1}")
+            color = comp_colors[a] if a < 3 else colormaps["tab10"](a % 10)
+            ax_t.plot(n, P[:, a], linewidth=0.9, color=color, label=f"y_0^{a + 1}")
+            if Z is not None:
+                ax_t.plot(n, Z[:, i, a], ".", color=color, markersize=3)
         ax_t.set_ylabel("component", fontsize=8)
         ax_t.tick_params(labelsize=7)
         ax_t.grid(True, alpha=0.3)
         step_axis(ax_t)
         if i == 0:
+            if Z is not None:
+                ax_t.plot([], [], ".", color="0.3", markersize=5, label=f"{overlay_label} (dots)")
             ax_t.legend(fontsize=7, ncol=min(P.shape[-1], 4), loc="upper right")
             ax.legend(fontsize=7, loc="upper left")
     axes[-1, 1].set_xlabel("step n", fontsize=8)
@@ -140,12 +154,14 @@ def figure_chain_integral_drift(n, model, X, *, title: str = "", xlabel: str = "
 
 
 def save_chain_figures(out_dir, n, X, model, *, title: str = "", xlabel: str = "step n", dpi: int = 130,
-                       fmt: str = "png") -> list[Path]:
+                       fmt: str = "png", overlay=None, overlay_label: str = "map") -> list[Path]:
     """Write ``chain_y0.<fmt>`` and ``chain_integrals.<fmt>`` into ``out_dir``; return their paths (``orbit``,
-    ``flow`` and ``plot`` of a chain run)."""
+    ``flow`` and ``plot`` of a chain run; ``overlay``: another orbit drawn over ``chain_y0``, as
+    :func:`figure_chain_y0`)."""
     out_dir = Path(out_dir)
     paths = []
-    for name, fig in (("chain_y0", figure_chain_y0(model, X, title=title, n=n)),
+    for name, fig in (("chain_y0", figure_chain_y0(model, X, title=title, n=n, overlay=overlay,
+                                                   overlay_label=overlay_label)),
                       ("chain_integrals", figure_chain_integral_drift(n, model, X, title=title, xlabel=xlabel))):
         paths.append(save_figure(fig, out_dir / f"{name}.{fmt}", dpi))  # atomic, never through a symlink
     return paths

@@ -19,14 +19,24 @@ from ._save import save_figure
 __all__ = ["figure_compare_drift", "figure_map_flow_distance", "save_compare_figures"]
 
 
-def _drift(X, b):
-    I = np.asarray(jg.integrals(np.asarray(X, dtype=float), b), dtype=float)
+def _drift(X, b, model=None):
+    X = np.asarray(X, dtype=float)
+    I = np.asarray(jg.integrals(X, b) if model is None else model.integrals(X), dtype=float)
     return np.abs(I - I[0])
 
 
-def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
+def _names(model, K: int) -> list[str]:
+    """The panel titles: a top's ``H_1..H_N, C_1..C_N``; a chain's integral labels, its Casimirs marked."""
+    if model is None:
+        return integral_labels(K // 2)
+    cas = np.asarray(model.casimir_mask(), dtype=bool)
+    return [name + (" (Casimir)" if c else "") for name, c in zip(model.integral_labels(), cas, strict=True)]
+
+
+def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = "", model=None):
     """The integral drifts ``|I_k − I_k(0)|`` of the flow of ``G_η`` (grey line) and of the map (coloured
-    points), one panel per integral (``H_1..H_N`` on the top row, ``C_1..C_N`` below), log scale, shared axes.
+    points), one panel per integral (a top: ``H_1..H_N`` on the top row, ``C_1..C_N`` below; a chain ``model``:
+    its integrals in the order of ``model.integral_labels()``, at most 4 panels a row), log scale, shared axes.
 
     One panel per integral keeps the 2N pairs of series apart (on one axis their 4N curves overlap).
 
@@ -39,7 +49,10 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
         Steps of the map (step ``n`` is compared with time ``t = n``).
     X_map : array_like, shape (M, 3N)
     b : float
+        The top's field (not used with ``model``).
     title : str
+    model : GaudinModel, optional
+        A chain: its integrals (``model.integrals``) instead of the top's.
 
     Returns
     -------
@@ -49,13 +62,17 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
     -----
     Exact zeros cannot be drawn on a log scale and are left out; a panel says so when a series is all zeros.
     """
-    df, dm = _drift(X_flow, b), _drift(X_map, b)
+    df, dm = _drift(X_flow, b, model), _drift(X_map, b, model)
     t_flow, n_map = np.asarray(t_flow, dtype=float), np.asarray(n_map, dtype=float)
-    N = df.shape[-1] // 2
-    fig = new_figure(figsize=(3.2 * N + 1.0, 5.6))
-    axes = np.asarray(fig.subplots(2, N, sharex=True, sharey=True, squeeze=False))
+    K = df.shape[-1]
+    rows = 2 if model is None else -(-K // 4)  # a chain: at most 4 panels a row, the rows filled evenly
+    N = -(-K // rows)
+    fig = new_figure(figsize=(3.2 * N + 1.0, 5.6 if model is None else 2.8 * rows))
+    axes = np.asarray(fig.subplots(rows, N, sharex=True, sharey=True, squeeze=False))
+    for ax in axes.flat[K:]:
+        ax.set_visible(False)
     colors = mpl.rcParams["axes.prop_cycle"].by_key()["color"]
-    for k, name in enumerate(integral_labels(N)):
+    for k, name in enumerate(_names(model, K)):
         ax = axes[k // N, k % N]
         mf, mm = df[:, k] > 0, dm[:, k] > 0
         ax.semilogy(t_flow[mf], df[mf, k], "-", color="0.55", linewidth=0.8, label="flow of G_η (line)")
@@ -64,15 +81,17 @@ def figure_compare_drift(t_flow, X_flow, n_map, X_map, b, *, title: str = ""):
         ax.set_title(name + (f" ({' and '.join(zero)}: exactly conserved)" if zero else ""), fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
         step_axis(ax)
-    for ax in axes[-1]:
-        ax.set_xlabel("step n = time t")
+    for k in range(K - N, K):  # the lowest panel of each column
+        axes[k // N, k % N].set_xlabel("step n = time t")
+        axes[k // N, k % N].xaxis.set_tick_params(labelbottom=True)
     for ax in axes[:, 0]:
         ax.set_ylabel("|I − I(0)|")
     handles = [mpl.lines.Line2D([], [], color="0.55", linewidth=1.0),
                mpl.lines.Line2D([], [], color=colors[0], marker=".", linestyle="none", markersize=6)]
     fig.legend(handles, ["flow of G_η at t = n (line)", "map, step n (points)"], loc="lower left", ncol=2,
                fontsize=8, frameon=False)
-    fig.suptitle((title + "\n" if title else "") + "drift of the 2N integrals: the map against the flow it "
+    what = "2N" if model is None else K
+    fig.suptitle((title + "\n" if title else "") + f"drift of the {what} integrals: the map against the flow it "
                  "interpolates", fontsize=8)
     fig.tight_layout(rect=(0, 0.04, 1, 1))
     mark_dimensionless(fig)
@@ -113,7 +132,7 @@ def figure_map_flow_distance(n, distance, *, title: str = ""):
 
 
 def save_compare_figures(
-    out_dir, t_flow, X_flow, n_map, X_map, b, *, title: str = "", dpi: int = 130, fmt: str = "png"
+    out_dir, t_flow, X_flow, n_map, X_map, b, *, title: str = "", dpi: int = 130, fmt: str = "png", model=None
 ) -> list[Path]:
     """Write ``compare_drift.<fmt>`` and ``compare_distance.<fmt>``; the flow samples at ``t = n`` are matched
     with the map's step ``n`` for the distance (rows of equal index).
@@ -121,8 +140,9 @@ def save_compare_figures(
     Parameters
     ----------
     out_dir : path
-    t_flow, X_flow, n_map, X_map, b, title
-        As in :func:`figure_compare_drift`; ``X_flow[i]`` and ``X_map[i]`` must be the same time.
+    t_flow, X_flow, n_map, X_map, b, title, model
+        As in :func:`figure_compare_drift` (``model``: a chain's run); ``X_flow[i]`` and ``X_map[i]`` must be the
+        same time.
     dpi : int
     fmt : str
 
@@ -136,7 +156,7 @@ def save_compare_figures(
     dist = np.linalg.norm(X_map[:m] - X_flow[:m], axis=-1)
     paths = []
     for name, fig in (
-        ("compare_drift", figure_compare_drift(t_flow, X_flow, n_map, X_map, b, title=title)),
+        ("compare_drift", figure_compare_drift(t_flow, X_flow, n_map, X_map, b, title=title, model=model)),
         ("compare_distance", figure_map_flow_distance(np.asarray(n_map)[:m], dist, title=title)),
     ):
         paths.append(save_figure(fig, out_dir / f"{name}.{fmt}", dpi))

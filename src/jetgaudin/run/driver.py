@@ -24,7 +24,7 @@ from .._errors import JetGaudinError, RunIOError
 from ..maps import Backend
 from .files import one_line
 from .health import Health
-from .spec import RunSpec, RunStatus
+from .spec import RunSpec, RunStatus, run_map
 from .store import Store
 
 #: target duration of one kernel call (signals are handled between calls)
@@ -242,6 +242,11 @@ class Driver:
                     store.append(np.array([0]), pos.X[None])
                     store.anchor = (0, pos.X, None)
                     store.checkpoint(0, pos.X, pos.carry, self.summary("running"))
+                if failure is None and self.map is spec.map and pos.n < steps:
+                    try:  # a map set up once per run (su(3) exact steps: their parameters), inside the run
+                        self.map = run_map(spec)
+                    except JetGaudinError as exc:
+                        failure = f"{type(exc).__name__} after step {pos.n}: {one_line(exc)}"
                 while failure is None and pos.n < steps and not sig.signum:
                     failure = self._chunk(sig, L if not invariant else None, sample_imag, per_step)
                     if invariant and not per_step:

@@ -32,6 +32,7 @@ import numpy as np
 
 from .._errors import JetGaudinError, RecordingError
 from .driver import Position, piece
+from .spec import run_map
 
 #: steps of one replayed kernel call, in save intervals (bounds the rows held: at most this many)
 _ROWS_PER_CALL = 4096
@@ -93,7 +94,7 @@ def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, 
             k, se = piece(n, min(L, grow) if invariant else L, end, every)
             grow *= 2
             with np.errstate(all="ignore"):
-                adv = spec.map.advance(X, carry, k, se)
+                adv = run_map(spec).advance(X, carry, k, se)
             whole = se == every and k >= every
             done = range(n + every, n + k + 1, every) if whole else [n + k]
             for m, row in zip(done, adv.rows if whole else adv.rows[-1:], strict=True):

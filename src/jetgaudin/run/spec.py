@@ -23,6 +23,7 @@ __all__ = [
     "RunSpec",
     "RunStatus",
     "integral_names",
+    "run_map",
 ]
 
 #: default health thresholds.  The map preserves the integrals up to round-off, which accumulates about
@@ -186,3 +187,16 @@ class RunSpec:
     @property
     def B(self) -> int:
         return 1 if self.X0.ndim == 1 else int(self.X0.shape[0])
+
+
+def run_map(spec: RunSpec) -> Map:
+    """The map a run advances (the driver and a resume's replay): ``spec.map``, or, where its class has
+    ``bind_run`` (the su(3) exact step), ``spec.map.bind_run(spec.X0)``: the map with its per-orbit set-up solved
+    once per run at the initial states, not at every chunk.  A resume rebuilds ``X0`` from ``run.json`` bit for bit,
+    so it solves once more and meets the same bits.  Kept on ``spec`` (one solve for the replay and the run)."""
+    m = spec.__dict__.get("_run_map")
+    if m is None:
+        bind = getattr(type(spec.map), "bind_run", None)  # the class's: a wrapper forwarding attributes is not bound
+        m = bind(spec.map, spec.X0) if callable(bind) else spec.map
+        object.__setattr__(spec, "_run_map", m)
+    return m
