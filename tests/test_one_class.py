@@ -238,3 +238,100 @@ def test_a_route_set_on_a_copy_is_the_route_taken():
         assert not np.array_equal(numpy_route.X, compiled_route.X)  # the two routes differ in the last bits
         got = c.advance(X, None, 30)
         assert np.array_equal(got.X, numpy_route.X) and np.array_equal(got.imag_max, numpy_route.imag_max)
+
+
+# -- the exact flow: one class for the top's IntegralHamiltonian and every chain's Hamiltonian ----------------------
+H_TOP = jg.physical_hamiltonian(3, 1.0)
+H_CHAIN = CHAIN.hamiltonian([0.0, 1.0, 0.0, 0.5, 0.0, 0.0])
+
+
+def test_exact_flow_is_one_class_for_both_systems():
+    top, chain = jg.ExactFlow(H_TOP, 0.05), jg.ExactFlow(H_CHAIN, 0.02)
+    assert jg.ChainExactFlow is jg.ExactFlow and type(top) is type(chain) is jg.ExactFlow
+    assert isinstance(jg.ChainExactFlow(H_CHAIN, 0.02), jg.ExactFlow) and isinstance(top, jg.ChainExactFlow)
+    assert (top.kind, chain.kind) == ("exact", "chain_exact")
+    assert top.model is None and top.b == 1.0 and chain.model is CHAIN and chain.b == 0.7
+    assert top.n_state == 9 and chain.n_state == 9 and top.time_step == 0.05 and chain.time_step == 0.02
+    assert top.chunk_invariant is False and chain.chunk_invariant is False  # the run layer's fixed chunks
+    assert repr(top).startswith("ExactFlow(H=IntegralHamiltonian(") and repr(chain).startswith("ExactFlow(H=Chain")
+    # the old signatures: the top's positional (H, dt, substeps, backend, rho_factor), the chain's keywords
+    old = jg.ExactFlow(H_TOP, 0.05, 2, "numpy", 1.7)
+    assert (old.substeps, old.backend, old.rho_factor) == (2, Backend.NUMPY, 1.7)
+    c = jg.ChainExactFlow(H_CHAIN, 0.02, rho_factor=1.8, substeps=3)
+    assert (c.rho_factor, c.substeps) == (1.8, 3) and c.describe()["rho_factor"] == 1.8
+
+
+def _old_exact(m):
+    from jetgaudin.exact import _TopExactFlow
+    from jetgaudin.exact_chain import _ChainExactFlow
+
+    if m.kind == "exact":
+        return _TopExactFlow(m.H, m.dt, m.substeps, m.backend, m.rho_factor)
+    return _ChainExactFlow(m.H, m.dt, m.rho_factor, m.substeps)
+
+
+@pytest.mark.parametrize("make, X", [
+    (lambda: jg.ExactFlow(H_TOP, 0.05, backend="numpy"), X0),
+    (lambda: jg.ExactFlow(H_TOP, -0.05, 2, backend="compiled"), X0),
+    (lambda: jg.ExactFlow(H_CHAIN, 0.02), XC),
+])
+def test_exact_orbits_are_the_old_implementations_bit_for_bit(make, X):
+    m = make()
+    old = _old_exact(m)
+    for x in (X, np.stack([X, X * 0.97])):
+        assert np.array_equal(m.iterate(x, 6, save_every=2), old.iterate(x, 6, save_every=2))
+        a, b = m.advance(x, None, 4, 1), old.advance(x, None, 4, 1)
+        assert np.array_equal(a.rows, b.rows) and np.array_equal(a.X, b.X)
+        assert np.array_equal(m.step(x)[0], old.step(x)[0]) and np.array_equal(m.integrals(x), old.integrals(x))
+        assert np.array_equal(m.max_dt(x), old.max_dt(x))
+    assert m.describe() == old.describe() and m.inverse().describe() == old.inverse().describe()
+    assert type(m.inverse()) is jg.ExactFlow
+
+
+@pytest.mark.parametrize("d", [
+    {"kind": "exact", "b": 1.0, "weights": [0.0, 0.5, 0.0, 0.0, 0.0, 0.0], "dt": 0.05, "substeps": 1,
+     "backend": "auto", "rho_factor": 1.5},
+    {"kind": "exact", "b": 1.0, "weights": [0.0, 0.5, 0.0, 0.0, 0.0, 0.0], "dt": 0.05},  # the oldest keys only
+    {"kind": "chain_exact", "b": 0.7, "sites": [[0.0, 2], [1.5, 1]], "weights": [0.0, 1.0, 0.0, 0.5, 0.0, 0.0],
+     "dt": 0.02, "rho_factor": 1.5, "substeps": 1},
+], ids=lambda d: d["kind"])
+def test_old_exact_descriptions_load_into_the_one_class(d):
+    m = map_from_description(dict(d))
+    assert type(m) is jg.ExactFlow and m.kind == d["kind"]
+    out = m.describe()
+    assert {k: v for k, v in out.items() if k in d} == d
+    X = X0 if m.kind == "exact" else XC
+    again = map_from_description(out)
+    assert again.describe() == out and np.array_equal(again.iterate(X, 3), m.iterate(X, 3))
+
+
+def test_matched_backlund_stays_its_own_kind():
+    from jetgaudin.exact import MatchedBacklund
+
+    mb = MatchedBacklund(H_TOP, 0.05)
+    assert mb.describe()["kind"] == "matched_backlund" and type(map_from_description(mb.describe())) is MatchedBacklund
+    with pytest.raises(InvalidParameterError, match="^MatchedBacklund matches the weights"):  # its own name
+        MatchedBacklund(jg.IntegralHamiltonian(1.0, [1.0, 0, 0, 0, 0, 0]), 0.1)
+
+
+@pytest.mark.parametrize("m", [jg.ExactFlow(H_TOP, 0.05, backend="numpy"), jg.ExactFlow(H_CHAIN, 0.02)],
+                         ids=["top", "chain"])
+def test_exact_pickle_copy_and_identity_equality(m):
+    X = X0 if m.model is None else XC
+    for other in (pickle.loads(pickle.dumps(m)), copy.deepcopy(m)):
+        assert type(other) is jg.ExactFlow and other.describe() == m.describe() and repr(other) == repr(m)
+        assert np.array_equal(other.iterate(X, 3), m.iterate(X, 3))
+        assert other != m  # as before: an exact flow is equal to itself only (it holds H's weight array)
+    assert m == m and len({m, m}) == 1
+
+
+def test_exact_refusals_name_what_is_accepted():
+    for bad in (1.0, CHAIN, None):
+        with pytest.raises(InvalidParameterError, match="IntegralHamiltonian .*model.hamiltonian"):
+            jg.ExactFlow(bad, 0.1)
+    with pytest.raises(InvalidParameterError, match="backend"):
+        jg.ExactFlow(H_CHAIN, 0.02, backend="compiled")
+    with pytest.raises(InvalidParameterError, match="dt must be nonzero"):
+        jg.ExactFlow(H_CHAIN, 0.0)
+    with pytest.raises(InvalidParameterError, match="^ExactFlow matches the weights"):
+        jg.ExactFlow(jg.IntegralHamiltonian(1.0, [1.0, 0, 0, 0, 0, 0]), 0.1)

@@ -39,13 +39,16 @@ import numpy as np
 from ._errors import InvalidParameterError
 from .maps import Advance, Backend, Branch, Map, MapProperties
 
-__all__ = ["OnePointBacklund", "TwoPointBacklund", "ROUTES", "system_kind"]
+__all__ = ["ExactFlow", "OnePointBacklund", "TwoPointBacklund", "ROUTES", "system_kind"]
 
 _TWO_POINT_PROPERTIES = MapProperties(
     preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
 )
 _ONE_POINT_PROPERTIES = MapProperties(
     preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
+)
+_EXACT_PROPERTIES = MapProperties(
+    preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True, interpolates_flow=False
 )
 
 #: the route table of the Bäcklund maps: ``(kind, system) -> (module, implementation class)`` (module docstring);
@@ -55,6 +58,8 @@ ROUTES: dict[tuple[str, str], tuple[str, str]] = {
     ("two_point", "chain"): ("jetgaudin.gaudin.maps", "_ChainTwoPoint"),
     ("one_point", "top"): ("jetgaudin.backlund.maps", "_TopOnePoint"),
     ("one_point", "chain"): ("jetgaudin.gaudin._one_point", "_ChainOnePoint"),
+    ("exact", "top"): ("jetgaudin.exact", "_TopExactFlow"),
+    ("exact", "chain"): ("jetgaudin.exact_chain", "_ChainExactFlow"),
 }
 _IMPL: dict[tuple[str, str], type] = {}
 _MISSING: Any = object()
@@ -114,17 +119,25 @@ class _SystemMap(Map):
     _MAP_KIND: ClassVar[str]  # the kind of map: the first key of ROUTES
     _KINDS: ClassVar[dict[str, str]]  # system -> describe()'s "kind"
     _ARGS: ClassVar[tuple[str, ...]]  # the implementation's positional fields after the system, in order
-    system: Any
+    _SYSTEM: ClassVar[str] = "system"  # the name of the first field (the exact flows: "H")
     backend: Backend
 
+    @classmethod
+    def _system_kind(cls, system: Any) -> str:
+        return system_kind(system, cls.__name__)
+
+    @staticmethod
+    def _system_of(impl: Any, sk: str) -> Any:
+        """The public first field from a validated implementation (the Bäcklund maps: ``b`` or the model)."""
+        return impl.b if sk == "top" else impl.model
+
     def _build(self, system: Any, values: tuple, kernel: Any) -> None:
-        name = type(self).__name__
-        sk = system_kind(system, name)
+        sk = self._system_kind(system)
         impl = _implementation(self._MAP_KIND, sk)(system, *values, kernel=kernel)
         self._adopt(impl, sk)
 
     def _adopt(self, impl: Any, sk: str) -> None:
-        object.__setattr__(self, "system", impl.b if sk == "top" else impl.model)
+        object.__setattr__(self, self._SYSTEM, self._system_of(impl, sk))
         for a in self._ARGS:
             object.__setattr__(self, a, getattr(impl, a))
         object.__setattr__(self, "kernel", None)
@@ -135,8 +148,13 @@ class _SystemMap(Map):
     def _wrap(cls, impl: Any) -> Any:
         """The public map running ``impl`` (an implementation of the route table, already validated)."""
         out = object.__new__(cls)
-        out._adopt(impl, "chain" if getattr(impl, "model", None) is not None else "top")
+        sk = next(s for (k, s), c in _IMPL.items() if k == cls._MAP_KIND and isinstance(impl, c))
+        out._adopt(impl, sk)
         return out
+
+    @property
+    def _sys(self) -> Any:
+        return getattr(self, self._SYSTEM)
 
     def _r(self) -> Any:
         impl = self.__dict__["_impl"]
@@ -159,7 +177,8 @@ class _SystemMap(Map):
                                  f"{name!r}") from None
 
     def __repr__(self) -> str:
-        first = f"b={self.system!r}" if self.__dict__.get("_system") == "top" else f"model={self.system!r}"
+        first = (f"{self._SYSTEM}={self._sys!r}" if self._SYSTEM != "system" else
+                 f"b={self._sys!r}" if self.__dict__.get("_system") == "top" else f"model={self._sys!r}")
         rest = ", ".join(f"{a}={getattr(self, a)!r}" for a in self._ARGS)
         return f"{type(self).__name__}({first}, {rest})"
 
@@ -178,16 +197,12 @@ class _SystemMap(Map):
     @property
     def b(self) -> float:
         """The field strength (the model's ``b`` for a chain)."""
-        return float(self.system) if not self.is_chain else self.system.b
+        return float(self._r().b) if not self.is_chain else float(self.model.b)
 
     @property
     def model(self) -> Any:
         """The :class:`~jetgaudin.GaudinModel` of a chain; ``None`` for the top (its ``N`` is the state's)."""
-        return self.system if self.is_chain else None
-
-    @property
-    def sheet(self) -> int:
-        return self.branch.sheet  # type: ignore[attr-defined, no-any-return]
+        return self._r().model if self.is_chain else None
 
     @property
     def n_state(self) -> int | None:
@@ -346,3 +361,76 @@ class OnePointBacklund(_SystemMap):
         if eta is _MISSING:
             raise TypeError(f"{type(self).__name__}() missing required argument: 'eta'")
         self._build(system, (eta, branch, inverse_map, backend), kernel)
+
+
+@dataclass(frozen=True, init=False, repr=False, eq=False)  # eq=False as before: equal when the same object
+class ExactFlow(_SystemMap):
+    r"""The exact time-``dt`` flow of a Hamiltonian ``H`` as a :class:`~jetgaudin.maps.Map`, for the top and for every
+    chain: one step is ``substeps`` times ``R_θ ∘ B_{η_1} ∘ … ∘ B_{η_k}`` (commuting two-point maps and a rotation
+    about the field) with parameters solved per orbit from its integrals (``docs/integrators.md``).
+
+    ``H``: an :class:`~jetgaudin.IntegralHamiltonian` (the top of any ``N ≥ 2``, field ``b e_3``: the route
+    :class:`jetgaudin.exact._TopExactFlow`, ``kind`` ``"exact"``; ``backend`` ``NUMPY`` or ``COMPILED``, ``AUTO``:
+    compiled) or a chain's Hamiltonian ``model.hamiltonian(weights)`` (:class:`~jetgaudin.ChainHamiltonian`, every
+    family: the route :class:`jetgaudin.exact_chain._ChainExactFlow`, ``kind`` ``"chain_exact"``; each map on its own
+    route inside).  ``dt``: either sign (``−dt`` is :meth:`inverse`).  It preserves the integrals, is a Poisson map
+    and real; the step *is* the flow (``order = None``).  Not chunk-invariant (``chunk_invariant = False``: the run
+    layer cuts runs into fixed chunks).  ``ChainExactFlow`` is this class (its old name for chains; its old third and
+    fourth positional arguments were ``rho_factor, substeps``: pass them by keyword).
+    :class:`jetgaudin.exact.MatchedBacklund` (one map per step, the top's baseline) stays its own class.
+
+    >>> import jetgaudin as jg, numpy as np
+    >>> H = jg.physical_hamiltonian(3, 1.0)
+    >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
+    >>> X1 = jg.ExactFlow(H, 0.05).iterate(X0, 2)[-1]
+    >>> ref = jg.integrate(H, X0, 0.1, rtol=1e-13, atol=1e-13).X[-1]
+    >>> bool(np.max(np.abs(X1 - ref)) < 1e-12)
+    True
+    """
+
+    H: Any
+    dt: float
+    substeps: int = 1
+    backend: Backend = field(default=Backend.AUTO, compare=False)
+    rho_factor: float | None = None  # None: the implementation's default (jetgaudin.exact.RHO_FACTOR)
+    properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False, compare=False)
+    kernel: Backend | str | None = field(default=None, repr=False, compare=False)  # the alias of backend
+
+    _MAP_KIND: ClassVar[str] = "exact"
+    _KINDS: ClassVar[dict[str, str]] = {"top": "exact", "chain": "chain_exact"}
+    _ARGS: ClassVar[tuple[str, ...]] = ("dt", "substeps", "backend", "rho_factor")
+    _SYSTEM: ClassVar[str] = "H"
+
+    def __init__(self, H: Any = _MISSING, dt: Any = _MISSING, substeps: int = 1, backend: Backend | str = Backend.AUTO,
+                 rho_factor: float | None = None, *, kernel: Backend | str | None = None) -> None:
+        if H is _MISSING or dt is _MISSING:
+            raise TypeError(f"{type(self).__name__}() missing required argument: {'H' if H is _MISSING else 'dt'}")
+        sk = self._system_kind(H)
+        cls = _implementation("exact", sk)
+        kw: dict[str, Any] = {"substeps": substeps}
+        if rho_factor is not None:
+            kw["rho_factor"] = rho_factor
+        if "backend" in getattr(cls, "__dataclass_fields__", {}):
+            kw.update(backend=backend, kernel=kernel)
+        elif {Backend.parse(backend), Backend.parse(kernel or "auto")} - {Backend.AUTO, Backend.NUMPY}:
+            raise InvalidParameterError("the exact flow of a chain has no backend choice (each of its maps runs on its "
+                                        "own route inside): backend (kernel) must be 'auto' or 'numpy'")
+        self._adopt(cls(H, dt, **kw), sk)
+
+    @classmethod
+    def _system_kind(cls, H: Any) -> str:
+        from .hamiltonians import IntegralHamiltonian
+
+        if isinstance(H, IntegralHamiltonian):
+            return "top"
+        if callable(getattr(getattr(H, "model", None), "two_point_backlund", None)):
+            return "chain"
+        raise InvalidParameterError(
+            f"the first argument of {cls.__name__} is a Hamiltonian: an IntegralHamiltonian (the top, e.g. "
+            "jg.physical_hamiltonian(N, b)) or a chain's model.hamiltonian(weights) (a ChainHamiltonian); got "
+            f"{type(H).__name__}"
+        )
+
+    @staticmethod
+    def _system_of(impl: Any, sk: str) -> Any:
+        return impl.H
