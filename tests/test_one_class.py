@@ -253,7 +253,8 @@ def test_exact_flow_is_one_class_for_both_systems():
     assert top.model is None and top.b == 1.0 and chain.model is CHAIN and chain.b == 0.7
     assert top.n_state == 9 and chain.n_state == 9 and top.time_step == 0.05 and chain.time_step == 0.02
     assert top.chunk_invariant is False and chain.chunk_invariant is False  # the run layer's fixed chunks
-    assert repr(top).startswith("ExactFlow(H=IntegralHamiltonian(") and repr(chain).startswith("ExactFlow(H=Chain")
+    assert repr(top).startswith("ExactFlow(H=IntegralHamiltonian(b=1.0")
+    assert repr(chain).startswith("ExactFlow(H=IntegralHamiltonian(model=")
     # the old signatures: the top's positional (H, dt, substeps, backend, rho_factor), the chain's keywords
     old = jg.ExactFlow(H_TOP, 0.05, 2, "numpy", 1.7)
     assert (old.substeps, old.backend, old.rho_factor) == (2, Backend.NUMPY, 1.7)
@@ -335,3 +336,86 @@ def test_exact_refusals_name_what_is_accepted():
         jg.ExactFlow(H_CHAIN, 0.0)
     with pytest.raises(InvalidParameterError, match="^ExactFlow matches the weights"):
         jg.ExactFlow(jg.IntegralHamiltonian(1.0, [1.0, 0, 0, 0, 0, 0]), 0.1)
+
+
+# -- one Hamiltonian type: IntegralHamiltonian for the top (a field b) and every su(2) chain (a GaudinModel) ---------
+W_TOP = np.array([0.2, 0.5, -0.3, 0.1, 0.0, 0.4])
+W_CHAIN = np.array([0.0, 1.0, 0.0, 0.5, 0.0, 0.0])
+
+
+def test_one_hamiltonian_type_for_both_systems():
+    from jetgaudin.hamiltonians import SolveHamiltonian
+
+    top, chain = jg.IntegralHamiltonian(1.0, W_TOP), CHAIN.hamiltonian(W_CHAIN)
+    assert jg.ChainHamiltonian is jg.IntegralHamiltonian and type(top) is type(chain) is jg.IntegralHamiltonian
+    assert isinstance(top, jg.ChainHamiltonian) and isinstance(chain, jg.IntegralHamiltonian)
+    assert isinstance(top, SolveHamiltonian) and isinstance(chain, SolveHamiltonian)
+    assert (top.route_kind, chain.route_kind) == ("top", "chain")  # their rows of solve's route table
+    assert top.b == 1.0 and top.model is None and top.c is None and top.N == 3 and top.n_state == 9
+    assert chain.b == 0.7 and chain.model is CHAIN and chain.c is None and chain.n_state == 9
+    assert chain.structure_constants.shape == (9, 9, 9) and not hasattr(top, "structure_constants")
+    # every construction of a chain's Hamiltonian is the one type, with the same weights
+    for H in (jg.IntegralHamiltonian(CHAIN, W_CHAIN), jg.ChainHamiltonian(CHAIN, W_CHAIN),
+              jg.ChainHamiltonian(model=CHAIN, weights=W_CHAIN)):
+        assert type(H) is jg.IntegralHamiltonian and H.model is CHAIN and np.array_equal(H.weights, W_CHAIN)
+    assert jg.IntegralHamiltonian(b=1.0, weights=W_TOP).route_kind == "top"
+    # the views both ways stay the one type
+    assert TOP3.hamiltonian(W_TOP).as_top().route_kind == "top" and top.as_model().route_kind == "chain"
+    assert repr(top).startswith("IntegralHamiltonian(b=1.0, weights=array(")
+    assert repr(chain).startswith("IntegralHamiltonian(model=GaudinModel(")
+
+
+@pytest.mark.parametrize("H, impl, X", [
+    (jg.IntegralHamiltonian(1.0, W_TOP), ("jetgaudin.hamiltonians", "_TopHamiltonian", (1.0, W_TOP)), X0),
+    (jg.IntegralHamiltonian([0.1, -0.2, 1.0], W_TOP, [0.3, 0.2]),
+     ("jetgaudin.hamiltonians", "_TopHamiltonian", ([0.1, -0.2, 1.0], W_TOP, [0.3, 0.2])), X0),
+    (CHAIN.hamiltonian(W_CHAIN), ("jetgaudin.gaudin.hamiltonian", "_ChainHamiltonian", (CHAIN, W_CHAIN)), XC),
+    (TRIG.hamiltonian([0.3, 0.0, 1.0, 0.0, 0.2]),
+     ("jetgaudin.gaudin.hamiltonian", "_ChainHamiltonian", (TRIG, [0.3, 0.0, 1.0, 0.0, 0.2])), XT),
+], ids=["top", "top-vector-field-c", "chain", "trigonometric"])
+def test_hamiltonian_values_are_the_old_implementations_bit_for_bit(H, impl, X):
+    import importlib
+
+    module, name, args = impl
+    old = getattr(importlib.import_module(module), name)(*args)
+    assert type(old) is not jg.IntegralHamiltonian
+    batch = np.stack([X, 0.9 * X])
+    for f in ("__call__", "gradient", "vector_field", "record_integrals", "check_state"):
+        assert np.array_equal(getattr(H, f)(batch), getattr(old, f)(batch)), f
+    assert H.n_state == old.n_state and H.route_kind == old.route_kind and np.array_equal(H.weights, old.weights)
+    assert H.b is old.b and H.c is getattr(old, "c", None)  # the parameters as given (the top's c, its b as a vector)
+    again = pickle.loads(pickle.dumps(H))
+    assert type(again) is jg.IntegralHamiltonian and np.array_equal(again.vector_field(X), H.vector_field(X))
+    assert repr(again) == repr(H)
+
+
+def test_hamiltonian_refusals_name_what_is_accepted():
+    for bad in ("1.0", None, jg.TwoPointBacklund(1.0, ETA)):
+        with pytest.raises(InvalidParameterError, match="field b .*GaudinModel"):
+            jg.IntegralHamiltonian(bad, W_TOP)
+    with pytest.raises(InvalidParameterError, match="c .*is the top's"):
+        jg.IntegralHamiltonian(CHAIN, W_CHAIN, [0.1, 0.2])
+    with pytest.raises(InvalidParameterError, match="b= must be a field"):
+        jg.IntegralHamiltonian(b=CHAIN, weights=W_CHAIN)
+    with pytest.raises(InvalidParameterError, match="once"):
+        jg.IntegralHamiltonian(1.0, W_TOP, b=1.0)
+    with pytest.raises(InvalidParameterError, match="trailing axis of length 6"):
+        jg.IntegralHamiltonian(CHAIN, W_CHAIN[:4])  # the chain's own message
+    with pytest.raises(InvalidParameterError, match="trailing axis of length 2N"):
+        jg.IntegralHamiltonian(1.0, W_TOP[:5])  # the top's own message
+
+
+def test_maps_of_one_system_refuse_the_other_system_s_hamiltonian():
+    """The one type's system decides (``route_kind``), where the code asked ``isinstance`` before."""
+    from jetgaudin.exact import exact_parameters
+    from jetgaudin.gaudin.flow import ChainFlowMap
+
+    top, chain = jg.physical_hamiltonian(3, 1.0), CHAIN.hamiltonian(W_CHAIN)
+    with pytest.raises(InvalidParameterError, match="ChainHamiltonian"):
+        ChainFlowMap(top, 0.1)
+    with pytest.raises(InvalidParameterError, match="IntegralHamiltonian of the top"):
+        jg.FlowMap(chain, 0.1)
+    with pytest.raises(InvalidParameterError, match="IntegralHamiltonian of the top"):
+        exact_parameters(chain, 0.1, XC)
+    assert jg.ExactFlow(chain, 0.02).kind == "chain_exact" and jg.ExactFlow(top, 0.02).kind == "exact"
+    assert ChainFlowMap(chain, 0.1).H is chain and jg.FlowMap(top, 0.1).H is top

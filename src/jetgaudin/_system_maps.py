@@ -419,9 +419,7 @@ class ExactFlow(_SystemMap):
 
     @classmethod
     def _system_kind(cls, H: Any) -> str:
-        from .hamiltonians import IntegralHamiltonian
-
-        if isinstance(H, IntegralHamiltonian):
+        if getattr(H, "route_kind", None) == "top":  # the one Hamiltonian type: its system decides
             return "top"
         if callable(getattr(getattr(H, "model", None), "two_point_backlund", None)):
             return "chain"

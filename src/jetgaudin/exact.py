@@ -201,8 +201,9 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
     ``maps``: use fewer than ``N − 1`` maps (matching ``H_2..H_{maps+1}`` only: the plain map of
     :class:`MatchedBacklund`, not the exact flow)."""
     X, N = as_state(X)
-    if not isinstance(H, IntegralHamiltonian) or np.ndim(H.weights) != 1:
-        raise InvalidParameterError("H must be an IntegralHamiltonian with one set of weights (shape (2N,))")
+    if getattr(H, "route_kind", None) != "top" or np.ndim(H.weights) != 1:
+        raise InvalidParameterError("H must be an IntegralHamiltonian of the top (a field b, not a model: a chain's "
+                                    "exact steps are jg.ExactFlow(H, dt)) with one set of weights (shape (2N,))")
     if H.N != N or N < 2:
         raise InvalidParameterError(f"ExactFlow needs N >= 2 and states of 3N = {3 * H.N} components, got {3 * N}")
     if H.c is not None:
@@ -333,8 +334,9 @@ class _TopExactFlow(FixedStep, Map):
     public_name: ClassVar[str] = "ExactFlow"  # the class its messages name (jetgaudin.maps.map_name)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.H, IntegralHamiltonian):
-            raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b))")
+        if getattr(self.H, "route_kind", None) != "top":
+            raise InvalidParameterError("H must be an IntegralHamiltonian of the top (e.g. "
+                                        "jg.physical_hamiltonian(N, b))")
         if self.H.N < 2 or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("ExactFlow needs N >= 2 and one set of weights (shape (2N,))")
         if self.H.c is not None:

@@ -40,7 +40,8 @@ from .._errors import InvalidParameterError, InvalidStateError
 from .._validate import as_state, check_gradient, finite_result
 from ..families import make_family
 from ..lie import SU, parse_algebra
-from .model import ChainHamiltonian, GaudinModel, _check_sites, _taylor_coefficient
+from .hamiltonian import _ChainHamiltonian
+from .model import GaudinModel, _check_sites, _taylor_coefficient
 
 __all__ = ["SunGaudinModel", "SunHamiltonian", "field_components"]
 
@@ -375,7 +376,7 @@ class SunGaudinModel(GaudinModel):
 
 
 @dataclass(frozen=True)
-class SunHamiltonian(ChainHamiltonian):
+class SunHamiltonian(_ChainHamiltonian):  # the chain Hamiltonian's implementation (another algebra: its own type)
     """``H = Σ_I w_I h_I`` on an su(n) chain.  For ``n ≥ 3`` the integrals are not quadratic, so it declares no
     structure constants (:func:`jetgaudin.integrate` then takes the generic right-hand side :meth:`vector_field`,
     not the affine-gradient one; heyoka's symbolic route refuses it), and it checks states of length ``(n²−1)M``."""
