@@ -347,7 +347,7 @@ class SunGaudinModel(GaudinModel):
 
         return SunExactFlow(H, dt, substeps, backend)
 
-    def hamiltonian(self, weights) -> SunHamiltonian:
+    def hamiltonian(self, weights) -> SunHamiltonian:  # type: ignore[override]  # another algebra: its own type
         """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""
         return SunHamiltonian(self, weights)
 
