@@ -383,7 +383,7 @@ def test_hamiltonian_values_are_the_old_implementations_bit_for_bit(H, impl, X):
     for f in ("__call__", "gradient", "vector_field", "record_integrals", "check_state"):
         assert np.array_equal(getattr(H, f)(batch), getattr(old, f)(batch)), f
     assert H.n_state == old.n_state and H.route_kind == old.route_kind and np.array_equal(H.weights, old.weights)
-    assert H.b is old.b and H.c is getattr(old, "c", None)  # the parameters as given (the top's c, its b as a vector)
+    assert H.b == old.b and H.c == getattr(old, "c", None)  # the parameters as given (the top's c, its b as a vector)
     again = pickle.loads(pickle.dumps(H))
     assert type(again) is jg.IntegralHamiltonian and np.array_equal(again.vector_field(X), H.vector_field(X))
     assert repr(again) == repr(H)

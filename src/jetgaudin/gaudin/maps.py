@@ -322,9 +322,8 @@ class _ChainMap(Map):
 
 @dataclass(frozen=True)
 class _ChainTwoPoint(_ChainMap):
-    r"""The chain's route of :class:`jetgaudin.TwoPointBacklund` (its system a :class:`~jetgaudin.GaudinModel`; the
-    route table of :mod:`jetgaudin._system_maps`): the real two-point Bäcklund map ``B_η`` of a chain (module
-    docstring); the time-1 flow of ``G_η``.
+    r"""The chain's route of :class:`jetgaudin.TwoPointBacklund` (:mod:`jetgaudin._system_maps`): the real two-point
+    Bäcklund map ``B_η`` of a chain (module docstring); the time-1 flow of ``G_η``.
 
     Parameters
     ----------
@@ -580,8 +579,7 @@ def _sites(d: dict) -> GaudinModel:
     return GaudinModel.from_description(d)
 
 
-#: the old name of :class:`jetgaudin.TwoPointBacklund` for chains: the same class (``isinstance`` holds both ways)
-ChainTwoPointBacklund = TwoPointBacklund
+ChainTwoPointBacklund = TwoPointBacklund  #: the old name for chains: the same class (isinstance both ways)
 
 
 def _two_point_from(d: dict) -> TwoPointBacklund:
