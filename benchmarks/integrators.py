@@ -53,7 +53,7 @@ CHAIN_T = 10.0
 
 
 def _chain(H) -> bool:
-    return not isinstance(H, jg.IntegralHamiltonian)
+    return getattr(H, "route_kind", None) != "top"
 
 
 def _kahan(H, dt, n):

@@ -58,8 +58,11 @@ def test_chain_step_too_large_and_description():
     E = ChainExactFlow(H, 0.02)
     F = jg.map_from_description(E.describe())
     assert F.describe() == E.describe() and np.array_equal(F(_state(model)), E(_state(model)))
-    with pytest.raises(jg.InvalidParameterError, match="chain Hamiltonian"):
-        ChainExactFlow(jg.physical_hamiltonian(3, 1.0), 0.1)
+    # one class for every system (issue 33): the top's Hamiltonian builds the top's exact flow; a non-Hamiltonian is
+    # refused naming both kinds accepted
+    assert ChainExactFlow(jg.physical_hamiltonian(3, 1.0), 0.1).kind == "exact"
+    with pytest.raises(jg.InvalidParameterError, match="IntegralHamiltonian .*model.hamiltonian"):
+        ChainExactFlow(model, 0.1)
 
 
 def test_solve_takes_a_chain_hamiltonian():

@@ -43,9 +43,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ._errors import InvalidParameterError, StepTooLargeError
+from ._system_maps import _EXACT_PROPERTIES, ExactFlow
 from ._validate import as_state, field_vector, real_number
 from .hamiltonians import IntegralHamiltonian
-from .maps import Advance, Backend, Map, MapProperties, check_count, register_map
+from .maps import Advance, Backend, Map, MapProperties, check_count, map_name, register_map
 from .spectral import _nu_from_kappa, integrals
 
 __all__ = ["ExactFlow", "MatchedBacklund", "ExactParameters", "exact_parameters", "rotate_about_field", "RHO_FACTOR",
@@ -200,8 +201,9 @@ def exact_parameters(H: IntegralHamiltonian, dt: float, X, *, rho_factor: float 
     ``maps``: use fewer than ``N − 1`` maps (matching ``H_2..H_{maps+1}`` only: the plain map of
     :class:`MatchedBacklund`, not the exact flow)."""
     X, N = as_state(X)
-    if not isinstance(H, IntegralHamiltonian) or np.ndim(H.weights) != 1:
-        raise InvalidParameterError("H must be an IntegralHamiltonian with one set of weights (shape (2N,))")
+    if getattr(H, "route_kind", None) != "top" or np.ndim(H.weights) != 1:
+        raise InvalidParameterError("H must be an IntegralHamiltonian of the top (a field b, not a model: a chain's "
+                                    "exact steps are jg.ExactFlow(H, dt)) with one set of weights (shape (2N,))")
     if H.N != N or N < 2:
         raise InvalidParameterError(f"ExactFlow needs N >= 2 and states of 3N = {3 * H.N} components, got {3 * N}")
     if H.c is not None:
@@ -286,16 +288,14 @@ class FixedStep:
         return self.dt
 
 
-_EXACT_PROPERTIES = MapProperties(
-    preserves_integrals=True, poisson=True, real=True, order=None, symmetric=True, interpolates_flow=False
-)
 
 
 @dataclass(frozen=True, eq=False)
-class ExactFlow(FixedStep, Map):
-    r"""The exact time-``dt`` flow of ``H`` as a :class:`~jetgaudin.maps.Map` (module doc): one step is
-    ``substeps`` times ``R_θ ∘ B_{η_1} ∘ … ∘ B_{η_{N−1}}`` with the parameters of :func:`exact_parameters` for
-    ``dt/substeps``.
+class _TopExactFlow(FixedStep, Map):
+    r"""The top's route of :class:`jetgaudin.ExactFlow` (``H`` an ``IntegralHamiltonian``; the route table of
+    :mod:`jetgaudin._system_maps`): the exact time-``dt`` flow of ``H`` as a :class:`~jetgaudin.maps.Map` (module
+    doc): one step is ``substeps`` times ``R_θ ∘ B_{η_1} ∘ … ∘ B_{η_{N−1}}`` with the parameters of
+    :func:`exact_parameters` for ``dt/substeps``.
 
     ``H``: an :class:`~jetgaudin.IntegralHamiltonian` with field ``b e_3`` (default use:
     ``jg.physical_hamiltonian(N, b)``), any ``N ≥ 2``; ``dt``: either sign (``−dt`` is :meth:`inverse`).  States
@@ -331,10 +331,12 @@ class ExactFlow(FixedStep, Map):
     has_compiled: ClassVar[bool] = True  # type: ignore[misc]
     _maps: ClassVar[int | None] = None  # the number of two-point maps per (sub-)step; None: N − 1 (the exact flow)
     _kind: ClassVar[str] = "exact"
+    public_name: ClassVar[str] = "ExactFlow"  # the class its messages name (jetgaudin.maps.map_name)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.H, IntegralHamiltonian):
-            raise InvalidParameterError("H must be an IntegralHamiltonian (e.g. jg.physical_hamiltonian(N, b))")
+        if getattr(self.H, "route_kind", None) != "top":
+            raise InvalidParameterError("H must be an IntegralHamiltonian of the top (e.g. "
+                                        "jg.physical_hamiltonian(N, b))")
         if self.H.N < 2 or np.ndim(self.H.weights) != 1:
             raise InvalidParameterError("ExactFlow needs N >= 2 and one set of weights (shape (2N,))")
         if self.H.c is not None:
@@ -343,7 +345,7 @@ class ExactFlow(FixedStep, Map):
         k = self.H.N - 1 if self._maps is None else self._maps
         if not np.any(np.asarray(self.H.weights, dtype=float)[1:k + 1]):
             raise InvalidParameterError(
-                f"{type(self).__name__} matches the weights of H_2..H_{k + 1} with Bäcklund maps, and H has none "
+                f"{map_name(self)} matches the weights of H_2..H_{k + 1} with Bäcklund maps, and H has none "
                 "(those weights are 0): its flow is the rotation about the field, which no such map gives. Use "
                 "jetgaudin.exact.rotate_about_field(X, 2 * b * w_1 * t) (the exact flow of w_1 H_1) or "
                 "method='dop853'")
@@ -504,7 +506,7 @@ class ExactFlow(FixedStep, Map):
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros,
                        imag_max=zeros.real)
 
-    def inverse(self) -> ExactFlow:
+    def inverse(self) -> _TopExactFlow:
         """The flow backwards: ``dt → −dt``."""
         return type(self)(self.H, -self.dt, self.substeps, self.backend, self.rho_factor)
 
@@ -514,7 +516,7 @@ class ExactFlow(FixedStep, Map):
 
 
 @dataclass(frozen=True, eq=False)
-class MatchedBacklund(ExactFlow):
+class MatchedBacklund(_TopExactFlow):
     r"""The plain Bäcklund map as a time step of ``H`` (the baseline of ``docs/integrators.md``): **one** two-point
     map per step, ``Re η = c R``, ``Im η`` solved so that its ``H_2`` weight is ``dt w_2``, and the ``H_1`` rotation
     undone exactly.  For N = 2 this is :class:`ExactFlow`; for N ≥ 3 it is the exact time-``dt`` flow of
@@ -523,9 +525,10 @@ class MatchedBacklund(ExactFlow):
 
     _maps = 1
     _kind = "matched_backlund"
+    public_name = "MatchedBacklund"
 
 
-def _exact_from(d: dict) -> ExactFlow:
+def _exact_from(d: dict) -> Map:
     H = IntegralHamiltonian(float(d["b"]), np.asarray(d["weights"], dtype=float))
     cls = MatchedBacklund if d["kind"] == "matched_backlund" else ExactFlow
     return cls(H, float(d["dt"]), int(d.get("substeps", 1)), d.get("backend", "auto"),

@@ -47,6 +47,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
+from ._system_maps import ExactFlow
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
 from .maps import Advance, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
@@ -125,7 +126,7 @@ class _Weights:
     ``model.nu`` while no branch point is near the segment; the solve checks the end values against
     ``model.nu`` itself (:func:`_branch_ok`)."""
 
-    def __init__(self, flow: ChainExactFlow, x: np.ndarray, keep: np.ndarray):
+    def __init__(self, flow: _ChainExactFlow, x: np.ndarray, keep: np.ndarray):
         self.flow, self.x, self.keep = flow, x, keep
 
     def _nu(self, lam: np.ndarray) -> np.ndarray:
@@ -199,8 +200,9 @@ def _rules() -> tuple[np.ndarray, ...]:
 
 
 @dataclass(frozen=True, eq=False)
-class ChainExactFlow(StepByAdvance, Map):
-    r"""The exact time-``dt`` flow of a chain Hamiltonian ``H = model.hamiltonian(weights)`` (module doc), one orbit
+class _ChainExactFlow(StepByAdvance, Map):
+    r"""The chain's route of :class:`jetgaudin.ExactFlow` (the route table of :mod:`jetgaudin._system_maps`): the exact
+    time-``dt`` flow of a chain Hamiltonian ``H = model.hamiltonian(weights)`` (module doc), one orbit
     ``(3M,)`` or a batch (each orbit its own parameters, solved at the start of every :meth:`step` /
     :meth:`advance` call, from its integrals: constant along the orbit).
 
@@ -217,6 +219,7 @@ class ChainExactFlow(StepByAdvance, Map):
     substeps: int = 1
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
     chunk_invariant: ClassVar[bool] = False
+    public_name: ClassVar[str] = "ExactFlow"  # the class its messages name (jetgaudin.maps.map_name)
 
     def __post_init__(self) -> None:
         model = getattr(self.H, "model", None)
@@ -527,20 +530,24 @@ class ChainExactFlow(StepByAdvance, Map):
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros.astype(complex),
                        imag_max=zeros)
 
-    def inverse(self) -> ChainExactFlow:
-        return ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)
+    def inverse(self) -> _ChainExactFlow:
+        return _ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)
 
     def describe(self) -> dict:
         return {"kind": "chain_exact", **self.model.describe(), "weights": np.asarray(self.H.weights).tolist(),
                 "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps}
 
 
-def _chain_exact_from(d: dict) -> ChainExactFlow:
+#: the old name of :class:`jetgaudin.ExactFlow` for chains: the same class (``isinstance`` holds both ways)
+ChainExactFlow = ExactFlow
+
+
+def _chain_exact_from(d: dict) -> ExactFlow:
     from .gaudin import GaudinModel
 
     model = GaudinModel.from_description(d)
-    return ChainExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
-                          float(d.get("rho_factor", RHO_FACTOR)), int(d.get("substeps", 1)))
+    return ExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
+                     rho_factor=float(d.get("rho_factor", RHO_FACTOR)), substeps=int(d.get("substeps", 1)))
 
 
 register_map("chain_exact", _chain_exact_from)

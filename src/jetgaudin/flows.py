@@ -274,7 +274,7 @@ def integrate(H, X0, T: float, *, t_eval=None, method: Method | str = Method.DOP
     rtol = _check_tol("rtol", rtol, True, RTOL_FLOOR)
     atol = _check_tol("atol", atol, False)
     method = Method.parse(method)
-    is_integral = isinstance(H, IntegralHamiltonian)
+    is_integral = getattr(H, "route_kind", None) == "top"  # the top's (one Hamiltonian type: the system decides)
     # quadratic Hamiltonians on another Lie-Poisson space (a chain) declare their structure constants
     affine = is_integral or getattr(H, "structure_constants", None) is not None
     if not is_integral and not callable(getattr(H, "vector_field", None)):
@@ -395,8 +395,9 @@ class FlowMap(Map):
     kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
 
     def __post_init__(self) -> None:
-        if not isinstance(self.H, IntegralHamiltonian):
-            raise InvalidParameterError("H must be an IntegralHamiltonian (physical_hamiltonian, ...)")
+        if getattr(self.H, "route_kind", None) != "top":
+            raise InvalidParameterError("H must be an IntegralHamiltonian of the top (a field b: physical_hamiltonian, "
+                                        "...); a chain's flow map is jetgaudin.gaudin.flow.ChainFlowMap")
         dt = _check_tol("dt", self.dt, True)
         if dt > MAX_FLOW_DT:
             raise InvalidParameterError(f"dt = {dt:g} is too large: one map step would integrate over {dt:g} time "

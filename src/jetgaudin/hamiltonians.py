@@ -21,8 +21,9 @@ Which is which:
 from __future__ import annotations
 
 import importlib
+import numbers
 from dataclasses import dataclass
-from typing import ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -56,7 +57,8 @@ class SolveHamiltonian(Protocol):
     * ``gradient(X)``, ``vector_field(X)`` -- ``∇H`` and ``Ẋ = Π(X)∇H`` (eq. (LP); a chain: its block bracket).
     """
 
-    route_kind: ClassVar[str]
+    @property
+    def route_kind(self) -> str: ...
 
     @property
     def n_state(self) -> int: ...
@@ -71,8 +73,9 @@ class SolveHamiltonian(Protocol):
 
 
 @dataclass(frozen=True)
-class IntegralHamiltonian:
-    r"""``H(X) = Σ_{m=1}^{2N} w_m κ_m(X)``, a linear combination of ``(H_1..H_N, C_1..C_N)``.
+class _TopHamiltonian:
+    r"""The top's route of :class:`IntegralHamiltonian` (its system a field ``b``):
+    ``H(X) = Σ_{m=1}^{2N} w_m κ_m(X)``, a linear combination of ``(H_1..H_N, C_1..C_N)``.
 
     ``weights`` has shape ``(2N,)`` or ``(..., 2N)`` (one combination per ensemble member);
     ``b`` is a float (field ``b e_3``) or a 3-vector; ``c`` the constants of eq. (lax).
@@ -143,6 +146,118 @@ class IntegralHamiltonian:
     def vector_field(self, X):
         r"""``Ẋ = Π(X) ∇H`` (eq. (LP)), shape ``(..., 3N)``."""
         return hamiltonian_vector_field(self.gradient(X), X)
+
+
+#: the route table of the Hamiltonian: system -> (module, implementation class), imported on use (the chain's lives in
+#: the method layer's gaudin package: this system-layer module imports it by name only)
+HAMILTONIAN_ROUTES: dict[str, tuple[str, str]] = {
+    "top": ("jetgaudin.hamiltonians", "_TopHamiltonian"),
+    "chain": ("jetgaudin.gaudin.hamiltonian", "_ChainHamiltonian"),
+}
+_MISSING: Any = object()
+
+
+@dataclass(frozen=True, init=False, repr=False)
+class IntegralHamiltonian:
+    r"""``H(X) = Σ_I w_I κ_I(X)``, a linear combination of a system's integrals: one type for the top and every su(2)
+    chain (issue 33; ``ChainHamiltonian`` is this class, and ``model.hamiltonian(weights)`` builds it).
+
+    ``system``: a field ``b`` (a float, field ``b e_3``, or a 3-vector: the top of ``N = len(weights)/2``, integrals
+    ``(H_1..H_N, C_1..C_N)`` of eq. (H); ``c`` the constants of eq. (lax); ``route_kind`` ``"top"``) or a
+    :class:`~jetgaudin.GaudinModel` (a chain of any family: its integrals ``h_{i,m}`` (and ``J``), weights of length
+    ``model.n_integrals``; ``c`` must be ``None``: a chain's constants are its model's; ``route_kind`` ``"chain"``).
+    ``weights``: shape ``(n,)`` or ``(..., n)`` (one combination per ensemble member).  The old keywords ``b=`` /
+    ``model=`` are accepted.  What it computes is its system's implementation (:data:`HAMILTONIAN_ROUTES`, unchanged:
+    the top's :class:`_TopHamiltonian`, a chain's :class:`jetgaudin.gaudin.hamiltonian._ChainHamiltonian`); the
+    methods of one system only (the top's ``N``, ``as_model``; a chain's ``structure_constants``, ``as_top``) are
+    its.  ``b`` is the field (a chain's: its model's), ``model`` the chain's model (``None`` for the top).  The su(n)
+    chains' :class:`jetgaudin.gaudin.sun.SunHamiltonian` stays its own type (another algebra: ``tr ℓ^k`` integrals).
+    """
+
+    system: object
+    weights: np.ndarray
+    c: object = None
+
+    def __init__(self, system: Any = _MISSING, weights: Any = _MISSING, c: object = None, *, b: Any = _MISSING,
+                 model: Any = _MISSING) -> None:
+        given = [(n, v) for n, v in (("system", system), ("b", b), ("model", model)) if v is not _MISSING]
+        if len(given) != 1:
+            raise InvalidParameterError(
+                "IntegralHamiltonian takes its system once: a field b (the top) or a GaudinModel (a chain), as the "
+                f"first argument or as b= / model=; got {', '.join(n for n, _ in given) or 'none'}")
+        if weights is _MISSING:
+            raise TypeError("IntegralHamiltonian() missing required argument: 'weights'")
+        name, system = given[0]
+        model_cls = importlib.import_module("jetgaudin.gaudin.model").GaudinModel
+        sk = "chain" if isinstance(system, model_cls) else "top"
+        if sk == "top" and not isinstance(system, numbers.Real | np.ndarray | list | tuple):
+            raise InvalidParameterError(
+                "the first argument of IntegralHamiltonian is its system: a field b (a real number or a 3-vector: the "
+                "top) or a GaudinModel (a chain, e.g. jg.GaudinModel(1.0, [(0, 3)])); got " + type(system).__name__)
+        if name != "system" and (name == "model") != (sk == "chain"):
+            raise InvalidParameterError(f"IntegralHamiltonian: {name}= must be "
+                                        + ("a GaudinModel (a chain)" if name == "model" else "a field (the top)")
+                                        + f", got {type(system).__name__}; pass the system as the first argument")
+        if sk == "chain" and c is not None:
+            raise InvalidParameterError("c (the jet constants of eq. (lax)) is the top's; a chain's constants are its "
+                                        "model's: give c = None with a GaudinModel")
+        module, cls = HAMILTONIAN_ROUTES[sk]
+        impl_cls = getattr(importlib.import_module(module), cls)
+        impl = impl_cls(system, weights, c) if sk == "top" else impl_cls(system, weights)
+        object.__setattr__(self, "system", impl.b if sk == "top" else impl.model)
+        object.__setattr__(self, "weights", impl.weights)
+        object.__setattr__(self, "c", impl.c if sk == "top" else None)
+        object.__setattr__(self, "_impl", impl)
+
+    def __getattr__(self, name: str) -> Any:
+        impl = self.__dict__.get("_impl") if not name.startswith("__") else None
+        if impl is None:
+            raise AttributeError(f"'IntegralHamiltonian' object has no attribute {name!r}")
+        try:
+            return getattr(impl, name)
+        except AttributeError:
+            raise AttributeError(f"'IntegralHamiltonian' object of the {impl.route_kind} has no attribute "
+                                 f"{name!r}") from None
+
+    def __repr__(self) -> str:
+        if self.route_kind == "top":
+            return f"IntegralHamiltonian(b={self.system!r}, weights={self.weights!r}, c={self.c!r})"
+        return f"IntegralHamiltonian(model={self.system!r}, weights={self.weights!r})"
+
+    @property
+    def route_kind(self) -> str:
+        """Its rows in the route table of :func:`jetgaudin.solve` (:class:`SolveHamiltonian`): "top" or "chain"."""
+        return self.__dict__["_impl"].route_kind  # type: ignore[no-any-return]
+
+    @property
+    def b(self) -> Any:
+        """The field: the top's ``b`` as given (a float or a 3-vector), a chain's model's ``b``."""
+        return self.__dict__["_impl"].b
+
+    @property
+    def model(self) -> Any:
+        """The chain's :class:`~jetgaudin.GaudinModel` (``None`` for the top)."""
+        return None if self.route_kind == "top" else self.system
+
+    @property
+    def n_state(self) -> int:
+        return int(self.__dict__["_impl"].n_state)
+
+    def check_state(self, X) -> np.ndarray:
+        return self.__dict__["_impl"].check_state(X)  # type: ignore[no-any-return]
+
+    def record_integrals(self, X) -> np.ndarray:
+        return self.__dict__["_impl"].record_integrals(X)  # type: ignore[no-any-return]
+
+    def __call__(self, X):
+        return self.__dict__["_impl"](X)
+
+    def gradient(self, X) -> np.ndarray:
+        return self.__dict__["_impl"].gradient(X)  # type: ignore[no-any-return]
+
+    def vector_field(self, X) -> np.ndarray:
+        r"""``Ẋ = Π(X) ∇H`` (eq. (LP); a chain: its block bracket), shape ``(..., n_state)``."""
+        return self.__dict__["_impl"].vector_field(X)  # type: ignore[no-any-return]
 
 
 def physical_hamiltonian(N: int, b) -> IntegralHamiltonian:

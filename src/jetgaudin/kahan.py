@@ -90,7 +90,7 @@ class KahanMap(Map):
     chunk_invariant = True
 
     def __post_init__(self) -> None:
-        if isinstance(self.H, IntegralHamiltonian):
+        if getattr(self.H, "route_kind", None) == "top":  # the one Hamiltonian type: its system decides
             if np.ndim(self.H.weights) != 1:
                 raise InvalidParameterError("Kahan's map takes one set of weights (shape (2N,)); "
                                             "give one Hamiltonian per orbit")

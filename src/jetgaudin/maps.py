@@ -237,6 +237,12 @@ def auto_gpu(has_gpu: bool, X: Any, steps: Any) -> bool:
     return auto_uses_gpu(math.prod(np.shape(X)[:-1]), int(steps))  # math.prod: 5 µs less than np.prod a call
 
 
+def map_name(m: Any) -> str:
+    """The class name a map's messages give: its ``public_name`` (a route of a public class, e.g. the top's route of
+    :class:`jetgaudin.OnePointBacklund`, :mod:`jetgaudin._system_maps`), else its class's name."""
+    return str(getattr(type(m), "public_name", type(m).__name__))
+
+
 class Map(abc.ABC):
     """Abstract base of every map ``X ↦ X_new`` on states ``(..., n)`` (see the module doc).
 
@@ -297,10 +303,10 @@ class Map(abc.ABC):
             object.__setattr__(self, "kernel", None)
         if self.backend is Backend.COMPILED and not self.has_compiled:
             raise InvalidParameterError(
-                f"{type(self).__name__} has no compiled route: backend (kernel) must be 'auto' or 'numpy', "
+                f"{map_name(self)} has no compiled route: backend (kernel) must be 'auto' or 'numpy', "
                 "got 'compiled'"
             )
-        check_gpu(self.backend, self.has_gpu, type(self).__name__)
+        check_gpu(self.backend, self.has_gpu, map_name(self))
 
     def with_backend(self, backend: Backend | str) -> Self:
         """This map with another ``backend`` (the same map when it is unchanged; :class:`InvalidParameterError` for
@@ -308,10 +314,10 @@ class Map(abc.ABC):
         backend = Backend.parse(backend)
         if backend is self.backend:
             return self
-        check_gpu(backend, self.has_gpu, type(self).__name__)
+        check_gpu(backend, self.has_gpu, map_name(self))
         if not self.has_compiled:  # one route: "auto" and "numpy" are the same map
             if backend is Backend.COMPILED:
-                raise InvalidParameterError(f"{type(self).__name__} has no compiled route: backend (kernel) must be "
+                raise InvalidParameterError(f"{map_name(self)} has no compiled route: backend (kernel) must be "
                                             "'auto' or 'numpy', got 'compiled'")
             return self
         return dataclasses.replace(self, backend=backend)  # type: ignore[type-var]

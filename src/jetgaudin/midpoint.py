@@ -50,7 +50,8 @@ def quadratic_field(H: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     linear bracket (a top: ``g^(N)``; a chain: ``H.structure_constants``), else ``None``."""
     from .algebra import structure_constants
 
-    c: Any = structure_constants(H.N) if isinstance(H, IntegralHamiltonian) else getattr(H, "structure_constants", None)
+    top = getattr(H, "route_kind", None) == "top"  # the one Hamiltonian type: its system decides
+    c: Any = structure_constants(H.N) if top else getattr(H, "structure_constants", None)
     if c is None:
         return None
     g0 = np.asarray(H.gradient(np.zeros(n)), dtype=float)

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
+from .._system_maps import _ONE_POINT_PROPERTIES, _TWO_POINT_PROPERTIES, OnePointBacklund, TwoPointBacklund
 from .._validate import as_state, nonzero_field, spectral_parameter
 from ..lax import ell_coefficients, state_from_ell
 from ..maps import (
@@ -53,7 +54,8 @@ from ._dressing import (
 )
 from .kernels import auto_kernel  # the kernel choice of kernel="auto" lives with the kernels
 
-__all__ = [  # what this module defines (Backend, Branch, MapProperties are jetgaudin.maps' own)
+__all__ = [  # what this module defines (Backend, Branch, MapProperties are jetgaudin.maps' own; the two public map
+    # classes are jetgaudin._system_maps', one per kind of map for every system, re-exported here)
     "OnePointBacklund",
     "TwoPointBacklund",
     "two_point_parameters",
@@ -151,12 +153,6 @@ def _empty_advance(X: np.ndarray, steps: int, save_every: int, carry: Any) -> Ad
                    imag_max=np.zeros(X.shape[:-1]))
 
 
-_TWO_POINT_PROPERTIES = MapProperties(
-    preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
-)
-_ONE_POINT_PROPERTIES = MapProperties(
-    preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
-)
 
 
 def _init_parameters(m) -> None:
@@ -169,8 +165,9 @@ def _init_parameters(m) -> None:
 
 
 @dataclass(frozen=True)
-class TwoPointBacklund(Map):
-    r"""The real two-point Bäcklund map ``B_η: X ↦ X̆`` (Section 6.2, Appendix 1), any N.
+class _TopTwoPoint(Map):
+    r"""The top's route of :class:`jetgaudin.TwoPointBacklund` (its system a field ``b``; the route table of
+    :mod:`jetgaudin._system_maps`): the real two-point Bäcklund map ``B_η: X ↦ X̆`` (Section 6.2, Appendix 1), any N.
 
     ``X̆`` solves ``M(λ) L(λ) = L̆(λ) M(λ)`` (eq. (128)) with ``M = λ + M0(s, t)`` of (mm),
     ``η1 = η``, ``η2 = η̄``, ``ν1 = ν(η)`` on the chosen branch and ``ν2 = conj ν1``.
@@ -183,15 +180,6 @@ class TwoPointBacklund(Map):
     ``backend`` (alias ``kernel``; default ``"auto"``): the route of :meth:`advance` / :meth:`iterate`, by the rule
     of :mod:`jetgaudin.maps` (the carry is ``ν1``).
 
-    >>> import jetgaudin as jg
-    >>> B = jg.TwoPointBacklund(1.0, 5 + 0.1j)
-    >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
-    >>> orbit = B.iterate(X0, 10)
-    >>> orbit.shape
-    (11, 9)
-    >>> import numpy as np
-    >>> bool(np.allclose(jg.integrals(orbit, 1.0), jg.integrals(X0, 1.0), rtol=1e-12, atol=1e-12))
-    True
     """
 
     b: float
@@ -200,6 +188,7 @@ class TwoPointBacklund(Map):
     backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_TWO_POINT_PROPERTIES, init=False, repr=False, compare=False)
     kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
+    public_name = "TwoPointBacklund"  # the class its messages name (jetgaudin.maps.map_name)
 
     def __post_init__(self) -> None:
         _init_parameters(self)
@@ -213,10 +202,10 @@ class TwoPointBacklund(Map):
     def sheet(self) -> int:
         return self.branch.sheet
 
-    def inverse(self) -> TwoPointBacklund:
+    def inverse(self) -> _TopTwoPoint:
         """The inverse map: the same ``η`` on the other branch."""
         other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
-        return TwoPointBacklund(self.b, self.eta, other, self.backend)
+        return _TopTwoPoint(self.b, self.eta, other, self.backend)
 
     def describe(self) -> dict:
         return {"kind": "two_point", "b": self.b, "eta": [self.eta.real, self.eta.imag],
@@ -355,7 +344,7 @@ class TwoPointBacklund(Map):
         orbit = np.ascontiguousarray(np.moveaxis(out, 0, 1)).reshape((out.shape[1],) + X.shape)
         return orbit, final.reshape(X.shape), nu.reshape(lead)
 
-    def _with_backend_cached(self, choice: Backend) -> TwoPointBacklund:
+    def _with_backend_cached(self, choice: Backend) -> _TopTwoPoint:
         """:meth:`with_backend`, kept per map and backend: building the map again (validation included) was ~20 µs of
         the ~60 of an Appendix 2 call with ``kernel="compiled"`` (issue 36).  The maps are frozen: the copy stays
         equal to a new one."""
@@ -409,8 +398,9 @@ class TwoPointBacklund(Map):
 
 
 @dataclass(frozen=True)
-class OnePointBacklund(Map):
-    r"""The complex one-point Bäcklund map ``B_(η, ν)`` of Section 6.1 (or its inverse), any N,
+class _TopOnePoint(Map):
+    r"""The top's route of :class:`jetgaudin.OnePointBacklund` (:mod:`jetgaudin._system_maps`): the complex
+    one-point Bäcklund map ``B_(η, ν)`` of Section 6.1 (or its inverse), any N,
     field ``b e_3``.
 
     Forward: ``L̃ = M L M^{-1}`` with ``M = [[λ − η + pq, p], [q, 1]]`` (eq. (ansatz)),
@@ -435,6 +425,7 @@ class OnePointBacklund(Map):
     backend: Backend = field(default=Backend.AUTO, compare=False)
     properties: MapProperties = field(default=_ONE_POINT_PROPERTIES, init=False, repr=False, compare=False)
     kernel: Backend | str | None = field(default=None, kw_only=True, repr=False, compare=False)  # alias
+    public_name = "OnePointBacklund"  # the class its messages name (jetgaudin.maps.map_name)
 
     def __post_init__(self) -> None:
         _init_parameters(self)
@@ -443,9 +434,9 @@ class OnePointBacklund(Map):
     def sheet(self) -> int:
         return self.branch.sheet
 
-    def inverse(self) -> OnePointBacklund:
+    def inverse(self) -> _TopOnePoint:
         """The inverse map (same ``η`` and branch)."""
-        return OnePointBacklund(self.b, self.eta, self.branch, not self.inverse_map, self.backend)
+        return _TopOnePoint(self.b, self.eta, self.branch, not self.inverse_map, self.backend)
 
     def describe(self) -> dict:
         return {"kind": "one_point", "b": self.b, "eta": [self.eta.real, self.eta.imag],

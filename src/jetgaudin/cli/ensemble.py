@@ -417,12 +417,10 @@ def _report(res, show):
 
 def _rate_line(res) -> str:
     """The session's stepping rate with the fraction of the device's FP64 peak (:mod:`jetgaudin.peak`)."""
-    from jetgaudin import TwoPointBacklund
     from jetgaudin import peak as pk
-    from jetgaudin.ensemble import BatchBacklund
 
     m = res.spec.map
-    chain = not isinstance(m, (BatchBacklund, TwoPointBacklund))
+    chain = getattr(m, "model", None) is not None  # a chain's map (a top's: no model; one class for both)
     if m.resolved_backend(res.spec.X0, res.spec.steps).value == "gpu":
         from jetgaudin import gpu
 

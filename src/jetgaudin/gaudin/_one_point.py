@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
+from .._system_maps import OnePointBacklund
 from ..backlund._dressing import adj, spectral_s
 from ..lax import ell_coefficients, ell_from_xi, state_from_ell
 from ..maps import Backend, Branch, MapProperties, register_map
@@ -62,9 +63,10 @@ _E22 = np.array([[0.0, 0.0], [0.0, 1.0]], dtype=complex)
 
 
 @dataclass(frozen=True)
-class ChainOnePointBacklund(_ChainMap):
-    r"""The complex one-point map ``B_(η, ν)`` of a chain (or its inverse, ``inverse_map=True``), module docstring:
-    rational (needs ``b ≠ 0``) and trigonometric (needs ``b + iγJ ≠ 0``) families.  Preserves the integrals, is
+class _ChainOnePoint(_ChainMap):
+    r"""The chain's route of :class:`jetgaudin.OnePointBacklund` (:mod:`jetgaudin._system_maps`): the complex
+    one-point map ``B_(η, ν)`` of a chain (or its inverse, ``inverse_map=True``), module docstring: rational
+    (needs ``b ≠ 0``) and trigonometric (needs ``b + iγJ ≠ 0``) families.  Preserves the integrals, is
     Poisson (holomorphically: ``J Π(X) Jᵀ = Π(X̃)``), ``inverse()`` undoes it; not real.
 
     Raises
@@ -83,6 +85,7 @@ class ChainOnePointBacklund(_ChainMap):
     backend: Backend = field(default=Backend.AUTO, compare=False)
     kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_one_point"
+    public_name = "OnePointBacklund"  # the class its messages name (jetgaudin.maps.map_name)
     properties: MapProperties = field(
         default=MapProperties(
             preserves_integrals=True, poisson=True, real=False, order=None, symmetric=True, interpolates_flow=False
@@ -105,8 +108,8 @@ class ChainOnePointBacklund(_ChainMap):
         self._init_common()
         object.__setattr__(self, "inverse_map", bool(self.inverse_map))
 
-    def inverse(self) -> ChainOnePointBacklund:
-        return ChainOnePointBacklund(self.model, self.eta, self.branch, not self.inverse_map)
+    def inverse(self) -> _ChainOnePoint:
+        return _ChainOnePoint(self.model, self.eta, self.branch, not self.inverse_map)
 
     def describe(self) -> dict:
         return {**super().describe(), "inverse_map": self.inverse_map}
@@ -201,10 +204,13 @@ class ChainOnePointBacklund(_ChainMap):
         return out.reshape(shape), nu.reshape(shape[:-1]), np.zeros(shape[:-1])
 
 
+#: the old name of :class:`jetgaudin.OnePointBacklund` for chains: the same class (``isinstance`` holds both ways)
+ChainOnePointBacklund = OnePointBacklund
 
-def _one_point_from(d: dict) -> ChainOnePointBacklund:
-    return ChainOnePointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
-                                 bool(d.get("inverse_map", False)))
+
+def _one_point_from(d: dict) -> OnePointBacklund:
+    return OnePointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
+                            bool(d.get("inverse_map", False)))
 
 
 register_map("chain_one_point", _one_point_from)

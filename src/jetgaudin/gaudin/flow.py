@@ -12,7 +12,7 @@ from .._errors import InvalidParameterError
 from ..flows import FlowMap, Method
 from ..hamiltonians import physical_hamiltonian
 from ..maps import register_map
-from .model import ChainHamiltonian, GaudinModel
+from .model import GaudinModel
 
 __all__ = ["ChainFlowMap"]
 
@@ -33,7 +33,7 @@ class ChainFlowMap(FlowMap):
     H: Any  # ChainHamiltonian (FlowMap's field, here the chain's Hamiltonian)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.H, ChainHamiltonian):
+        if getattr(self.H, "route_kind", None) not in ("chain", "sun"):  # a chain's Hamiltonian (the su(n) ones too)
             raise InvalidParameterError("H must be a ChainHamiltonian (model.hamiltonian(weights), "
                                         "model.interpolating_flow_hamiltonian(X, eta))")
         probe = FlowMap(physical_hamiltonian(1, 1.0), abs(self.dt) if isinstance(self.dt, int | float) else self.dt,

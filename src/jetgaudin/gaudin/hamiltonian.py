@@ -11,16 +11,23 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 
 from .._errors import InvalidParameterError
+from ..hamiltonians import IntegralHamiltonian
 
 if TYPE_CHECKING:
     from .model import GaudinModel
 
 __all__ = ["ChainHamiltonian"]
 
+#: the old name of the chain's Hamiltonian: :class:`jetgaudin.IntegralHamiltonian`, the one type (``isinstance`` holds
+#: both ways; ``ChainHamiltonian(model, weights)`` builds it)
+ChainHamiltonian = IntegralHamiltonian
+
 
 @dataclass(frozen=True)
-class ChainHamiltonian:
-    r"""``H(X) = Σ_I w_I h_I(X)``, a linear combination of the chain integrals (weights ``(2M,)`` or
+class _ChainHamiltonian:
+    r"""The chain's route of :class:`jetgaudin.IntegralHamiltonian` (its system a :class:`~jetgaudin.GaudinModel`;
+    :data:`jetgaudin.hamiltonians.HAMILTONIAN_ROUTES`): ``H(X) = Σ_I w_I h_I(X)``, a linear combination of the
+    chain integrals (weights ``(2M,)`` or
     ``(..., 2M)``).  Usable with :func:`jetgaudin.integrate` (``vector_field`` and ``record_integrals``)."""
 
     model: GaudinModel

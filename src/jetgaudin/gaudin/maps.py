@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from .._errors import InvalidParameterError, SingularStepError
+from .._system_maps import TwoPointBacklund
 from .._validate import spectral_parameter
 from ..backlund._dressing import adj, eigenvector, mm, real_two_point_M0
 from ..lax import ell_coefficients, state_from_ell
@@ -324,8 +325,9 @@ class _ChainMap(Map):
 
 
 @dataclass(frozen=True)
-class ChainTwoPointBacklund(_ChainMap):
-    r"""The real two-point Bäcklund map ``B_η`` of a chain (module docstring); the time-1 flow of ``G_η``.
+class _ChainTwoPoint(_ChainMap):
+    r"""The chain's route of :class:`jetgaudin.TwoPointBacklund` (:mod:`jetgaudin._system_maps`): the real two-point
+    Bäcklund map ``B_η`` of a chain (module docstring); the time-1 flow of ``G_η``.
 
     Parameters
     ----------
@@ -350,6 +352,7 @@ class ChainTwoPointBacklund(_ChainMap):
     backend: Backend = field(default=Backend.AUTO, compare=False)
     kernel: Backend | str | None = field(default=None, compare=False, repr=False)
     kind = "chain_two_point"
+    public_name = "TwoPointBacklund"  # the class its messages name (jetgaudin.maps.map_name)
     properties: MapProperties = field(
         default=MapProperties(
             preserves_integrals=True, poisson=True, real=True, order=2, symmetric=True, interpolates_flow=True
@@ -367,10 +370,10 @@ class ChainTwoPointBacklund(_ChainMap):
                 "(at Im eta = 0 it degenerates to the identity); give Im(eta) != 0, its time step is -2 Im(eta)"
             )
 
-    def inverse(self) -> ChainTwoPointBacklund:
+    def inverse(self) -> _ChainTwoPoint:
         """The same ``η`` on the other branch (same backend)."""
         other = Branch.OPPOSITE if self.branch is Branch.DEFAULT else Branch.DEFAULT
-        return ChainTwoPointBacklund(self.model, self.eta, other, self.backend)
+        return _ChainTwoPoint(self.model, self.eta, other, self.backend)
 
     def describe(self) -> dict:
         return {**super().describe(), "backend": self.backend.value}
@@ -421,7 +424,7 @@ class ChainTwoPointBacklund(_ChainMap):
         loaded = bool(getattr(disp, "signatures", None))
         where = getattr(getattr(disp, "_cache", None), "_cache_path", None)  # Numba's cache directory
         cached = isinstance(where, str) and bool(glob.glob(os.path.join(where, f"{name}.run_orbit-*.nbi")))
-        compiled = ChainTwoPointBacklund(self.model, self.eta, self.branch, Backend.COMPILED)
+        compiled = _ChainTwoPoint(self.model, self.eta, self.branch, Backend.COMPILED)
         return kernels().prepare_call((f"gaudin.{name}.run_orbit",), loaded, CHAIN_COMPILE_S,
                                       lambda: compiled.advance(x0, None, 0), notify, cached)
 
@@ -474,16 +477,16 @@ class ChainTwoPointBacklund(_ChainMap):
             X = self.model.check_state(X0)
             if m.resolved_backend(X, steps) is Backend.COMPILED:
                 return m._top_map().iterate(X, steps, save_every=save_every, carry=carry, return_carry=return_carry)
-        return super(ChainTwoPointBacklund, m).iterate(X0, steps, save_every=save_every, carry=carry,
+        return super(_ChainTwoPoint, m).iterate(X0, steps, save_every=save_every, carry=carry,
                                                        return_carry=return_carry)
 
     def _top_map(self):
         """The top's compiled two-point map of this one-site model (``model.is_top``, order ``N ≥ 2``): the route
         table's entry that takes the top's hand-tuned kernels (``docs/architecture.md``; same orbits to round-off,
         ``tests/test_top_as_model.py``)."""
-        from ..backlund.maps import TwoPointBacklund
+        from ..backlund.maps import _TopTwoPoint
 
-        return TwoPointBacklund(self.model.b, self.eta, self.branch, Backend.COMPILED)
+        return _TopTwoPoint(self.model.b, self.eta, self.branch, Backend.COMPILED)
 
     def _compiled_start(self, Xb: np.ndarray) -> np.ndarray:
         """``ν1`` at the states ``Xb`` ``(B, 3M)`` by the compiled branch rule
@@ -580,9 +583,12 @@ def _sites(d: dict) -> GaudinModel:
     return GaudinModel.from_description(d)
 
 
-def _two_point_from(d: dict) -> ChainTwoPointBacklund:
-    return ChainTwoPointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
-                                 Backend.parse(d.get("backend", "numpy")))
+ChainTwoPointBacklund = TwoPointBacklund  #: the old name for chains: the same class (isinstance both ways)
+
+
+def _two_point_from(d: dict) -> TwoPointBacklund:
+    return TwoPointBacklund(_sites(d), complex(*d["eta"]), Branch.parse(d.get("branch", "default")),
+                            Backend.parse(d.get("backend", "numpy")))
 
 
 register_map("chain_two_point", _two_point_from)

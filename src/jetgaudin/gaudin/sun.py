@@ -41,7 +41,8 @@ from .._validate import as_state, check_gradient, finite_result
 from ..families import make_family
 from ..lie import SU, parse_algebra
 from ._model_map import model_map, register_model_map
-from .model import ChainHamiltonian, GaudinModel, _check_sites, _taylor_coefficient
+from .hamiltonian import _ChainHamiltonian
+from .model import GaudinModel, _check_sites, _taylor_coefficient
 
 __all__ = ["SunGaudinModel", "SunHamiltonian", "field_components"]
 
@@ -347,7 +348,7 @@ class SunGaudinModel(GaudinModel):
         """The exact time-``dt`` flow of ``H`` (``n = 3``; :class:`jetgaudin.gaudin.sun_exact.SunExactFlow`)."""
         return model_map("sun_exact")(H, dt, substeps, backend)  # SunExactFlow (registered: no import circle)
 
-    def hamiltonian(self, weights) -> SunHamiltonian:
+    def hamiltonian(self, weights) -> SunHamiltonian:  # type: ignore[override]  # another algebra: its own type
         """``H = Σ_I w_I h_I`` (weights in the order of :meth:`integrals`) for :func:`jetgaudin.integrate`."""
         return SunHamiltonian(self, weights)
 
@@ -374,7 +375,7 @@ class SunGaudinModel(GaudinModel):
 
 
 @dataclass(frozen=True)
-class SunHamiltonian(ChainHamiltonian):
+class SunHamiltonian(_ChainHamiltonian):  # the chain Hamiltonian's implementation (another algebra: its own type)
     """``H = Σ_I w_I h_I`` on an su(n) chain.  For ``n ≥ 3`` the integrals are not quadratic, so it declares no
     structure constants (:func:`jetgaudin.integrate` then takes the generic right-hand side :meth:`vector_field`,
     not the affine-gradient one; heyoka's symbolic route refuses it), and it checks states of length ``(n²−1)M``."""
