@@ -403,12 +403,14 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
             compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
                                  f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
                                  f"{spec.program} --resume {out_dir}")
-            replay(view, spec, pos, anchor, str(out_dir / RUN_JSON), recorded_rate=_recorded_rate(run))
+            spec = replay(view, spec, pos, anchor, str(out_dir / RUN_JSON), recorded_rate=_recorded_rate(run))
         finally:
             view.close()
         lock.claim()  # from here on the directory is written: the lock names this process
         if read_run(out_dir, verify=True) != run:  # only possible without a lock file (taken just now)
             raise RecordingError(f"{out_dir / RUN_JSON} changed while the resume checked it; try again")
+        if spec._per_chunk_setup:  # written before runs were set up once (found by the replay): resumed that way
+            run["map_setup"] = _PER_CHUNK
         store = _open_store(spec, out_dir, run, fresh=False)
         store.anchor = anchor
         return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, compile_s=compile_s,
@@ -425,15 +427,26 @@ def _recorded_rate(run: dict) -> float | None:
     return steps / seconds if steps > 0 and seconds > 0 else None
 
 
+#: ``run.json`` ``map_setup`` of a run whose map's set-up (the su(3) exact step's parameters) is solved at every
+#: kernel call, as before it was solved once per run (:func:`jetgaudin.run.spec.run_map`); absent: once per run, or
+#: a directory of that older code (the replay tells which: :func:`jetgaudin.run.replay.replay`)
+_PER_CHUNK = "per_chunk"
+
+
 def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float, Any]:
     rec, ck = run["inputs"], run["checkpoint"]
+    setup = run.get("map_setup")
+    if setup not in (None, _PER_CHUNK):
+        raise ValueError(f"map_setup {setup!r}")
+    per_chunk = setup == _PER_CHUNK
     limits = HealthLimits(_limit(rec["max_drift"]), _limit(rec.get("max_imag")))  # null: no limit (strict JSON)
     program = str(run.get("program", "jetgaudin orbit"))
     elapsed0 = float(run.get("elapsed_seconds", 0.0))
     if "B" not in rec:  # an orbit directory
         m = map_from_description(run["map"]) if "map" in run else _legacy_two_point(rec)
         spec = RunSpec(m, np.array(rec["init"], dtype=float), rec["steps"], rec["save_every"], limits,
-                       csv=bool(rec["csv"]), program=program, stem=str(rec.get("stem", "flow")))
+                       csv=bool(rec["csv"]), program=program, stem=str(rec.get("stem", "flow")),
+                       _per_chunk_setup=per_chunk)
         I0 = unhex(run["integrals0_hex"])
         health = Health(spec.map, spec.X0, limits, I0=I0)
         health.drift = np.array(run["max_drift_abs"], dtype=float)
@@ -461,7 +474,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
             from ..ensemble import DaskBatch
 
             m = DaskBatch(m, **map_options)
-        spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
+        spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program, _per_chunk_setup=per_chunk)
         if "file" not in ck and int(ck["rows"]) == 0 and int(ck["step"]) == 0:  # stopped before its first slot
             d: dict[str, np.ndarray] = {"step": np.array(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
                  "drift": np.zeros((X0.shape[0], np.shape(spec.map.integrals(X0[:1]))[-1]))}
