@@ -42,8 +42,9 @@ class RunResult:
 
     ``status``: the text recorded (``completed``, ``failed: <reason>``), ``state``: the :class:`RunStatus`;
     ``drift_abs`` ``(..., k)``: ``max |I_k(n) − I_k(0)|`` over the checked states (saved rows and chunk ends);
-    ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``
-    (absolute where ``I_k(0) = 0``).  ``spec``: the run's :class:`RunSpec`; ``record``: the final ``run.json``.
+    ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``,
+    ``nan`` where ``I_k(0)`` is zero to round-off (:func:`relative_drift`).  ``spec``: the run's :class:`RunSpec`;
+    ``record``: the final ``run.json``.
     ``elapsed``: wall seconds of stepping over all sessions of the run (compile/load time excluded).  This
     session (the call that returned it): ``compile_seconds`` compiling or loading the kernels before the loop
     (0 when they were loaded), ``session_steps`` steps done in ``session_seconds`` of stepping, and
@@ -84,7 +85,8 @@ class RunResult:
 
     @property
     def max_drift_rel(self) -> np.ndarray:
-        return self.drift_abs / np.where(self.integrals0 != 0, np.abs(self.integrals0), 1.0)
+        """``drift_abs / |I_k(0)|``, ``nan`` where ``I_k(0)`` is zero to round-off (:func:`relative_drift`)."""
+        return relative_drift(self.drift_abs, self.integrals0, integral_scales(self.spec.map, self.spec.X0))
 
     @property
     def max_drift(self) -> np.ndarray:
@@ -94,6 +96,49 @@ class RunResult:
     @property
     def failed(self) -> bool:
         return self.state in (RunStatus.FAILED, RunStatus.FAILED_IO)
+
+
+# ------------------------------------------------------------------------------------- relative drift
+#: ``I_k(0)`` within this many ulps of its scale ``s_k`` (:func:`integral_scales`) is zero to round-off: its
+#: relative drift is undefined (the Clebsch top's Casimir ``2 M·p`` computed as ``-1.1e-16`` at a state with
+#: ``M ⟂ p`` made ``|ΔI| / |I(0)|`` read 1115 for a drift of 1e-13)
+ROUNDOFF_ULPS = 64
+#: the fixed directions of :func:`integral_scales` (unit vectors, one draw per state length, seed 0)
+_SCALE_DIRECTIONS = 8
+
+
+def integral_scales(m: Map, X0: np.ndarray) -> np.ndarray:
+    """``s_k``, the natural scale of each integral at ``X0`` ``(..., n)``: the largest ``|I_k(X0 ± ‖X0‖ d) −
+    I_k(X0)|`` over 8 fixed unit directions ``d`` (pseudo-random, seed 0), shape ``(..., k)``.
+
+    Why this scale: round-off moves a state by ``~ε ‖X‖`` in every component (the steps mix them), which moves an
+    integral of degree ``q`` by ``~ε ‖∇I‖ ‖X‖ ~ ε c ‖X‖^q`` (``c`` the size of its coefficients: ``b``, the site
+    differences, the weights), whatever ``I(X0)`` is; ``s_k`` is ``c ‖X0‖^q`` up to a factor of order one for the
+    quadratic integrals of the tops and chains and the cubic ones of su(3) (and mixed degrees, e.g. ``2b y + …``,
+    without knowing ``q`` or ``c``).  The sum of the absolute values of ``I``'s terms at ``X0`` is the round-off of
+    one evaluation only: it vanishes at states such as ``M = e_1``, ``p = e_2`` (``2 M·p``), where the orbit's
+    integral still drifts by ``~ε ‖X‖²``, and is not available from a map's ``integrals``."""
+    X0 = np.asarray(X0, dtype=float)
+    n = X0.shape[-1]
+    D = np.random.default_rng(0).normal(size=(_SCALE_DIRECTIONS, n))
+    D /= np.linalg.norm(D, axis=1, keepdims=True)
+    h = np.linalg.norm(X0, axis=-1, keepdims=True)
+    with np.errstate(all="ignore"):
+        I0 = np.asarray(m.integrals(X0), dtype=float)
+        s = np.zeros_like(I0)
+        for d in np.concatenate([D, -D]):
+            s = np.fmax(s, np.abs(np.asarray(m.integrals(X0 + h * d), dtype=float) - I0))
+    return s
+
+
+def relative_drift(drift_abs: np.ndarray, I0: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``drift_abs / |I0|``, and ``nan`` where ``|I0| ≤`` :data:`ROUNDOFF_ULPS` ``· ε · scale`` (``I0`` zero to
+    round-off, e.g. exactly zero: no relative drift means anything there; ``null`` in ``run.json``, ``n/a`` in the
+    command's table; the absolute drift is the number to read)."""
+    I0 = np.abs(np.asarray(I0, dtype=float))
+    zero = I0 <= ROUNDOFF_ULPS * np.finfo(float).eps * np.asarray(scale, dtype=float)
+    with np.errstate(all="ignore"):
+        return np.where(zero, np.nan, np.asarray(drift_abs, dtype=float) / np.where(zero, 1.0, I0))
 
 
 # ------------------------------------------------------------------------------------------ records
@@ -148,13 +193,15 @@ def _route(m: Any) -> Backend:
 def _summary(spec: RunSpec) -> Callable[[Health, float], dict]:
     if spec.layout is Layout.ORBIT:
         N = spec.n_state // block_size(spec.map)
+        scale = integral_scales(spec.map, spec.X0)
 
         def orbit(h: Health, elapsed: float) -> dict:
             return dict(
                 max_drift_abs=h.drift.tolist(),
-                max_drift_rel=(h.drift / np.where(h.I0 != 0, np.abs(h.I0), 1.0)).tolist(),
-                max_drift_rel_note="|I_k(n) - I_k(0)| / |I_k(0)| over the saved rows and chunk ends (absolute "
-                                   "where I_k(0) = 0)",
+                max_drift_rel=relative_drift(h.drift, h.I0, scale).tolist(),  # nan: null in run.json
+                max_drift_rel_note=f"|I_k(n) - I_k(0)| / |I_k(0)| over the saved rows and chunk ends; null where "
+                                   f"|I_k(0)| <= {ROUNDOFF_ULPS} eps s_k (zero to round-off; s_k the integral's "
+                                   "scale at X0, jetgaudin.run.api.integral_scales)",
                 max_imag_residue=h.imag,
                 sphere={"block": f"y_{N - 1}", "radius0": float(h.r0), "max_deviation": h.sphere},
                 elapsed_seconds=elapsed,
