@@ -319,3 +319,17 @@ def test_an_edited_old_way_run_is_still_refused(tmp_path):
     with pytest.raises(jg.RecordingError, match="edited or corrupted"):
         rl.resume(cut, handle_signals=False)
     assert "map_setup" not in json.loads((cut / "run.json").read_text())
+
+
+def test_the_command_resumes_an_old_way_run(capsys, tmp_path):
+    """``orbit --resume`` on a directory written the old way: exit 0, the uninterrupted old-way orbit's rows."""
+    rl.start(_su3_spec(True), tmp_path / "old", handle_signals=False)
+    cut = tmp_path / "cut"
+    try:
+        rl.start(_su3_spec(True), cut, progress=_stop_at(300))
+    except rl.RunInterrupted:
+        pass
+    code, _, err = run_cli(capsys, "orbit", "--resume", cut, "--no-plots", "--no-progress")
+    assert code == 0, err
+    assert np.array_equal(rl.load(cut).X, rl.load(tmp_path / "old").X)
+    assert rl.read_run(cut)["map_setup"] == "per_chunk"
