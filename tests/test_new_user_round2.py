@@ -245,3 +245,91 @@ def test_su3_init_errors_do_not_ask_for_3n(capsys, tmp_path):
     code, _, err = run_cli(capsys, "orbit", *SU3[:-1], "1,2,x", "--eta", "0.4+0.1i", "--out", tmp_path / "o")
     assert one_line_error(code, err, "--init", "value 3"), err
     assert "3N" not in err
+
+
+# ---- 2. su(3) exact runs written before (parameters solved at every chunk) still resume -------------------------
+
+OLD_STEPS, OLD_EVERY = 800, 100  # kernel calls of 200 steps (the driver's fixed cuts of a non-invariant map)
+
+
+def _su3_spec(old: bool) -> rl.RunSpec:
+    """The su(3) exact run on the NumPy route; ``old``: as the code before ``bind_run`` ran it (parameters solved
+    at the start of every kernel call), which writes no ``map_setup`` in run.json, as that code did not."""
+    fm = sun_exact.SunExactFlow(MODEL.hamiltonian(W), 0.05, backend="numpy")
+    return rl.RunSpec(fm, X0, OLD_STEPS, save_every=OLD_EVERY, checkpoint_seconds=0, _per_chunk_setup=old)
+
+
+def _stop_at(step: int):
+    """A progress callback sending SIGINT once the run has passed ``step`` (the driver stops after that call)."""
+    def progress(n, steps):
+        if n >= step:
+            os.kill(os.getpid(), signal.SIGINT)
+    return progress
+
+
+def test_a_run_written_the_old_way_resumes_the_old_way_bit_for_bit(tmp_path, monkeypatch):
+    """A directory written by the per-chunk code, stopped part-way, is resumed by the current code: the replay with
+    the parameters of X0 does not meet its rows, the per-chunk replay does, and the run goes on that way to the end
+    (recorded: run.json ``map_setup``, so a second resume goes straight to it): the orbit equals, bit for bit, the
+    uninterrupted old-way run (which differs from the new way's, else this would prove nothing)."""
+    rl.start(_su3_spec(True), tmp_path / "old", handle_signals=False)
+    rl.start(_su3_spec(False), tmp_path / "new", handle_signals=False)
+    old, new = rl.load(tmp_path / "old").X, rl.load(tmp_path / "new").X
+    assert "map_setup" not in json.loads((tmp_path / "old" / "run.json").read_text())
+    assert np.array_equal(old[:3], new[:3]) and not np.array_equal(old, new)  # the first call is the same
+
+    cut = tmp_path / "cut"
+    try:
+        rl.start(_su3_spec(True), cut, progress=_stop_at(300))
+    except rl.RunInterrupted:
+        pass
+    run = json.loads((cut / "run.json").read_text())
+    assert run["status"] == "interrupted" and "map_setup" not in run
+    assert run["checkpoint"]["step"] < OLD_STEPS and run["checkpoint"]["anchor"]["step"] > 0  # past the first call
+    try:  # the first resume (the fallback) is itself stopped part-way
+        rl.resume(cut, progress=_stop_at(run["checkpoint"]["step"] + 1))
+    except rl.RunInterrupted:
+        pass
+    run2 = json.loads((cut / "run.json").read_text())
+    assert run2["status"] == "interrupted" and run2["map_setup"] == "per_chunk"
+    assert run["checkpoint"]["step"] < run2["checkpoint"]["step"] < OLD_STEPS
+
+    def never(*a, **k):
+        raise AssertionError("a run recorded as per_chunk was replayed with bound parameters")
+
+    monkeypatch.setattr(sun_exact.SunExactFlow, "bind_run", never)
+    res = rl.resume(cut, handle_signals=False)
+    assert res.state is rl.RunStatus.COMPLETED
+    assert np.array_equal(rl.load(cut).X, old)  # bit for bit the uninterrupted old-way run
+
+
+def test_an_edited_old_way_run_is_still_refused(tmp_path):
+    """Neither way reproduces a checkpoint state moved by one ulp: refused as before, nothing recorded."""
+    from jetgaudin.run.files import write_run
+
+    cut = tmp_path / "cut"
+    try:
+        rl.start(_su3_spec(True), cut, progress=_stop_at(300))
+    except rl.RunInterrupted:
+        pass
+    run = json.loads((cut / "run.json").read_text())
+    ck = run["checkpoint"]
+    ck["X_hex"][4] = np.nextafter(float.fromhex(ck["X_hex"][4]), np.inf).hex()
+    write_run(cut, run)  # a valid digest: what an editor produces
+    with pytest.raises(jg.RecordingError, match="edited or corrupted"):
+        rl.resume(cut, handle_signals=False)
+    assert "map_setup" not in json.loads((cut / "run.json").read_text())
+
+
+def test_the_command_resumes_an_old_way_run(capsys, tmp_path):
+    """``orbit --resume`` on a directory written the old way: exit 0, the uninterrupted old-way orbit's rows."""
+    rl.start(_su3_spec(True), tmp_path / "old", handle_signals=False)
+    cut = tmp_path / "cut"
+    try:
+        rl.start(_su3_spec(True), cut, progress=_stop_at(300))
+    except rl.RunInterrupted:
+        pass
+    code, _, err = run_cli(capsys, "orbit", "--resume", cut, "--no-plots", "--no-progress")
+    assert code == 0, err
+    assert np.array_equal(rl.load(cut).X, rl.load(tmp_path / "old").X)
+    assert rl.read_run(cut)["map_setup"] == "per_chunk"

@@ -299,7 +299,15 @@ def console(**kwargs):
     return _Console(**({"highlight": False, "soft_wrap": True} | kwargs))
 
 
+#: the relative column of an integral zero to round-off at the start (``nan`` in ``RunResult.max_drift_rel``)
+ROUNDOFF_ZERO = "n/a (I(0) at round-off)"
+
+
 def integrals_table(names, I0, drift_abs, drift_rel, title: str):
+    """The integrals' table of a run: ``drift_rel`` is ``RunResult.max_drift_rel`` (``nan`` where ``I_k(0)`` is zero
+    to round-off: :data:`ROUNDOFF_ZERO` there, the absolute drift being the number to read)."""
+    import math
+
     from rich.table import Table
 
     t = Table(title=title, title_justify="left")
@@ -308,11 +316,12 @@ def integrals_table(names, I0, drift_abs, drift_rel, title: str):
     t.add_column("max |I_k - I_k(0)|", justify="right")
     t.add_column("relative", justify="right")
     rows: list[int] = list(range(len(names)))
-    if len(names) > 12:  # large N: the integrals with the largest relative drift only
-        rows = sorted(sorted(rows, key=lambda k: -drift_rel[k])[:6])
+    if len(names) > 12:  # large N: the integrals with the largest relative drift only (n/a ones last)
+        rows = sorted(sorted(rows, key=lambda k: -drift_rel[k] if not math.isnan(drift_rel[k]) else math.inf)[:6])
         t.caption = f"{len(names) - 6} more integrals in run.json"
     for k in rows:
-        t.add_row(names[k], f"{I0[k]:.17g}", f"{drift_abs[k]:.3e}", f"{drift_rel[k]:.3e}")
+        rel = ROUNDOFF_ZERO if math.isnan(drift_rel[k]) else f"{drift_rel[k]:.3e}"
+        t.add_row(names[k], f"{I0[k]:.17g}", f"{drift_abs[k]:.3e}", rel)
     return t
 
 

@@ -342,6 +342,11 @@ class SunExactFlow(ModelMap, StepByAdvance, Map):
         object.__setattr__(bound, "_bound", (flat.copy(), self._solve(flat)))
         return bound
 
+    def unbound(self) -> SunExactFlow:
+        """This map solving the parameters at the start of every :meth:`advance` call (the run layer's way before
+        :meth:`bind_run`; a run directory written that way is resumed that way: :mod:`jetgaudin.run.replay`)."""
+        return self if self._bound is None else SunExactFlow(self.H, self.dt, self.substeps, self.backend)
+
     def _solve(self, flat: np.ndarray) -> list[list[SunTwoPointBacklund]]:
         """The sub-step's maps of each orbit of ``flat`` ``(B, 8M)``."""
         maps = []

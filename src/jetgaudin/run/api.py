@@ -42,8 +42,9 @@ class RunResult:
 
     ``status``: the text recorded (``completed``, ``failed: <reason>``), ``state``: the :class:`RunStatus`;
     ``drift_abs`` ``(..., k)``: ``max |I_k(n) − I_k(0)|`` over the checked states (saved rows and chunk ends);
-    ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``
-    (absolute where ``I_k(0) = 0``).  ``spec``: the run's :class:`RunSpec`; ``record``: the final ``run.json``.
+    ``drift`` ``(..., k)`` the same relative to ``max(1, |I_k(0)|)``; ``max_drift_rel``: relative to ``|I_k(0)|``,
+    ``nan`` where ``I_k(0)`` is zero to round-off (:func:`relative_drift`).  ``spec``: the run's :class:`RunSpec`;
+    ``record``: the final ``run.json``.
     ``elapsed``: wall seconds of stepping over all sessions of the run (compile/load time excluded).  This
     session (the call that returned it): ``compile_seconds`` compiling or loading the kernels before the loop
     (0 when they were loaded), ``session_steps`` steps done in ``session_seconds`` of stepping, and
@@ -84,7 +85,8 @@ class RunResult:
 
     @property
     def max_drift_rel(self) -> np.ndarray:
-        return self.drift_abs / np.where(self.integrals0 != 0, np.abs(self.integrals0), 1.0)
+        """``drift_abs / |I_k(0)|``, ``nan`` where ``I_k(0)`` is zero to round-off (:func:`relative_drift`)."""
+        return relative_drift(self.drift_abs, self.integrals0, integral_scales(self.spec.map, self.spec.X0))
 
     @property
     def max_drift(self) -> np.ndarray:
@@ -94,6 +96,52 @@ class RunResult:
     @property
     def failed(self) -> bool:
         return self.state in (RunStatus.FAILED, RunStatus.FAILED_IO)
+
+
+# ------------------------------------------------------------------------------------- relative drift
+#: ``I_k(0)`` within this many ulps of its scale ``s_k`` (:func:`integral_scales`) is zero to round-off: its
+#: relative drift is undefined (the Clebsch top's Casimir ``2 M·p`` computed as ``-1.1e-16`` at a state with
+#: ``M ⟂ p`` made ``|ΔI| / |I(0)|`` read 1115 for a drift of 1e-13)
+ROUNDOFF_ULPS = 64
+#: the fixed directions of :func:`integral_scales` (unit vectors, one draw per state length, seed 0)
+_SCALE_DIRECTIONS = 8
+
+
+def integral_scales(m: Map, X0: np.ndarray) -> np.ndarray:
+    """``s_k``, the natural scale of each integral at ``X0`` ``(..., n)``: the largest ``|I_k(X0 ± ‖X0‖ d) −
+    I_k(X0)|`` over 8 fixed unit directions ``d`` (pseudo-random, seed 0), shape ``(..., k)``.
+
+    Why this scale: round-off moves a state by ``~ε ‖X‖`` in every component (the steps mix them), which moves an
+    integral of degree ``q`` by ``~ε ‖∇I‖ ‖X‖ ~ ε c ‖X‖^q`` (``c`` the size of its coefficients: ``b``, the site
+    differences, the weights), whatever ``I(X0)`` is; ``s_k`` is ``c ‖X0‖^q`` up to a factor of order one for the
+    quadratic integrals of the tops and chains and the cubic ones of su(3) (and mixed degrees, e.g. ``2b y + …``,
+    without knowing ``q`` or ``c``).  The sum of the absolute values of ``I``'s terms at ``X0`` is the round-off of
+    one evaluation only: it vanishes at states such as ``M = e_1``, ``p = e_2`` (``2 M·p``), where the orbit's
+    integral still drifts by ``~ε ‖X‖²``, and is not available from a map's ``integrals``."""
+    X0 = np.asarray(X0, dtype=float)
+    n = X0.shape[-1]
+    D = np.random.default_rng(0).normal(size=(_SCALE_DIRECTIONS, n))
+    D /= np.linalg.norm(D, axis=1, keepdims=True)
+    h = np.linalg.norm(X0, axis=-1, keepdims=True)
+    with np.errstate(all="ignore"):
+        I0 = np.asarray(m.integrals(X0), dtype=float)
+        s = np.zeros_like(I0)
+        for d in np.concatenate([D, -D]):
+            try:
+                s = np.fmax(s, np.abs(np.asarray(m.integrals(X0 + h * d), dtype=float) - I0))
+            except JetGaudinError:  # a map refusing such a state: that direction is left out
+                continue
+    return s
+
+
+def relative_drift(drift_abs: np.ndarray, I0: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """``drift_abs / |I0|``, and ``nan`` where ``|I0| ≤`` :data:`ROUNDOFF_ULPS` ``· ε · scale`` (``I0`` zero to
+    round-off, e.g. exactly zero: no relative drift means anything there; ``null`` in ``run.json``, ``n/a`` in the
+    command's table; the absolute drift is the number to read)."""
+    I0 = np.abs(np.asarray(I0, dtype=float))
+    zero = I0 <= ROUNDOFF_ULPS * np.finfo(float).eps * np.asarray(scale, dtype=float)
+    with np.errstate(all="ignore"):
+        return np.where(zero, np.nan, np.asarray(drift_abs, dtype=float) / np.where(zero, 1.0, I0))
 
 
 # ------------------------------------------------------------------------------------------ records
@@ -148,13 +196,15 @@ def _route(m: Any) -> Backend:
 def _summary(spec: RunSpec) -> Callable[[Health, float], dict]:
     if spec.layout is Layout.ORBIT:
         N = spec.n_state // block_size(spec.map)
+        scale = integral_scales(spec.map, spec.X0)
 
         def orbit(h: Health, elapsed: float) -> dict:
             return dict(
                 max_drift_abs=h.drift.tolist(),
-                max_drift_rel=(h.drift / np.where(h.I0 != 0, np.abs(h.I0), 1.0)).tolist(),
-                max_drift_rel_note="|I_k(n) - I_k(0)| / |I_k(0)| over the saved rows and chunk ends (absolute "
-                                   "where I_k(0) = 0)",
+                max_drift_rel=relative_drift(h.drift, h.I0, scale).tolist(),  # nan: null in run.json
+                max_drift_rel_note=f"|I_k(n) - I_k(0)| / |I_k(0)| over the saved rows and chunk ends; null where "
+                                   f"|I_k(0)| <= {ROUNDOFF_ULPS} eps s_k (zero to round-off; s_k the integral's "
+                                   "scale at X0, jetgaudin.run.api.integral_scales)",
                 max_imag_residue=h.imag,
                 sphere={"block": f"y_{N - 1}", "radius0": float(h.r0), "max_deviation": h.sphere},
                 elapsed_seconds=elapsed,
@@ -403,12 +453,14 @@ def resume(out_dir: str | Path, *, expect: dict | None = None, checkpoint_second
             compile_s = _prepare(spec, pos.X, out_dir, notify, options.get("handle_signals", True),
                                  f"while compiling the kernels; the run in {out_dir} is unchanged; resume with: "
                                  f"{spec.program} --resume {out_dir}")
-            replay(view, spec, pos, anchor, str(out_dir / RUN_JSON), recorded_rate=_recorded_rate(run))
+            spec = replay(view, spec, pos, anchor, str(out_dir / RUN_JSON), recorded_rate=_recorded_rate(run))
         finally:
             view.close()
         lock.claim()  # from here on the directory is written: the lock names this process
         if read_run(out_dir, verify=True) != run:  # only possible without a lock file (taken just now)
             raise RecordingError(f"{out_dir / RUN_JSON} changed while the resume checked it; try again")
+        if spec._per_chunk_setup:  # written before runs were set up once (found by the replay): resumed that way
+            run["map_setup"] = _PER_CHUNK
         store = _open_store(spec, out_dir, run, fresh=False)
         store.anchor = anchor
         return _drive(spec, out_dir, store, pos, health, elapsed0, first=store.rows == 0, compile_s=compile_s,
@@ -425,15 +477,26 @@ def _recorded_rate(run: dict) -> float | None:
     return steps / seconds if steps > 0 and seconds > 0 else None
 
 
+#: ``run.json`` ``map_setup`` of a run whose map's set-up (the su(3) exact step's parameters) is solved at every
+#: kernel call, as before it was solved once per run (:func:`jetgaudin.run.spec.run_map`); absent: once per run, or
+#: a directory of that older code (the replay tells which: :func:`jetgaudin.run.replay.replay`)
+_PER_CHUNK = "per_chunk"
+
+
 def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Position, Health, float, Any]:
     rec, ck = run["inputs"], run["checkpoint"]
+    setup = run.get("map_setup")
+    if setup not in (None, _PER_CHUNK):
+        raise ValueError(f"map_setup {setup!r}")
+    per_chunk = setup == _PER_CHUNK
     limits = HealthLimits(_limit(rec["max_drift"]), _limit(rec.get("max_imag")))  # null: no limit (strict JSON)
     program = str(run.get("program", "jetgaudin orbit"))
     elapsed0 = float(run.get("elapsed_seconds", 0.0))
     if "B" not in rec:  # an orbit directory
         m = map_from_description(run["map"]) if "map" in run else _legacy_two_point(rec)
         spec = RunSpec(m, np.array(rec["init"], dtype=float), rec["steps"], rec["save_every"], limits,
-                       csv=bool(rec["csv"]), program=program, stem=str(rec.get("stem", "flow")))
+                       csv=bool(rec["csv"]), program=program, stem=str(rec.get("stem", "flow")),
+                       _per_chunk_setup=per_chunk)
         I0 = unhex(run["integrals0_hex"])
         health = Health(spec.map, spec.X0, limits, I0=I0)
         health.drift = np.array(run["max_drift_abs"], dtype=float)
@@ -461,7 +524,7 @@ def _restore(out_dir: Path, run: dict, map_options: dict) -> tuple[RunSpec, Posi
             from ..ensemble import DaskBatch
 
             m = DaskBatch(m, **map_options)
-        spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program)
+        spec = RunSpec(m, X0, rec["steps"], rec["save_every"], limits, program=program, _per_chunk_setup=per_chunk)
         if "file" not in ck and int(ck["rows"]) == 0 and int(ck["step"]) == 0:  # stopped before its first slot
             d: dict[str, np.ndarray] = {"step": np.array(0), "X": X0.copy(), "nu1": np.zeros(0, complex),
                  "drift": np.zeros((X0.shape[0], np.shape(spec.map.integrals(X0[:1]))[-1]))}

@@ -17,6 +17,12 @@ the same bits however a run is cut (``chunk_invariant``, the Bäcklund maps); a 
 of its save grid only where the anchor is on that grid.  Cost: at most one kernel call (about 0.1 s) plus the steps
 from the last saved row to the checkpoint (at most one save interval).
 
+A map whose set-up is solved once per run (the su(3) exact step's parameters, :func:`jetgaudin.run.spec.run_map`)
+was solved at the start of every kernel call by the code before that: a directory written then does not replay
+with the parameters of ``X0``.  It is replayed the old way too, and resumed that way to the end when that way
+reproduces its rows (``run.json`` records ``map_setup: "per_chunk"``, so a second resume takes it at once); a run
+neither way reproduces is refused.
+
 What replay cannot detect (``docs/reliability.md``): a forgery made by running the map (an anchor and a checkpoint
 computed consistently from a changed state between rows), edits of fields that do not change a bit of the orbit
 (``steps``, ``max_drift``, ``max_imag``, timings), and rows before the anchor (those are covered by the rows'
@@ -25,6 +31,7 @@ SHA-256 digest, which detects accidents only).
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from typing import Any
 
@@ -32,7 +39,7 @@ import numpy as np
 
 from .._errors import JetGaudinError, RecordingError
 from .driver import Position, piece
-from .spec import run_map
+from .spec import RunSpec, binds_per_run, run_map
 
 #: steps of one replayed kernel call, in save intervals (bounds the rows held: at most this many)
 _ROWS_PER_CALL = 4096
@@ -49,15 +56,43 @@ def _same(a: Any, b: Any) -> bool:
     return bool(np.array_equal(np.asarray(a, dtype=complex), np.asarray(b, dtype=complex)))
 
 
-def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, Any] | None, where: str, *,
-           recorded_rate: float | None = None) -> None:
+class _Mismatch(Exception):
+    """The replayed map does not reach the stored rows or the checkpoint, bit for bit."""
+
+
+def replay(store: Any, spec: RunSpec, pos: Position, anchor: tuple[int, np.ndarray, Any] | None, where: str, *,
+           recorded_rate: float | None = None) -> RunSpec:
     """Refuse (:class:`jetgaudin.RecordingError`) a checkpoint ``pos`` that the recorded map does not reach from
     ``anchor`` through the stored rows ``store.dn``/``store.dS`` (``store.rows`` of them), bit for bit; see the
     module doc.  ``where``: the file named in the message.  ``recorded_rate``: the recorded run's steps per second;
     a replay slower than :data:`REPLAY_SLOWDOWN` times it (and than :data:`REPLAY_MIN_SECONDS`) is refused: the map
-    is not the one that wrote the rows (e.g. its kernel was edited)."""
+    is not the one that wrote the rows (e.g. its kernel was edited).
+
+    Returns the spec to resume with: ``spec``, or, for a map whose set-up is solved once per run
+    (:func:`jetgaudin.run.spec.binds_per_run`: the su(3) exact step) whose rows that does not reproduce, the spec
+    solving it at every kernel call (``_per_chunk_setup``: how such runs were written before) when *that* reproduces
+    them bit for bit; a run neither reproduces is refused as above."""
     bad = RecordingError(f"{where}: the checkpoint does not match the saved rows replayed with the recorded map "
                          "(edited or corrupted: state, step or map parameters); cannot resume")
+    try:
+        _replay(store, spec, pos, anchor, where, recorded_rate)
+        return spec
+    except _Mismatch:
+        if not binds_per_run(spec):
+            raise bad from None
+    old = dataclasses.replace(spec, _per_chunk_setup=True)
+    try:
+        _replay(store, old, pos, anchor, where, recorded_rate)
+    except _Mismatch:
+        raise bad from None
+    return old
+
+
+def _replay(store: Any, spec: RunSpec, pos: Position, anchor: tuple[int, np.ndarray, Any] | None, where: str,
+            recorded_rate: float | None) -> None:
+    """:func:`replay` with the map :func:`jetgaudin.run.spec.run_map` gives ``spec``: raises :class:`_Mismatch`
+    where the bits differ (:class:`jetgaudin.RecordingError` for the other refusals)."""
+    bad = _Mismatch()
     rows, every = store.rows, spec.save_every
     if rows < 1:  # nothing durable yet: the run starts again from X0
         if pos.n != 0 or not np.array_equal(pos.X, spec.X0):
@@ -106,6 +141,6 @@ def replay(store: Any, spec: Any, pos: Position, anchor: tuple[int, np.ndarray, 
     except RecordingError:
         raise
     except JetGaudinError:
-        raise bad from None
+        raise _Mismatch() from None
     if n != pos.n or not np.array_equal(np.asarray(X), pos.X) or not _same(carry, pos.carry):
         raise bad

@@ -23,6 +23,7 @@ __all__ = [
     "RunSpec",
     "RunStatus",
     "integral_names",
+    "binds_per_run",
     "run_map",
 ]
 
@@ -134,6 +135,9 @@ class RunSpec:
     program: str = "jetgaudin orbit"
     checkpoint_seconds: float = 1.0
     stem: str = "flow"
+    #: private: the map's per-orbit set-up is solved at the start of every kernel call, not once per run (see
+    #: :func:`run_map`); set by a resume for the run directories written that way (``run.json`` ``map_setup``)
+    _per_chunk_setup: bool = field(default=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.map, Map):
@@ -193,10 +197,24 @@ def run_map(spec: RunSpec) -> Map:
     """The map a run advances (the driver and a resume's replay): ``spec.map``, or, where its class has
     ``bind_run`` (the su(3) exact step), ``spec.map.bind_run(spec.X0)``: the map with its per-orbit set-up solved
     once per run at the initial states, not at every chunk.  A resume rebuilds ``X0`` from ``run.json`` bit for bit,
-    so it solves once more and meets the same bits.  Kept on ``spec`` (one solve for the replay and the run)."""
+    so it solves once more and meets the same bits.  Kept on ``spec`` (one solve for the replay and the run).
+
+    With ``spec._per_chunk_setup`` (a run directory written before runs were bound: ``run.json`` ``map_setup`` is
+    ``"per_chunk"``, or such a run found by the replay, :mod:`jetgaudin.run.replay`): the map's ``unbound()``, which
+    solves its set-up at the start of every kernel call, as those runs were written."""
     m = spec.__dict__.get("_run_map")
     if m is None:
-        bind = getattr(type(spec.map), "bind_run", None)  # the class's: a wrapper forwarding attributes is not bound
-        m = bind(spec.map, spec.X0) if callable(bind) else spec.map
+        cls = type(spec.map)  # the class's methods: a wrapper forwarding attributes is not bound
+        bind, unbind = getattr(cls, "bind_run", None), getattr(cls, "unbound", None)
+        if spec._per_chunk_setup:
+            m = unbind(spec.map) if callable(unbind) else spec.map
+        else:
+            m = bind(spec.map, spec.X0) if callable(bind) else spec.map
         object.__setattr__(spec, "_run_map", m)
     return m
+
+
+def binds_per_run(spec: RunSpec) -> bool:
+    """Whether :func:`run_map` solves the map's set-up once per run (its class has ``bind_run`` and the spec is not
+    ``_per_chunk_setup``): only such a run may have been written the other way, per kernel call."""
+    return callable(getattr(type(spec.map), "bind_run", None)) and not spec._per_chunk_setup
