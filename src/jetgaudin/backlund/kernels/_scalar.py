@@ -174,7 +174,10 @@ def _eigvec_flags(u, v, w, nu):
     # square roots): the compiled route refuses whenever the NumPy route does, and in a band twice as wide
     scale2 = 4.0 * (_abs2(u) + _abs2(v) + _abs2(w) + _abs2(nu))
     nonfinite = not (scale2 - scale2 == 0.0)
-    branch = nk <= _EIG_TOL2 * scale2 or nk == 0.0
+    # _eigvec's ``or nk == 0.0`` dropped (one comparison fewer per 8 lanes): with ``scale2`` finite (>= 0)
+    # ``nk == 0`` implies ``nk <= _EIG_TOL2 scale2``; with it infinite too; with it NaN ``nonfinite`` is set,
+    # and it takes precedence over ``branch`` wherever the flags are used (the statuses of _eigvec)
+    branch = nk <= _EIG_TOL2 * scale2
     return k1, k2, nk, nonfinite, branch
 
 
