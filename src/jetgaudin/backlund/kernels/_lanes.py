@@ -37,7 +37,8 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``
     (carried to the next step, or applied first: the selects of ``_step3``'s cases), the eigenvector and the
     unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of two of
-    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
+    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, bad, code)``
+    (``bad``: the eigenvector failed, ``code``: then its status, :func:`._scalar._eigvec_flags`);
     ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
     nu2 = _nu2(u, v, w)
@@ -50,9 +51,9 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     carry = a2 <= _CARRY_TOL2 * s2  # ν1 used as is, its update carried (as _step3)
     nu_next = S._selc(newton, nn, nu)
     nu = S._selc(S._sel(newton, not carry, False), nn, nu)
-    k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
+    k1, k2, nk, bad, code = S._eigvec_flags(u, v, w, nu)  # eigenvector, its status as a flag and a value
     n1, n2, n3, r = _axis(k1, k2, nk, q)
-    return nu_next, n1, n2, n3, r, need_root, bad_scale, branch
+    return nu_next, n1, n2, n3, r, need_root, bad, code
 
 
 @block(inline="always")
@@ -73,31 +74,28 @@ def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, ba
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 32
-# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status and a copy of the
-# status during the second pass.  The status row also says which lanes a pass steps: those with status 0 (a
-# failed lane's status is positive); the axis loop sets it to _REDO in a lane whose Newton update of ν1 was
-# refused (the closest-root fallback: the second pass), to a failure's status if the eigenvector failed
+# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status, redo (the lane
+# needs the closest-root fallback) and a copy of alive during the second pass
 _C0 = 12
 _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
-_SAVED = _ALIVE + 2
-_REDO = -1.0
+_REDO = _ALIVE + 2
+_SAVED = _ALIVE + 3
 # the power of two q of _n3._scale3 (per orbit and call)
-_Q = _ALIVE + 3
-# scratch rows between the two halves of a step: n' (3), r, the residual tolerance
-_MID = _ALIVE + 4
-_ROWS = _MID + 5
+_Q = _ALIVE + 4
+# scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
+# eigenvector valid), the residual tolerance
+_MID = _ALIVE + 5
+_ROWS = _MID + 6
 
 
 @block(inline="always")
 def _lanes_pass(buf, newton):
-    """One step of the lanes of ``buf`` (``_ROWS × LANES``) whose status is 0, vectorised across the lanes, in two
-    loops over the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the
-    new values in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence
-    the bits, are those of :func:`._n3._step3`.  A lane with a nonzero status keeps its values and status, a lane
-    to be redone its values (its status becomes ``_REDO``: the status row is also the redo and the "go" flag, one
-    store per 8 lanes for three, docs/performance.md "a fourth session"), and so does the state of a lane whose
-    step failed (selects of the old values: on Zen 4 a blend, masked move or
+    """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
+    the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
+    in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
+    are those of :func:`._n3._step3`.  A lane that is not alive, or is to be redone, keeps its values and status,
+    and so does the state of a lane whose step failed (selects of the old values: on Zen 4 a blend, masked move or
     masked store costs no FMA-pipe cycle, a comparison one, a 512-bit store ~1.6, ``benchmarks/fp_ports.py``;
     writing the new values elsewhere and copying them back cost 13 stores per 8 lanes more).  Inlined by Numba
     into the step loop: as a call it cost an NRT incref/decref of ``buf`` per step (docs/performance.md, issue 36,
@@ -109,20 +107,22 @@ def _lanes_pass(buf, newton):
                        buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l], buf[12 * L + l],
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
                        buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
-        # a lane stepped by this pass (status 0) and not to be redone takes its new ν1 (in place); its status
-        # becomes _REDO, or an eigenvector failure's status, or stays 0 (the dressing's flag: one row for three)
-        act = buf[_STATUS * L + l] == 0.0
-        take = S._sel(act, not r[5], False)
+        # a lane alive and not to be redone takes its new ν1 (in place) and, if its eigenvector failed, the status;
+        # the others keep their values.  The dressing gets one flag: the lane steps, its eigenvector valid
+        alive = buf[_ALIVE * L + l] != 0.0
+        take = S._sel(alive, not r[5], False)
         buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
         buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
-        pre = S._sel(r[5], _REDO, S._sel(r[6], float(STATUS_NONFINITE), S._sel(r[7], float(STATUS_BRANCH), 0.0)))
-        buf[_STATUS * L + l] = S._sel(act, pre, buf[_STATUS * L + l])
+        pre = S._sel(r[6], r[7], 0.0)
+        buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
+        buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
         buf[M + l] = r[1]
         buf[M + L + l] = r[2]
         buf[M + 2 * L + l] = r[3]
         buf[M + 3 * L + l] = r[4]
+        buf[M + 4 * L + l] = S._sel(S._sel(take, not r[6], False), 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
-        buf[M + 4 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+        buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
@@ -131,13 +131,13 @@ def _lanes_pass(buf, newton):
                buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-        go = buf[_STATUS * L + l] == 0.0  # stepped by this pass, not to be redone, its eigenvector valid
+        go = buf[M + 4 * L + l] != 0.0
         Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l], buf[M + L + l],
                   buf[M + 2 * L + l], buf[M + 3 * L + l], cst)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l],
-                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 4 * L + l], False, False)
-        # in place: the state of a lane that steps (``go``) without failure, and the status of a lane that steps;
-        # any other lane keeps its values (selects of the old values,
+                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 5 * L + l], False, False)
+        # in place: the state of a lane that steps (``go``: alive, not to be redone, its eigenvector valid) without
+        # failure, and the status of a lane that steps; any other lane keeps its values (selects of the old values,
         # stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
         new = S._sel(go, r[10], False)
         buf[l] = S._sel(new, r[1], x0)
@@ -162,17 +162,6 @@ def _any_row(buf, start):
     for l in range(start, start + LANES):
         acc |= bits[l]
     return acc != 0
-
-
-@block(inline="always")
-def _any_negative(buf, start):
-    """Whether the row ``buf[start : start + LANES]`` has a negative entry (a lane to redo): the sign bit of
-    an OR of the bits (statuses are 0.0, positive or ``_REDO``), as :func:`_any_row`."""
-    bits = buf.view(np.int64)
-    acc = 0
-    for l in range(start, start + LANES):
-        acc |= bits[l]
-    return acc < 0
 
 
 @block()
@@ -232,6 +221,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                                       X0[o, 7], X0[o, 8], b[o])
             buf[_ALIVE * L + l] = 1.0
             buf[_STATUS * L + l] = 0.0
+            buf[_REDO * L + l] = 0.0
         for o in range(i0, i0 + W):
             for i in range(9):
                 out[0, o, i] = X0[o, i]
@@ -242,11 +232,11 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             redo = False
             for second in (False, True):  # one call site of the pass (LLVM inlines it once)
                 if second:
-                    if not _any_negative(buf, _STATUS * L):
+                    if not _any_row(buf, _REDO * L):
                         break
                     redo = True
                     for l in range(L):  # ν1 of the lanes to redo continued by the closest root
-                        if buf[_STATUS * L + l] == _REDO:
+                        if buf[_REDO * L + l] != 0.0:
                             u, v, w = _ell3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                             buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l],
                                             buf[11 * L + l], buf[12 * L + l], buf[13 * L + l], buf[14 * L + l],
@@ -254,14 +244,13 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                             nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
                             buf[9 * L + l] = nu.real
                             buf[10 * L + l] = nu.imag
-                    for l in range(L):  # the second pass steps those lanes alone (status 0; the others 1)
-                        buf[_SAVED * L + l] = buf[_STATUS * L + l]
-                        buf[_STATUS * L + l] = 0.0 if buf[_STATUS * L + l] == _REDO else 1.0
+                    for l in range(L):  # the second pass steps those lanes alone
+                        buf[_SAVED * L + l] = buf[_ALIVE * L + l]
+                        buf[_ALIVE * L + l] = buf[_REDO * L + l]
                 _lanes_pass(buf, newton and not second)
-            if redo:  # the other lanes' statuses back
+            if redo:
                 for l in range(L):
-                    if buf[_SAVED * L + l] != _REDO:
-                        buf[_STATUS * L + l] = buf[_SAVED * L + l]
+                    buf[_ALIVE * L + l] = buf[_SAVED * L + l]
             for l in range(L if _any_row(buf, _STATUS * L) else 0):
                 if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
                     buf[_ALIVE * L + l] = 0.0
