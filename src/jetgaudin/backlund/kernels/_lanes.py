@@ -37,7 +37,8 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     """First half of :func:`._n3._step3` without data-dependent branches: ``ℓ(η)``, the Newton update of ``ν1``
     (carried to the next step, or applied first: the selects of ``_step3``'s cases), the eigenvector and the
     unnormalised axis ``n'`` with ``r = 1/(q|k|²)`` (:func:`._n3._axis`; ``q`` the power of two of
-    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, nonfinite, branch)``;
+    :func:`._n3._scale3`).  Returns ``(ν1 for the next step, n'_1, n'_2, n'_3, r, need_root, bad, code)``
+    (``bad``: the eigenvector failed, ``code``: then its status, :func:`._scalar._eigvec_flags`);
     ``need_root``: the Newton update of ``ν1`` was refused, the lane must be redone with the closest root."""
     u, v, w = _ell3(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z3i)
     nu2 = _nu2(u, v, w)
@@ -50,9 +51,9 @@ def _lane_axis(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, z1r, z1i, z2r, z2i, z3r, z
     carry = a2 <= _CARRY_TOL2 * s2  # ν1 used as is, its update carried (as _step3)
     nu_next = S._selc(newton, nn, nu)
     nu = S._selc(S._sel(newton, not carry, False), nn, nu)
-    k1, k2, nk, bad_scale, branch = S._eigvec_flags(u, v, w, nu)  # eigenvector, statuses kept as flags
+    k1, k2, nk, bad, code = S._eigvec_flags(u, v, w, nu)  # eigenvector, its status as a flag and a value
     n1, n2, n3, r = _axis(k1, k2, nk, q)
-    return nu_next, n1, n2, n3, r, need_root, bad_scale, branch
+    return nu_next, n1, n2, n3, r, need_root, bad, code
 
 
 @block(inline="always")
@@ -112,14 +113,14 @@ def _lanes_pass(buf, newton):
         take = S._sel(alive, not r[5], False)
         buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
         buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
-        pre = S._sel(r[6], float(STATUS_NONFINITE), S._sel(r[7], float(STATUS_BRANCH), 0.0))
+        pre = S._sel(r[6], r[7], 0.0)
         buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
         buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
         buf[M + l] = r[1]
         buf[M + L + l] = r[2]
         buf[M + 2 * L + l] = r[3]
         buf[M + 3 * L + l] = r[4]
-        buf[M + 4 * L + l] = S._sel(S._sel(take, not (r[6] | r[7]), False), 1.0, 0.0)
+        buf[M + 4 * L + l] = S._sel(S._sel(take, not r[6], False), 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
         buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])

@@ -188,10 +188,26 @@ def _sel3(c, a1, a2, a3, b1, b2, b3):
 
 
 @block()
+def _max2_ok(q1, q2, t):
+    """``q1 <= t and q2 <= t`` for ``q_i >= 0`` or NaN (NaN fails) with one comparison: ``max(q1, q2, c) <= t``,
+    ``c = min(0, q1 + q2)`` (0, or NaN when a ``q_i`` is: a sum of non-negative numbers is never ``inf − inf``).
+    ``a if a > b else b`` is x86's ``maxpd`` exactly (a NaN in either operand gives ``b``), hence the NaN carried
+    by ``c`` as the last ``max``'s second operand; ``0 if 0 < s else s`` is ``minpd``.  Without a NaN the maximum
+    of non-negative numbers is compared, so the answer is the two comparisons' (infinities included).  On Zen 4
+    ``maxpd``, ``minpd`` and adds take no FMA-pipe cycle, a comparison into a mask one (``benchmarks/fp_ports.py``).
+    (All four residuals in one comparison made LLVM spill a register in the lanes' dressing loop: a store more.)"""
+    m = q1 if q1 > q2 else q2
+    s = q1 + q2
+    c = 0.0 if 0.0 < s else s
+    m = m if m > c else c
+    return m <= t
+
+
+@block()
 def _norm_ok(e1, e2, e3, t):
     """The residual test of the complex route for the Hermitian residual ``e·σ``: ``|u|² = e3²`` and
-    ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails)."""
-    return (e3 * e3 <= t) & (F(e1, e1, e2 * e2) <= t)
+    ``|v|² = |w|² = e1² + e2²`` at most ``t`` (NaN fails); one comparison (:func:`_max2_ok`)."""
+    return _max2_ok(e3 * e3, F(e1, e1, e2 * e2), t)
 
 
 @block()

@@ -164,7 +164,17 @@ def _eigvec(u, v, w, nu):
 @block(inline="always")
 def _eigvec_flags(u, v, w, nu):
     """:func:`_eigvec` without data-dependent branches (both candidates formed, one selected; for the
-    lock-step lanes): returns ``(k1, k2, |k|², nonfinite, branch)``."""
+    lock-step lanes): returns ``(k1, k2, |k|², bad, code)``, ``bad``: the status of :func:`_eigvec` is not
+    ``STATUS_OK``, ``code``: that status if ``bad`` (a float).
+
+    One comparison for both tests (a comparison into a mask costs an FMA-pipe cycle on Zen 4, an add or ``maxpd``
+    none, ``benchmarks/fp_ports.py``): ``bad = not (|k|² > _EIG_TOL2 scale2)``.  With ``scale2`` finite,
+    ``u, v, w, ν`` are finite, so ``|k|²`` is finite or ``+inf``, never NaN, and ``bad`` is
+    ``|k|² <= _EIG_TOL2 scale2`` (``_eigvec``'s ``or |k|² == 0`` is implied: the bound is ``>= 0``); with
+    ``scale2`` infinite or NaN the bound is too, nothing exceeds it, and ``bad`` holds.  With
+    ``x = scale2 − scale2`` (0, or NaN exactly when ``_eigvec`` says ``STATUS_NONFINITE``),
+    ``code = 1 − max(x, −4)`` (``x if x > −4 else −4``: ``maxpd``, NaN gives −4) is ``STATUS_BRANCH`` (1) or
+    ``STATUS_NONFINITE`` (5) without a second comparison."""
     a1, a2, b1, b2, na, nb = _eig_candidates(u, v, w, nu)
     use_a = na >= nb
     k1 = _selc(use_a, a1, b1)
@@ -173,9 +183,11 @@ def _eigvec_flags(u, v, w, nu):
     # NumPy: max(na, nb) <= (1e-15 (|u| + |v| + |w| + |ν|))²; here the bound (Σ|·|)² <= 4 Σ|·|² (no
     # square roots): the compiled route refuses whenever the NumPy route does, and in a band twice as wide
     scale2 = 4.0 * (_abs2(u) + _abs2(v) + _abs2(w) + _abs2(nu))
-    nonfinite = not (scale2 - scale2 == 0.0)
-    branch = nk <= _EIG_TOL2 * scale2 or nk == 0.0
-    return k1, k2, nk, nonfinite, branch
+    x = scale2 - scale2
+    bad = not (nk > _EIG_TOL2 * scale2)
+    m = x if x > -4.0 else -4.0
+    code = 1.0 - m
+    return k1, k2, nk, bad, code
 
 
 @block(inline="always")
