@@ -189,16 +189,79 @@ def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, per
     return True
 
 
+#: the step (relative to ``|u|``) from which Newton on the fine rule alone continues with the estimate pass (``xs2``)
+_FINE_FROM = 1e-9
+
+
+@njit(cache=True, error_model="numpy")
+def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs, perm, w, w2, xsf, permf,
+             wf, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res):
+    """Newton's steps on the rule ``(xs, perm, w)`` from ``u`` until every ``|Δu| ≤ step_tol |u|``; returns 0
+    (converged: ``om``, ``dom``, ``nu_end`` and, with a half rule ``w2`` (nodes ``xs[len(w) + 1:]``), ``om2`` are
+    those of the last point evaluated, ``u`` + the last step), 1 (no solution: diverged, left the bound, ill
+    conditioned, ``ν`` not continued).  A point where ``ν`` cannot be continued over the nodes ``xs`` is evaluated
+    on the rule ``(xsf, permf, wf)`` when that is not empty (a coarse rule's nodes can be too few for the
+    quarter-size rule where the fine rule's are not).  (A damped step, halving towards the previous iterate where
+    the coarse continuation fails, saved one evaluation of the fine rule but made steps feasible that are not on
+    the undamped iteration: the Clebsch top's ``dt_max`` 1.07 → 1.79, so the undamped path is kept.)"""
+    k = rho.shape[0]
+    nk = kidx.shape[0]
+    ne = E.shape[1]
+    for _ in range(iterations):
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1
+        if not np.all(np.isfinite(u)):
+            return 1
+        if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs, perm, w, w2, w.shape[0],
+                        om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
+            if not (wf.shape[0] and _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xsf,
+                                             permf, wf, wf[:0], wf.shape[0], om, dom, om2, nu_end, f, psi, s, c, r,
+                                             d, xcache)):
+                return 1
+        for i in range(nk):
+            acc = -target[i]
+            for j in range(k):
+                acc += om[j, i]
+                J[i, j] = dom[j, i]
+            for e in range(ne):
+                acc -= E[i, e] * u[k + e]
+                J[i, k + e] = -E[i, e]
+            res[i] = acc
+        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om)) and np.linalg.cond(J) <= 1e12):
+            return 1
+        du = np.linalg.solve(J, res)
+        done = True
+        for i in range(k + ne):
+            u[i] -= du[i]
+            if not abs(du[i]) <= step_tol * abs(u[i]):
+                done = False
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1
+        if not np.all(np.isfinite(u)):
+            return 1
+        if done:
+            return 0
+    return 1
+
+
 @njit(cache=True, error_model="numpy")
 def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
-           w2, step_tol, iterations, u, om, nu_end):
+           w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end):
     """Newton's method of ``ChainExactFlow._newton_numpy`` compiled: ``u = (h_1..h_k, extra unknowns)`` with
     ``Σ_j ω(ρ_j + i h_j) − E u_{k:} = target`` on the matched integrals ``kidx``.  The start from the linearisation
     at ``h = 0`` (``∂ω/∂h = −Re[∂ν²/∂I(ρ)/ν(ρ)]``), then steps with the exact Jacobian while ``|h_j| ≤ bound_j``,
-    the Jacobian finite with condition number at most 1e12, until every ``|Δu| ≤ step_tol |u|``; then one pass of
-    the rule ``w1`` and the half rule ``w2`` (nodes ``xs2``, their continuation order ``perm2``) at the solution.
-    Returns ``(status, quadrature estimate)``: status 0 converged (``u``, ``om`` (k, n_keep) by the rule ``w1``,
-    ``nu_end`` (k,) written), 1 no solution (diverged, left the bound, ill conditioned, or ``ν`` not continued)."""
+    the Jacobian finite with condition number at most 1e12: first on the coarse rule ``(xsc, permc, wc)`` to
+    ``|Δu| ≤ coarse_tol |u|`` (cheap iterations far from the solution; a step whose nodes are too few to continue
+    ``ν`` takes the rule ``w1``), else (the coarse phase fails, or ``wc`` is empty) from the linear start on the rule
+    ``w1`` to ``|Δu| ≤ _FINE_FROM |u|``; then steps on the rule ``w1`` with the half rule ``w2`` in the same pass (nodes
+    ``xs2``, their continuation order ``perm2``) until every ``|Δu| ≤ step_tol |u|`` (quadratic convergence: one
+    step where the coarse rule has converged to round-off, else two).  The solution is the fine rule's (the coarse
+    one only gives the start), so the result is that of Newton on the fine rule alone to round-off.  Returns
+    ``(status, quadrature estimate)``: status 0 converged (``u``; ``om`` (k, n_keep) by the rule ``w1`` and
+    ``nu_end`` (k,) at the last point evaluated, ``u`` + the last step: the residual there is ``O(|Δu|)``, and
+    ``ν`` there only chooses the maps' root), 1 no solution."""
     k = rho.shape[0]
     nk = kidx.shape[0]
     ne = E.shape[1]
@@ -208,9 +271,8 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
-    nw1 = w1.shape[0]
-    empty = np.empty(0)
     J = np.empty((nk, k + ne))
+    res = np.empty(nk)
     # the start: the linearisation at h = 0
     for j in range(k):
         _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
@@ -228,52 +290,34 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     if not (np.all(np.isfinite(J)) and np.linalg.cond(J) <= 1e12):
         return 1, 0.0
     u[:] = np.linalg.solve(J, target)
-    res = np.empty(nk)
-    for _ in range(iterations):
+    u0 = u.copy()
+    status = 1
+    none = w1[:0]
+    if wc.shape[0]:
+        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc, wc,
+                          none, xs1, perm1, w1, coarse_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d,
+                          xcache, J, res)
+    if status:  # the coarse phase failed (or none): from the linear start on the fine rule
+        u[:] = u0
+        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1,
+                          none, none, perm1[:0], none, _FINE_FROM, iterations, u, om, dom, om2, nu_end, f, psi, s, c,
+                          r, d, xcache, J, res)
+    if status:
+        return 1, 0.0
+    # the last steps on the fine rule with the half rule's estimate in the same pass (xs2): om, om2, nu_end at
+    # the last point evaluated, u = that point + the last step (|Δu| ≤ step_tol |u|)
+    if _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs2, perm2, w1, w2, none,
+                perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res):
+        return 1, 0.0
+    quad = 0.0
+    scale = 0.0
+    for i in range(nk):
+        tot = 0.0
         for j in range(k):
-            if not (abs(u[j]) <= bound[j]):
-                return 1, 0.0
-        if not np.all(np.isfinite(u)):
-            return 1, 0.0
-        if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
-                        nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
-            return 1, 0.0
-        for i in range(nk):
-            acc = -target[i]
-            for j in range(k):
-                acc += om[j, i]
-                J[i, j] = dom[j, i]
-            for e in range(ne):
-                acc -= E[i, e] * u[k + e]
-                J[i, k + e] = -E[i, e]
-            res[i] = acc
-        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om)) and np.linalg.cond(J) <= 1e12):
-            return 1, 0.0
-        du = np.linalg.solve(J, res)
-        done = True
-        for i in range(k + ne):
-            u[i] -= du[i]
-            if not abs(du[i]) <= step_tol * abs(u[i]):
-                done = False
-        for j in range(k):
-            if not (abs(u[j]) <= bound[j]):
-                return 1, 0.0
-        if not np.all(np.isfinite(u)):
-            return 1, 0.0
-        if done:
-            if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
-                            nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
-                return 1, 0.0
-            quad = 0.0
-            scale = 0.0
-            for i in range(nk):
-                tot = 0.0
-                for j in range(k):
-                    quad = max(quad, abs(om[j, i] - om2[j, i]))
-                    tot += abs(om[j, i])
-                scale = max(scale, tot)
-            return 0, quad / (scale + 1e-300)
-    return 1, 0.0
+            quad = max(quad, abs(om[j, i] - om2[j, i]))
+            tot += abs(om[j, i])
+        scale = max(scale, tot)
+    return 0, quad / (scale + 1e-300)
 
 
 @njit(cache=True, error_model="numpy")

@@ -96,6 +96,9 @@ _STEP_TOL, _ITERATIONS, _RES_TOL = 1e-13, 30, 1e-11
 #: scale); an orbit whose rule does not converge to it falls back to the adaptive quadrature
 #: (``model.interpolating_weights``, epsrel 1e-13)
 _NODES, _QUAD_TOL = 64, 1e-13
+#: the compiled solve's coarse rule and the step (relative to |u|) at which Newton leaves it for the 64-point rule
+#: (the coarse rule only finds the start of the fine rule's Newton iterations: the solution is the fine rule's)
+_COARSE_NODES, _COARSE_TOL = 16, 1e-9
 #: the smallest ``R`` of the real-part rule: below it (one site and no branch points: the elliptic family, whose
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
@@ -188,14 +191,18 @@ def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: n
 
 @cache
 def _rules() -> tuple[np.ndarray, ...]:
-    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2)``, ``xs1`` the 64-point rule's nodes and
-    the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass), ``perm*`` the
-    order of the continuation (increasing ``|s|``, stable: the NumPy route's order)."""
+    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2, xsc, permc, wc)``, ``xs1`` the 64-point
+    rule's nodes and the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass),
+    ``xsc`` the coarse rule's (``_COARSE_NODES``) with the end point, ``perm*`` the order of the continuation
+    (increasing ``|s|``, stable: the NumPy route's order)."""
     x1, w1 = _gauss_legendre(_NODES)
     x2, w2 = _gauss_legendre(_NODES // 2)
+    xc, wc = _gauss_legendre(_COARSE_NODES)
     xs1 = np.concatenate([x1, [1.0]])
     xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
-    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2)
+    xsc = np.concatenate([xc, [1.0]])
+    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2, xsc,
+            np.argsort(xsc, kind="stable"), wc)
 
 
 @dataclass(frozen=True, eq=False)
@@ -378,12 +385,11 @@ class ChainExactFlow(StepByAdvance, Map):
         om = np.empty((k, E.shape[0]))
         nu_end = np.empty(k, dtype=complex)
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
-        xs1, perm1, w1, xs2, perm2, w2 = _rules()
         status, quad = K.newton(fid, _family_constants(fam), model.positions.astype(float),
                               np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
                               dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
                               np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),
-                              np.ascontiguousarray(bound, dtype=float), xs1, perm1, w1, xs2, perm2, w2, _STEP_TOL,
+                              np.ascontiguousarray(bound, dtype=float), *_rules(), _STEP_TOL, _COARSE_TOL,
                               _ITERATIONS, u, om, nu_end)
         return None if status else (u, om, quad, nu_end)
 
