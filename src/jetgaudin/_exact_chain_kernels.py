@@ -28,7 +28,7 @@ from numba import njit
 
 from ._exact_elliptic import psi_elliptic_cached
 
-__all__ = ["newton", "psi_values"]
+__all__ = ["branch_numerical", "newton", "nu_numerical", "psi_values"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -145,11 +145,13 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
         rq = cmath.sqrt(acc)
-        if abs(rq - v) > abs(rq + v):
+        if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|: the root nearer to v
             rq = -rq
-        if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
-            ok = False
-        if not abs(rq) > 0:
+        # |rq − v| ≤ |rq|/4 or |v|/4, in squares (no hypot), and ν ≠ 0
+        dr = rq.real - v.real
+        di = rq.imag - v.imag
+        a2 = rq.real * rq.real + rq.imag * rq.imag
+        if not (dr * dr + di * di <= 0.0625 * max(a2, v.real * v.real + v.imag * v.imag) and a2 > 0.0):
             ok = False
         v = rq
         inv = 1.0 / rq
@@ -346,9 +348,13 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
                 acc += hI[cI] * psi[cI]
             rq = cmath.sqrt(acc)
             if q > 0:
-                if abs(rq - v) > abs(rq + v):
+                if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|
                     rq = -rq
-                if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
+                dr = rq.real - v.real
+                di = rq.imag - v.imag
+                # |rq − v| ≤ max(|rq|, |v|)/4, in squares (no hypot)
+                if not dr * dr + di * di <= 0.0625 * max(rq.real * rq.real + rq.imag * rq.imag,
+                                                         v.real * v.real + v.imag * v.imag):
                     ok = False
                     break
             v = rq
@@ -356,3 +362,14 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
             return True, v
         n *= 2
     return False, 0j
+
+
+@njit(cache=True, error_model="numpy")
+def branch_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end, n0, n_max, tol):
+    """Whether every ``nu_end[j]`` is :func:`nu_numerical`'s ``ν(η_j)`` to ``tol`` relative (the solve's branch
+    check, every segment in one call)."""
+    for j in range(eta.shape[0]):
+        ok, ref = nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta[j], n0, n_max)
+        if not (ok and abs(ref - nu_end[j]) <= tol * abs(ref)):
+            return False
+    return True

@@ -40,6 +40,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import weakref
 from dataclasses import dataclass, field
 from functools import cache, cached_property, lru_cache
 from typing import Any, ClassVar
@@ -109,12 +110,41 @@ COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
 
 
 def _family_constants(fam) -> np.ndarray:
-    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``(k, m, K, K', E, E', k')``."""
-    if fam.name == "elliptic":
+    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``
+    (read-only, computed once per family parameter)."""
+    return _family_constants_of(fam.name, float(fam.modulus) if fam.name == "elliptic"
+                                else float(getattr(fam, "gamma", 0.0)))
+
+
+@lru_cache(maxsize=64)
+def _family_constants_of(name: str, param: float) -> np.ndarray:
+    if name == "elliptic":
         from ._exact_elliptic import elliptic_constants
 
-        return elliptic_constants(float(fam.modulus))
-    return np.array([float(getattr(fam, "gamma", 0.0))])
+        out = elliptic_constants(param)
+    else:
+        out = np.array([param])
+    out.setflags(write=False)
+    return out
+
+
+#: per flow, the compiled solve's constants that depend on the model and weights only (:func:`_static`)
+_STATIC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _static(flow) -> tuple:
+    """``(keep, E, rate, k, weights_keep, kidx, positions, orders, λ_c, P, K')`` of a flow (cached per flow: the
+    Python around the compiled solve was ~1/3 of a Clebsch top's solve)."""
+    out = _STATIC.get(flow)
+    if out is None:
+        model = flow.model
+        keep, E, rate = flow._design
+        out = (keep, np.ascontiguousarray(E, dtype=float), rate, int(keep.sum()) - E.shape[1],
+               np.asarray(flow.H.weights, dtype=float)[keep], np.flatnonzero(keep).astype(np.int64),
+               np.ascontiguousarray(model.positions, dtype=float), np.array(model.orders, dtype=np.int64),
+               float(np.mean(model.positions)), model.family.period, getattr(model.family, "Kp", np.inf))
+        _STATIC[flow] = out
+    return out
 
 
 class _Weights:
@@ -318,79 +348,89 @@ class ChainExactFlow(StepByAdvance, Map):
         the families of its ``COMPILED_FAMILIES``) or the NumPy route (:meth:`_newton_numpy`; ``compiled=False``
         forces it: the tests compare the two), then the acceptance (quadrature estimate, residual, branch)."""
         model = self.model
-        keep, E, rate = self._design
-        target = dt * np.asarray(self.H.weights, dtype=float)[keep]
-        k = int(keep.sum()) - E.shape[1]
+        keep, E, rate, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(self)
+        target = dt * wkeep
         raw, bp = _orbit_roots(model, x)  # once per orbit: the real parts and the branch check
         rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
-        lc = float(np.mean(model.positions))
-        P = model.family.period
         # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
         # points η, η̄ coincide modulo the period 2iK')
-        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
-        fid = COMPILED_FAMILIES.get(model.family.name)
-        if fid == 2 and not float(model.family.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
+        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
+        fam = model.family
+        fid = COMPILED_FAMILIES.get(fam.name)
+        if fid == 2 and not float(fam.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
             fid = None
         if compiled is None:
             compiled = fid is not None
         if compiled and fid is None:
-            raise InvalidParameterError(f"the {model.family.name} family has no compiled exact-step solve")
-        sol = (self._newton_compiled(x, int(fid), keep, E, target, rho, bound) if compiled  # type: ignore[arg-type]
-               else self._newton_numpy(x, keep, E, target, rho, bound))
+            raise InvalidParameterError(f"the {fam.name} family has no compiled exact-step solve")
+        if compiled:
+            I = np.asarray(model.integrals(x), dtype=float)  # once: the solve's ν² and the branch check
+            extra = I[2 * model.M:]
+            const = float(np.real(fam.nu2_constant(float(model.b), extra)))
+            hI = np.ascontiguousarray(I[:2 * model.M])
+            sol = self._newton_compiled(x, int(fid), keep, E, target, rho, bound,  # type: ignore[arg-type]
+                                        (hI, const, extra, kidx, pos, orders))
+        else:
+            sol = self._newton_numpy(x, keep, E, target, rho, bound)
         if sol is None:
             return None
         u, om, quad, nu_end = sol
         if quad > _QUAD_TOL:  # the rule has not converged on some segment: the adaptive quadrature
             om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
-        scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
+        Eu = E @ u[k:]
+        scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(Eu)
         eta = rho + 1j * u[:k]
-        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) > _RES_TOL:
+        if np.max(np.abs(om.sum(axis=0) - Eu - target) / scale) > _RES_TOL:
             return None
-        if compiled and model.family.uniformizer(0.0) is None:  # the numerical branch rule, compiled
-            ok = self._branch_numerical(x, eta, nu_end)
+        if compiled and fam.uniformizer(0.0) is None:  # the numerical branch rule, compiled
+            ok = self._branch_numerical(x, eta, nu_end, (hI, const, pos, orders))
         else:
             ok = _branch_ok(model, x, eta, nu_end, raw)
         return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
 
-    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray) -> bool:
+    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, pre: tuple | None = None
+                          ) -> bool:
         """:func:`_branch_ok` for a family without a uniformizer (elliptic), by the compiled twin of its branch rule
-        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``)."""
+        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``), every
+        segment in one call; ``pre``: ``(h_I, ν²'s constant, positions, orders)`` where the caller has them."""
         model = self.model
         fam = model.family
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
-        I = np.asarray(model.integrals(x), dtype=float)
-        const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
-        args = (COMPILED_FAMILIES[fam.name], _family_constants(fam), model.positions.astype(float),
-                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
-                float(fam.period or np.inf))
-        for e, v in zip(eta, nu_end, strict=True):
-            ok, ref = K.nu_numerical(*args, complex(e), 64, 2**16)
-            if not (ok and abs(ref - v) <= 1e-8 * abs(ref)):
-                return False
-        return True
+        if pre is None:
+            I = np.asarray(model.integrals(x), dtype=float)
+            pre = (np.ascontiguousarray(I[:2 * model.M]), float(np.real(fam.nu2_constant(float(model.b),
+                                                                                          I[2 * model.M:]))),
+                   model.positions.astype(float), np.array(model.orders, dtype=np.int64))
+        hI, const, pos, orders = pre
+        return bool(K.branch_numerical(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const,
+                                       float(fam.period or np.inf), np.ascontiguousarray(eta, dtype=complex),
+                                       np.ascontiguousarray(nu_end, dtype=complex), 64, 2**16, 1e-8))
 
-    def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound):
+    def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound, pre: tuple | None = None):
         """:meth:`_newton_numpy` in one compiled call: ``(u, ω (k, n_keep), quadrature estimate, ν(η_j))`` or
-        ``None``."""
+        ``None``; ``pre``: ``(h_I, ν²'s constant, extra integrals, kidx, positions, orders)`` where the caller has
+        them."""
         model = self.model
         fam = model.family
-        I = np.asarray(model.integrals(x), dtype=float)
-        extra = I[2 * model.M:]
-        const = float(np.real(fam.nu2_constant(float(model.b), extra)))
+        if pre is None:
+            I = np.asarray(model.integrals(x), dtype=float)
+            pre = (np.ascontiguousarray(I[:2 * model.M]), float(np.real(fam.nu2_constant(float(model.b),
+                                                                                          I[2 * model.M:]))),
+                   I[2 * model.M:], np.flatnonzero(keep).astype(np.int64), model.positions.astype(float),
+                   np.array(model.orders, dtype=np.int64))
+        hI, const, extra, kidx, pos, orders = pre
         dconst = np.ascontiguousarray(fam.nu2_constant_gradient(float(model.b), extra), dtype=float)
         k = len(rho)
         u = np.empty(E.shape[0])
         om = np.empty((k, E.shape[0]))
         nu_end = np.empty(k, dtype=complex)
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
-        status, quad = K.newton(fid, _family_constants(fam), model.positions.astype(float),
-                              np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
-                              dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
-                              np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),
-                              np.ascontiguousarray(bound, dtype=float), *_rules(), _STEP_TOL, _COARSE_TOL,
-                              _ITERATIONS, u, om, nu_end)
+        status, quad = K.newton(fid, _family_constants(fam), pos, orders, hI, const, dconst, kidx,
+                                np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(target),
+                                np.ascontiguousarray(rho, dtype=float), np.ascontiguousarray(bound, dtype=float),
+                                *_rules(), _STEP_TOL, _COARSE_TOL, _ITERATIONS, u, om, nu_end)
         return None if status else (u, om, quad, nu_end)
 
     def _newton_numpy(self, x, keep, E, target, rho, bound):
