@@ -118,6 +118,29 @@ def test_the_compiled_real_jacobi_functions_are_scipy_s():
             assert abs(zeta_real(x, m) - (special.ellipeinc(ph, m) - E / K * x)) < 1e-14
 
 
+@pytest.mark.parametrize("k", [0.002, 0.05, 0.3, 0.6, 0.95, 0.999])
+def test_the_theta_series_of_the_imaginary_parts_are_scipy_s(k):
+    from scipy import special
+
+    from jetgaudin._exact_elliptic import _theta_im, elliptic_constants, zeta_real
+
+    ell = elliptic_constants(k)
+    m1 = 1.0 - k * k  # the imaginary parts' parameter
+    assert ell[7] >= 1  # a theta series (nome q' ≤ 0.6) for every modulus of the compiled route (k ≥ 1e-3)
+    K1, E1 = special.ellipk(m1), special.ellipe(m1)
+    y = np.linspace(-ell[3] / 2, ell[3] / 2, 201)  # |Im| ≤ K'/2 after the reductions
+    got = np.array([_theta_im(v, ell) for v in y])
+    s, c, d, ph = special.ellipj(y, m1)
+    # truncated where q'^{n²} < 1e-18; the multiples' round-off enters damped by q'^{n(n+1)}: a few ulps of the
+    # O(1) values (2e-15 allows ~10 ulps; the largest seen 3.4e-15 at k = 0.002: 5e-15 there)
+    tol = 5e-15 if k < 0.01 else 2e-15
+    assert np.max(np.abs(got[:, :3] - np.stack([s, c, d], -1))) < tol
+    # Z = E(am y) − (E/K) y (A&S 17.4) and the AGM sum; |Z| grows like ln(1/k) as k → 0: 1e-14 absolute there
+    z_ref = special.ellipeinc(ph, m1) - E1 / K1 * y
+    assert np.max(np.abs(got[:, 3] - z_ref)) < (5e-14 if k < 0.01 else 2e-15 * max(1.0, np.abs(z_ref).max()))
+    assert np.max(np.abs(got[:, 3] - np.array([zeta_real(v, m1) for v in y]))) < 5e-14
+
+
 @pytest.mark.parametrize("name", ["Clebsch top (elliptic, one site)", "elliptic, 3 sites"])
 def test_the_compiled_numerical_branch_rule_is_model_nu(name):
     H, x = _models()[name]
