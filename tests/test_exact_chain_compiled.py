@@ -192,3 +192,47 @@ def test_the_recorded_integrals_are_jg_integrals_bit_for_bit():
         record_integrals(H, np.full((2, 9), 1e200))  # refusal, not a silent inf
     tr = jg.solve(H, [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0], (0.0, 2.0), dt=0.1)
     assert np.array_equal(tr.integrals, np.asarray(jg.integrals(tr.X, 1.0)))
+
+
+@pytest.mark.parametrize("name", ["trigonometric", "trigonometric, a site of order 2"])
+def test_the_compiled_uniformized_branch_rule_is_model_nu(name):
+    from jetgaudin._exact_chain_kernels import branch_uniformized
+    from jetgaudin.exact_chain import _branch_ok, _orbit_roots
+
+    H, x0 = _models()[name]
+    model = H.model
+    rng = np.random.default_rng(11)
+    P = float(model.family.period)
+    flips = 0
+    for trial in range(6):
+        x = x0 if trial == 0 else x0 + 0.3 * rng.standard_normal(x0.shape)
+        raw, _ = _orbit_roots(model, x)
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+        args = (1, _family_constants(model.family), model.positions.astype(float),
+                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const, P)
+        # points over a period and both half planes (not only the solve's η: there ν is mostly the principal root)
+        etas = rng.uniform(0, P, 40) + 1j * rng.uniform(-1.5, 1.5, 40)
+        for e in etas:
+            try:
+                nu = complex(np.asarray(model.nu(x, np.array([e])))[0])
+            except jg.BranchPointError:
+                continue
+            flips += (nu / np.sqrt(nu * nu)).real < 0  # the rule's ν is minus the principal root
+            one = np.array([e])
+            # both decide the sign of ±√ν²(η) by the same root product; ν² by the expansion against the Lax
+            # vector (round-off ~1e-15 relative): the decisions agree, tol 1e-8 is the solve's own
+            assert branch_uniformized(*args, one, np.array([nu]), raw.astype(complex), 1e-8)
+            assert not branch_uniformized(*args, one, np.array([-nu]), raw.astype(complex), 1e-8)
+            assert _branch_ok(model, x, one, np.array([nu]), raw)
+    assert flips >= 20  # the sign is not the principal root's at many points: the test sees the rule's choice
+    # the solve's own η on the benchmark state, through the flow
+    flow = jg.ChainExactFlow(H, 0.05)
+    eta, _, nu_end = flow._solve(x0, 0.05, compiled=False)
+    raw, _ = _orbit_roots(model, x0)
+    I = np.asarray(model.integrals(x0), dtype=float)
+    const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+    args = (1, _family_constants(model.family), model.positions.astype(float), np.array(model.orders, dtype=np.int64),
+            np.ascontiguousarray(I[:2 * model.M]), const, P, eta.astype(complex))
+    assert branch_uniformized(*args, nu_end.astype(complex), raw.astype(complex), 1e-8)
+    assert not branch_uniformized(*args, np.array([nu_end[0], -nu_end[1]]), raw.astype(complex), 1e-8)

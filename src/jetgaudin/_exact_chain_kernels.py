@@ -28,7 +28,7 @@ from numba import njit
 
 from ._exact_elliptic import psi_elliptic_cached
 
-__all__ = ["branch_numerical", "newton", "nu_numerical", "psi_values"]
+__all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "psi_values"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -371,5 +371,52 @@ def branch_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end, 
     for j in range(eta.shape[0]):
         ok, ref = nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta[j], n0, n_max)
         if not (ok and abs(ref - nu_end[j]) <= tol * abs(ref)):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def branch_uniformized(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end, roots, tol):
+    """Whether every ``nu_end[j]`` is the uniformized branch rule's ``ν(η_j)`` to ``tol`` relative: the compiled
+    twin of ``gaudin._curve._nu_uniformized`` for the trigonometric family (``z = e^{2iγλ}``, ``roots`` the orbit's
+    branch points in ``z``): ``ν(η) = ±√ν²(η)``, the sign of ``ν(a) Π_j [(z_a − z_j)/(z − z_j)]^{N_j}
+    Π_k √((z − r_k)/(z_a − r_k))`` (``a = Re η``; ``ν(a) = +√ν²(a)``), ``ν²`` from the expansion.  False where the
+    rule refuses (``Re η`` a site modulo the period, a root on the segment, ``ν`` zero or not finite)."""
+    n2 = hI.shape[0]
+    psi = np.empty(n2, dtype=np.complex128)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    g2 = 2.0 * fp[0]
+    for j in range(eta.shape[0]):
+        e = eta[j]
+        a = e.real
+        for i in range(site_pos.shape[0]):
+            q = (a - site_pos[i]) / period
+            if abs(q - np.round(q)) < 1e-14:
+                return False
+        _psi_point(fid, fp, e, site_pos, site_n, psi, s, c, r, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        direct = cmath.sqrt(acc)
+        _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        ref = cmath.sqrt(acc)
+        z = cmath.exp(1j * g2 * e)
+        za = cmath.exp(1j * g2 * complex(a, 0.0))
+        for i in range(site_pos.shape[0]):
+            zj = cmath.exp(1j * g2 * complex(site_pos[i], 0.0))
+            ref = ref * ((za - zj) / (z - zj)) ** site_n[i]
+        for kk in range(roots.shape[0]):
+            ratio = (z - roots[kk]) / (za - roots[kk])
+            if abs(ratio.imag) <= 1e-13 * abs(ratio) and ratio.real <= 0:
+                return False
+            ref = ref * cmath.sqrt(ratio)
+        test = ((direct / abs(direct)).conjugate() * (ref / abs(ref))).real
+        if not np.isfinite(test):
+            return False
+        nu = direct if test >= 0 else -direct
+        if not abs(nu - nu_end[j]) <= tol * abs(nu):
             return False
     return True

@@ -386,6 +386,12 @@ class ChainExactFlow(StepByAdvance, Map):
             return None
         if compiled and fam.uniformizer(0.0) is None:  # the numerical branch rule, compiled
             ok = self._branch_numerical(x, eta, nu_end, (hI, const, pos, orders))
+        elif compiled and fid == 1:  # the trigonometric family's uniformized rule, compiled (the same raw roots)
+            K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+            ok = bool(K.branch_uniformized(1, _family_constants(fam), pos, orders, hI, const, float(P),
+                                           np.ascontiguousarray(eta, dtype=complex),
+                                           np.ascontiguousarray(nu_end, dtype=complex),
+                                           np.ascontiguousarray(np.ravel(raw), dtype=complex), 1e-8))
         else:
             ok = _branch_ok(model, x, eta, nu_end, raw)
         return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
