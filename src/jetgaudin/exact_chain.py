@@ -62,12 +62,14 @@ def _periodic_real_parts(lc: float, P: float, k: int, points: np.ndarray) -> np.
     grid = lc + P * np.arange(256) / 256
     imgs = np.concatenate([points - P, points, points + P])
     score = np.min(np.abs(grid[:, None] - imgs[None, :]), axis=1)
+    order = np.argsort(-score, kind="stable")
+    free = np.ones(len(grid), dtype=bool)  # at least P/(4k) from every chosen point (the same test, vectorised)
     chosen: list[float] = []
-    for i in np.argsort(-score, kind="stable"):
-        if all(min(abs(grid[i] - c), P - abs(grid[i] - c)) >= P / (4 * k) for c in chosen):
-            chosen.append(float(grid[i]))
-        if len(chosen) == k:
-            break
+    while len(chosen) < k and free.any():
+        c = grid[order[np.argmax(free[order])]]  # the best-scored free point
+        chosen.append(float(c))
+        d = np.abs(grid - c)
+        free &= np.minimum(d, P - d) >= P / (4 * k)
     return np.array(sorted(chosen))
 
 
