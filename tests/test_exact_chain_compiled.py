@@ -236,3 +236,52 @@ def test_the_compiled_uniformized_branch_rule_is_model_nu(name):
             np.ascontiguousarray(I[:2 * model.M]), const, P, eta.astype(complex))
     assert branch_uniformized(*args, nu_end.astype(complex), raw.astype(complex), 1e-8)
     assert not branch_uniformized(*args, np.array([nu_end[0], -nu_end[1]]), raw.astype(complex), 1e-8)
+
+
+def test_the_backend_picks_the_solve_and_the_stepping_route():
+    from jetgaudin.maps import Backend
+
+    H, x = _models()["Clebsch top (elliptic, one site)"]
+    dt = 0.05
+    auto, comp = jg.ChainExactFlow(H, dt), jg.ChainExactFlow(H, dt, backend="compiled")
+    nump, alias = jg.ChainExactFlow(H, dt, backend="numpy"), jg.ChainExactFlow(H, dt, kernel="numpy")
+    assert (auto.backend, comp.backend, nump.backend, alias.backend) == (Backend.AUTO, Backend.COMPILED,
+                                                                          Backend.NUMPY, Backend.NUMPY)
+    assert alias.kernel is None and nump.inverse().backend is Backend.NUMPY
+    from jetgaudin.maps import map_from_description
+
+    assert map_from_description(nump.describe()).backend is Backend.NUMPY  # a saved run keeps its route
+    old = {k: v for k, v in auto.describe().items() if k != "backend"}  # a description from before the option
+    assert map_from_description(old).backend is Backend.AUTO
+    # each route's parameters are bit for bit its own solve's (the two differ by ~1e-15: another order of sums)
+    for flow, compiled in ((auto, True), (comp, True), (nump, False)):
+        eta, theta = flow.parameters(x)
+        ref = flow._solve(x, dt, compiled=compiled)
+        assert ref is not None and np.array_equal(eta, ref[0]) and theta == ref[1]
+    from jetgaudin.exact import rotate_about_field
+
+    a = np.asarray(comp.iterate(x, 6))
+    b = np.asarray(nump.iterate(x, 6))
+    # the NumPy maps and solve against the compiled ones: round-off of 6 steps (1e-12, as the routes' own tests)
+    assert np.max(np.abs(a - b)) < 1e-12
+    # backend="numpy" steps on the maps' NumPy route: its rows are those of that route, bit for bit, and not the
+    # compiled loop's (which differ at round-off)
+    eta, theta = nump.parameters(x)
+    maps = [H.model.two_point_backlund(e).with_backend("numpy") for e in eta]
+    z, rows = x, []
+    for i in range(6):
+        for mp in maps:
+            z = mp.advance(z, None, 1, 1).X
+        rows.append(rotate_about_field(z, (i + 1) * theta))
+    assert np.array_equal(b[-6:], np.array(rows)) and not np.array_equal(a[-6:], b[-6:])
+
+
+def test_the_backend_refuses_what_it_cannot_run():
+    H, _ = _models()["Clebsch top (elliptic, one site)"]
+    with pytest.raises(jg.InvalidParameterError, match="GPU"):
+        jg.ChainExactFlow(H, 0.05, backend="gpu")
+    with pytest.raises(jg.InvalidParameterError):
+        jg.ChainExactFlow(H, 0.05, backend="fortran")
+    tiny = jg.GaudinModel(0.0, [(0.0, 1), (0.4, 1)], family="elliptic", modulus=1e-4)
+    with pytest.raises(jg.InvalidParameterError, match="modulus"):
+        jg.ChainExactFlow(tiny.hamiltonian([0.5, 0.1, 0.2, 0.0, 0.3]), 0.05, backend="compiled")

@@ -50,7 +50,7 @@ import numpy as np
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
-from .maps import Advance, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
+from .maps import Advance, Backend, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
 
 __all__ = ["ChainExactFlow"]
 
@@ -248,13 +248,20 @@ class ChainExactFlow(StepByAdvance, Map):
     the maps commute), and every row is the unrotated map orbit rotated once through its accumulated angle: the
     rotation's round-off does not accumulate (``docs/integrators.md`` §7).  Each orbit is stepped on its own, so a
     batch member equals its single run bit for bit, and an orbit without parameters raises
-    :class:`~jetgaudin.StepTooLargeError` naming it and its ``dt_max`` (:meth:`max_dt`)."""
+    :class:`~jetgaudin.StepTooLargeError` naming it and its ``dt_max`` (:meth:`max_dt`).
+
+    ``backend`` (alias ``kernel``, the maps' rule): ``"auto"`` (default) the compiled solve and loop where the family
+    has them (:data:`COMPILED_FAMILIES`; an elliptic modulus below 1e-3 solves on NumPy), ``"compiled"`` those
+    (:class:`~jetgaudin.InvalidParameterError` for a family without), ``"numpy"`` the NumPy solve and the maps' NumPy
+    route (the reference; the same parameters to ~1e-15)."""
 
     H: Any  # a jetgaudin.ChainHamiltonian
     dt: float
     rho_factor: float = RHO_FACTOR
     substeps: int = 1
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
+    backend: Any = "auto"
+    kernel: Any = None  # the alias of backend (None once parsed into backend)
     chunk_invariant: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
@@ -268,6 +275,15 @@ class ChainExactFlow(StepByAdvance, Map):
             raise InvalidParameterError(f"rho_factor must be > 1, got {rf}")
         object.__setattr__(self, "rho_factor", rf)
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
+        backend = Backend.parse(self.backend if self.kernel is None else self.kernel)
+        if backend is Backend.GPU:
+            raise InvalidParameterError("ChainExactFlow has no GPU route: give backend='auto', 'compiled' or 'numpy'")
+        if backend is Backend.COMPILED and (COMPILED_FAMILIES.get(model.family.name) is None or (
+                model.family.name == "elliptic" and not float(model.family.modulus) >= 1e-3)):
+            raise InvalidParameterError(f"the {model.family.name} family has no compiled exact-step solve here "
+                                        "(elliptic: modulus >= 1e-3): give backend='numpy' or 'auto'")
+        object.__setattr__(self, "backend", backend)
+        object.__setattr__(self, "kernel", None)
 
     @property
     def model(self):
@@ -364,7 +380,7 @@ class ChainExactFlow(StepByAdvance, Map):
         if fid == 2 and not float(fam.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
             fid = None
         if compiled is None:
-            compiled = fid is not None
+            compiled = fid is not None and self.backend is not Backend.NUMPY
         if compiled and fid is None:
             raise InvalidParameterError(f"the {fam.name} family has no compiled exact-step solve")
         if compiled:
@@ -531,7 +547,9 @@ class ChainExactFlow(StepByAdvance, Map):
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
         maps = [self.model.two_point_backlund(eta[j]) for j in used]
-        if maps and all(mp.has_compiled for mp in maps):
+        if self.backend is Backend.NUMPY:
+            maps = [mp.with_backend(Backend.NUMPY) for mp in maps]
+        elif maps and all(mp.has_compiled for mp in maps):
             return self._orbit_compiled(x, maps, nu[used], theta, steps, save_every, rows)
         z, done = x, 0
         while done < steps:
@@ -579,11 +597,11 @@ class ChainExactFlow(StepByAdvance, Map):
                        imag_max=zeros)
 
     def inverse(self) -> ChainExactFlow:
-        return ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)
+        return ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps, backend=self.backend)
 
     def describe(self) -> dict:
         return {"kind": "chain_exact", **self.model.describe(), "weights": np.asarray(self.H.weights).tolist(),
-                "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps}
+                "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps, "backend": str(self.backend)}
 
 
 def _chain_exact_from(d: dict) -> ChainExactFlow:
@@ -591,7 +609,8 @@ def _chain_exact_from(d: dict) -> ChainExactFlow:
 
     model = GaudinModel.from_description(d)
     return ChainExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
-                          float(d.get("rho_factor", RHO_FACTOR)), int(d.get("substeps", 1)))
+                          float(d.get("rho_factor", RHO_FACTOR)), int(d.get("substeps", 1)),
+                          backend=d.get("backend", "auto"))
 
 
 register_map("chain_exact", _chain_exact_from)
