@@ -285,3 +285,26 @@ def test_the_backend_refuses_what_it_cannot_run():
     tiny = jg.GaudinModel(0.0, [(0.0, 1), (0.4, 1)], family="elliptic", modulus=1e-4)
     with pytest.raises(jg.InvalidParameterError, match="modulus"):
         jg.ChainExactFlow(tiny.hamiltonian([0.5, 0.1, 0.2, 0.0, 0.3]), 0.05, backend="compiled")
+
+
+@pytest.mark.parametrize("name", ["trigonometric", "trigonometric, a site of order 2"])
+def test_the_compiled_trigonometric_branch_points_are_the_model_s(name):
+    from jetgaudin.exact_chain import _orbit_roots, _trig_roots
+
+    H, x0 = _models()[name]
+    model = H.model
+    rng = np.random.default_rng(4)
+    for trial in range(20):
+        x = x0 if trial == 0 else rng.standard_normal(x0.shape) * rng.uniform(0.2, 2.0)
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+        raw, bp = _trig_roots(model, np.ascontiguousarray(I[:2 * model.M]), const, model.positions.astype(float),
+                              np.array(model.orders, dtype=np.int64))
+        raw0, bp0 = _orbit_roots(model, x)
+        # the same samples, DFT and companion matrix; ν² by the expansion instead of the Lax vector (round-off of
+        # the samples, ~1e-15 relative): simple roots agree to ~1e-13 of the largest (tolerance 1e-10, room for
+        # the conditioning of nearby roots); matched as sets (the eigenvalue order may differ)
+        d = np.abs(raw[:, None] - raw0[None, :])
+        assert np.max(np.min(d, axis=1)) < 1e-10 * np.max(np.abs(raw0))
+        assert np.max(np.min(d, axis=0)) < 1e-10 * np.max(np.abs(raw0))
+        assert np.max(np.min(np.abs(bp[:, None] - bp0[None, :]), axis=1)) < 1e-9

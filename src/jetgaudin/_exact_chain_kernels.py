@@ -22,13 +22,14 @@ Numba's cache keys this module by its own source: after an edit of :mod:`jetgaud
 from __future__ import annotations
 
 import cmath
+import math
 
 import numpy as np
 from numba import njit
 
 from ._exact_elliptic import psi_elliptic_cached
 
-__all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "psi_values"]
+__all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "psi_values", "trig_polynomial"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -420,3 +421,34 @@ def branch_uniformized(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end
         if not abs(nu - nu_end[j]) <= tol * abs(nu):
             return False
     return True
+
+
+@njit(cache=True, error_model="numpy")
+def trig_polynomial(fp, site_pos, site_n, hI, const, out):
+    """``gaudin._curve._uniform_polynomial`` for the trigonometric family with ``ν²`` from the expansion: the
+    coefficients ``out[n]``, ``n = 0..2M`` (ascending), of ``Q(z) = ν²(λ(z)) Π_j (z − z_j)^{2N_j}``
+    (``z = e^{2iγλ}``, ``z_j = e^{2iγλ_j}``), by the discrete Fourier transform of its ``2M + 1`` values at
+    ``λ_q = qT/(2M + 1) + 0.15i/γ`` (``T = π/γ``: the circle ``|z| = e^{−0.3}``, off the sites' unit circle)."""
+    n2 = hI.shape[0]
+    D = n2 + 1
+    psi = np.empty(n2, dtype=np.complex128)
+    s, c, rr, d, xcache = _psi_scratch(site_pos, site_n)
+    gamma = fp[0]
+    T = math.pi / gamma
+    vals = np.empty(D, dtype=np.complex128)
+    for q in range(D):
+        lam = complex(q * T / D, 0.15 / gamma)
+        z = cmath.exp(2j * gamma * lam)
+        _psi_point(1, fp, lam, site_pos, site_n, psi, s, c, rr, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        for i in range(site_pos.shape[0]):
+            acc *= (z - cmath.exp(2j * gamma * complex(site_pos[i], 0.0))) ** (2 * site_n[i])
+        vals[q] = acc
+    r = math.exp(-0.3)
+    for n in range(D):
+        acc = 0j
+        for q in range(D):
+            acc += vals[q] * cmath.exp(-2j * math.pi * ((q * n) % D) / D)
+        out[n] = acc / D / r ** n

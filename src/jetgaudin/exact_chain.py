@@ -212,6 +212,25 @@ def _orbit_roots(model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return raw, (raw if fam.uniform or fam.uniformizer(0.0) is None else fam.uniformizer_inverse(raw))
 
 
+def _trig_roots(model, hI: np.ndarray, const: float, pos: np.ndarray, orders: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_orbit_roots` for the trigonometric family with the polynomial compiled
+    (:func:`jetgaudin._exact_chain_kernels.trig_polynomial`, ``ν²`` from the expansion: the roots equal
+    ``gaudin._curve.branch_points``' to round-off), the roots by the same companion matrix."""
+    from .spectral import _roots
+
+    K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+    coef = np.empty(hI.size + 1, dtype=complex)
+    K.trig_polynomial(_family_constants(model.family), pos, orders, hI, const, coef)
+    Q = coef[::-1]
+    if abs(Q[0]) <= 1e-13 * np.max(np.abs(Q)):
+        raise BranchPointError(
+            "nu^2 vanishes at Im(lambda) -> -infinity (b + i gamma J = 0: b = 0 and J = sum of the y_0^3 = 0); the "
+            "branch rule of nu needs b != 0 or J != 0")
+    raw = _roots(Q)
+    return raw, model.family.uniformizer_inverse(raw)
+
+
 def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: np.ndarray) -> bool:
     """Whether the continued end values ``nu_end`` are ``model.nu``'s default branch at ``η_j`` (to 1e-8 relative:
     the maps take that branch); ``raw`` the orbit's branch points as the rule takes them (:func:`_orbit_roots`)."""
@@ -368,13 +387,6 @@ class ChainExactFlow(StepByAdvance, Map):
         model = self.model
         keep, E, rate, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(self)
         target = dt * wkeep
-        raw, bp = _orbit_roots(model, x)  # once per orbit: the real parts and the branch check
-        rho = self._real_parts(x, k, bp)
-        if rho is None:
-            return None
-        # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
-        # points η, η̄ coincide modulo the period 2iK')
-        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
         fam = model.family
         fid = COMPILED_FAMILIES.get(fam.name)
         if fid == 2 and not float(fam.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
@@ -384,10 +396,19 @@ class ChainExactFlow(StepByAdvance, Map):
         if compiled and fid is None:
             raise InvalidParameterError(f"the {fam.name} family has no compiled exact-step solve")
         if compiled:
-            I = np.asarray(model.integrals(x), dtype=float)  # once: the solve's ν² and the branch check
+            I = np.asarray(model.integrals(x), dtype=float)  # once: the roots, the solve's ν², the branch check
             extra = I[2 * model.M:]
             const = float(np.real(fam.nu2_constant(float(model.b), extra)))
             hI = np.ascontiguousarray(I[:2 * model.M])
+        # once per orbit: the real parts and the branch check
+        raw, bp = _trig_roots(model, hI, const, pos, orders) if compiled and fid == 1 else _orbit_roots(model, x)
+        rho = self._real_parts(x, k, bp)
+        if rho is None:
+            return None
+        # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
+        # points η, η̄ coincide modulo the period 2iK')
+        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
+        if compiled:
             sol = self._newton_compiled(x, int(fid), keep, E, target, rho, bound,  # type: ignore[arg-type]
                                         (hI, const, extra, kidx, pos, orders))
         else:
