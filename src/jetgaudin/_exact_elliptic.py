@@ -16,7 +16,10 @@ shifted away: ``F(v ± iK') = Z(v) ∓ iπ/(2K)``), its Taylor coefficients from
 from the ODE series of ``sn, cn, dn`` (``_jacobi._w_series``).  ``ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``
 (:func:`psi_elliptic_cached`; the tests compare it with ``EllipticFamily.nu2_basis``).
 
-The constants ``ell = (k, m, K, K', E, E', k')`` come from SciPy (:func:`elliptic_constants`), once per family.
+The constants ``ell = (k, m, K, K', E, E', k', …)`` come from SciPy (:func:`elliptic_constants`), once per family,
+with the theta series of the parameter ``1 − m``: the imaginary parts' ``sn, cn, dn, Z`` (a new argument at every
+node of a segment) by :func:`_theta_im` (one ``sin``/``cos`` and ≤ 9 terms, ~6× faster than the AGM), the AGM where
+the nome ``q'`` exceeds 0.6.
 """
 
 from __future__ import annotations
