@@ -130,6 +130,8 @@ def _family_constants_of(name: str, param: float) -> np.ndarray:
     return out
 
 
+#: per flow and ``k``, the real parts of a model without computed branch points (:meth:`ChainExactFlow._real_parts`)
+_NO_ROOTS_RHO: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: per flow, the compiled solve's constants that depend on the model and weights only (:func:`_static`)
 _STATIC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -356,8 +358,19 @@ class ChainExactFlow(StepByAdvance, Map):
         """``ρ_1..ρ_k`` (module doc); ``None`` where no rule applies (one site, no branch points, no period).
         ``bp``: the orbit's branch points when the caller has them (``model.branch_points(x)``)."""
         model = self.model
-        lc = float(np.mean(model.positions))
         bp = np.ravel(model.branch_points(x) if bp is None else bp)
+        if not bp.size:  # no computed branch points (elliptic): the same real parts for every orbit of the model
+            per_k = _NO_ROOTS_RHO.setdefault(self, {})
+            if k not in per_k:
+                per_k[k] = self._real_parts_of(k, bp)
+            rho = per_k[k]
+            return None if rho is None else rho.copy()
+        return self._real_parts_of(k, bp)
+
+    def _real_parts_of(self, k: int, bp: np.ndarray) -> np.ndarray | None:
+        """:meth:`_real_parts` from the orbit's branch points ``bp`` (1-D)."""
+        model = self.model
+        lc = float(np.mean(model.positions))
         R = max(float(np.max(np.abs(bp - lc))) if bp.size else 0.0, float(np.max(np.abs(model.positions - lc))),
                 _R_FLOOR)
         P = model.family.period
