@@ -166,27 +166,38 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
 
 
 @njit(cache=True, error_model="numpy")
-def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
-             nu_end, f, psi, s, c, r, d, xcache):
+def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, xsf, permf, wf, om,
+             dom, om2, nu_end, f, psi, s, c, r, d, xcache):
     """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
     ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
-    ``nu_end[j]`` the continued ``ν`` at ``η_j``.  Returns ``False`` where ``ν`` cannot be continued."""
+    ``nu_end[j]`` the continued ``ν`` at ``η_j``.  A segment where ``ν`` cannot be continued over ``xs`` takes the
+    rule ``(xsf, permf, wf)`` when that is not empty (nodes ``xsf[:len(wf)]``, end node 1; no ``om2``).  Returns
+    ``False`` where ``ν`` cannot be continued."""
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
         ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
                           c, r, d, xcache)
+        w = w1
+        m = n1
+        m2 = n2r
+        if not ok and wf.shape[0]:  # this segment on the fallback rule (the others keep theirs)
+            ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xsf, permf, f, psi,
+                              s, c, r, d, xcache)
+            w = wf
+            m = wf.shape[0]
+            m2 = 0
         if not ok:
             return False
         nu_end[j] = nv
         for i in range(kidx.shape[0]):
             acc = 0.0
-            for q in range(n1):
-                acc += w1[q] * f[q, i]
+            for q in range(m):
+                acc += w[q] * f[q, i]
             om[j, i] = -h[j] * acc
-            dom[j, i] = -f[n1, i]
-            if n2r:
+            dom[j, i] = -f[m, i]
+            if m2:
                 acc = 0.0
-                for q in range(n2r):
+                for q in range(m2):
                     acc += w2[q] * f[n1 + 1 + q, i]
                 om2[j, i] = -h[j] * acc
     return True
@@ -202,11 +213,12 @@ def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho,
     """Newton's steps on the rule ``(xs, perm, w)`` from ``u`` until every ``|Δu| ≤ step_tol |u|``; returns 0
     (converged: ``om``, ``dom``, ``nu_end`` and, with a half rule ``w2`` (nodes ``xs[len(w) + 1:]``), ``om2`` are
     those of the last point evaluated, ``u`` + the last step), 1 (no solution: diverged, left the bound, ill
-    conditioned, ``ν`` not continued).  A point where ``ν`` cannot be continued over the nodes ``xs`` is evaluated
+    conditioned, ``ν`` not continued).  A segment where ``ν`` cannot be continued over the nodes ``xs`` is evaluated
     on the rule ``(xsf, permf, wf)`` when that is not empty (a coarse rule's nodes can be too few for the
-    quarter-size rule where the fine rule's are not).  (A damped step, halving towards the previous iterate where
-    the coarse continuation fails, saved one evaluation of the fine rule but made steps feasible that are not on
-    the undamped iteration: the Clebsch top's ``dt_max`` 1.07 → 1.79, so the undamped path is kept.)"""
+    quarter-size rule where the fine rule's are not; the other segments keep the coarse rule).  (A damped step,
+    halving towards the previous iterate where the coarse continuation fails, saved one evaluation of the fine rule
+    but made steps feasible that are not on the undamped iteration: the Clebsch top's ``dt_max`` 1.07 → 1.79, so
+    the undamped path is kept.)"""
     k = rho.shape[0]
     nk = kidx.shape[0]
     ne = E.shape[1]
@@ -217,11 +229,8 @@ def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho,
         if not np.all(np.isfinite(u)):
             return 1
         if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs, perm, w, w2, w.shape[0],
-                        om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
-            if not (wf.shape[0] and _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xsf,
-                                             permf, wf, wf[:0], wf.shape[0], om, dom, om2, nu_end, f, psi, s, c, r,
-                                             d, xcache)):
-                return 1
+                        xsf, permf, wf, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
+            return 1
         for i in range(nk):
             acc = -target[i]
             for j in range(k):
