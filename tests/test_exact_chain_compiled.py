@@ -308,3 +308,34 @@ def test_the_compiled_trigonometric_branch_points_are_the_model_s(name):
         assert np.max(np.min(d, axis=1)) < 1e-10 * np.max(np.abs(raw0))
         assert np.max(np.min(d, axis=0)) < 1e-10 * np.max(np.abs(raw0))
         assert np.max(np.min(np.abs(bp[:, None] - bp0[None, :]), axis=1)) < 1e-9
+
+
+@pytest.mark.parametrize("name", list(_models()))
+def test_the_coarse_rule_only_starts_newton_on_the_fine_rule(name):
+    from jetgaudin import _exact_chain_kernels as K
+    from jetgaudin.exact_chain import _COARSE_TOL, _ITERATIONS, _STEP_TOL, _orbit_roots, _rules, _static
+
+    H, x = _models()[name]
+    flow = jg.ChainExactFlow(H, 0.05)
+    model, fam = H.model, H.model.family
+    keep, E, _, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(flow)
+    I = np.asarray(model.integrals(x), dtype=float)
+    hI = np.ascontiguousarray(I[:2 * model.M])
+    const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
+    dconst = np.ascontiguousarray(fam.nu2_constant_gradient(float(model.b), I[2 * model.M:]), dtype=float)
+    rho = flow._real_parts(x, k, _orbit_roots(model, x)[1])
+    bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
+    rules = _rules()
+    out = []
+    for coarse in (rules[6:], (rules[6][:0], rules[7][:0], rules[8][:0])):  # with the 16-point phase, without
+        u, om, nu = np.empty(E.shape[0]), np.empty((k, E.shape[0])), np.empty(k, dtype=complex)
+        status, quad = K.newton(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const, dconst,
+                                kidx, E, 0.05 * wkeep, rho, bound, *rules[:6], *coarse, _STEP_TOL, _COARSE_TOL,
+                                _ITERATIONS, u, om, nu)
+        assert status == 0
+        out.append((u.copy(), om.copy(), quad))
+    # both end with Newton on the 64-point rule to a step of 1e-13 |u|: the same solution to round-off (1e-13
+    # relative, the step tolerance), the same weights and quadrature estimate (1e-12 of their scale)
+    assert np.max(np.abs(out[0][0] - out[1][0]) / np.abs(out[1][0])) < 1e-13
+    assert np.max(np.abs(out[0][1] - out[1][1])) < 1e-12 * np.abs(out[1][1]).max()
+    assert abs(out[0][2] - out[1][2]) < 1e-12
