@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import importlib
 import math
-import weakref
 from dataclasses import dataclass, field
 from functools import cache, cached_property, lru_cache
 from typing import Any, ClassVar
@@ -48,6 +47,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
+from ._exact_chain_prep import _NO_ROOTS_RHO, _family_constants, _static, _trig_roots
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
 from .maps import Advance, Backend, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
@@ -111,46 +111,6 @@ _R_FLOOR = 1e-6
 COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
 
 
-def _family_constants(fam) -> np.ndarray:
-    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``
-    (read-only, computed once per family parameter)."""
-    return _family_constants_of(fam.name, float(fam.modulus) if fam.name == "elliptic"
-                                else float(getattr(fam, "gamma", 0.0)))
-
-
-@lru_cache(maxsize=64)
-def _family_constants_of(name: str, param: float) -> np.ndarray:
-    if name == "elliptic":
-        from ._exact_elliptic import elliptic_constants
-
-        out = elliptic_constants(param)
-    else:
-        out = np.array([param])
-    out.setflags(write=False)
-    return out
-
-
-#: per flow and ``k``, the real parts of a model without computed branch points (:meth:`ChainExactFlow._real_parts`)
-_NO_ROOTS_RHO: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-#: per flow, the compiled solve's constants that depend on the model and weights only (:func:`_static`)
-_STATIC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _static(flow) -> tuple:
-    """``(keep, E, rate, k, weights_keep, kidx, positions, orders, λ_c, P, K')`` of a flow (cached per flow: the
-    Python around the compiled solve was ~1/3 of a Clebsch top's solve)."""
-    out = _STATIC.get(flow)
-    if out is None:
-        model = flow.model
-        keep, E, rate = flow._design
-        out = (keep, np.ascontiguousarray(E, dtype=float), rate, int(keep.sum()) - E.shape[1],
-               np.asarray(flow.H.weights, dtype=float)[keep], np.flatnonzero(keep).astype(np.int64),
-               np.ascontiguousarray(model.positions, dtype=float), np.array(model.orders, dtype=np.int64),
-               float(np.mean(model.positions)), model.family.period, getattr(model.family, "Kp", np.inf))
-        _STATIC[flow] = out
-    return out
-
-
 class _Weights:
     """The weights ``ω_I(ρ_j + i h_j)`` of the matched integrals ``I`` (``keep``) of one orbit ``x`` and their
     derivatives ``∂ω_I/∂h = −Re[∂ν²/∂I(η)/ν(η)]`` (the integrand at the end point), by the 64-point
@@ -212,25 +172,6 @@ def _orbit_roots(model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     raw = branch_points(model, x)
     fam = model.family
     return raw, (raw if fam.uniform or fam.uniformizer(0.0) is None else fam.uniformizer_inverse(raw))
-
-
-def _trig_roots(model, hI: np.ndarray, const: float, pos: np.ndarray, orders: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_orbit_roots` for the trigonometric family with the polynomial compiled
-    (:func:`jetgaudin._exact_chain_kernels.trig_polynomial`, ``ν²`` from the expansion: the roots equal
-    ``gaudin._curve.branch_points``' to round-off), the roots by the same companion matrix."""
-    from .spectral import _roots
-
-    K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
-    coef = np.empty(hI.size + 1, dtype=complex)
-    K.trig_polynomial(_family_constants(model.family), pos, orders, hI, const, coef)
-    Q = coef[::-1]
-    if abs(Q[0]) <= 1e-13 * np.max(np.abs(Q)):
-        raise BranchPointError(
-            "nu^2 vanishes at Im(lambda) -> -infinity (b + i gamma J = 0: b = 0 and J = sum of the y_0^3 = 0); the "
-            "branch rule of nu needs b != 0 or J != 0")
-    raw = _roots(Q)
-    return raw, model.family.uniformizer_inverse(raw)
 
 
 def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: np.ndarray) -> bool:
