@@ -118,6 +118,29 @@ def test_the_compiled_real_jacobi_functions_are_scipy_s():
             assert abs(zeta_real(x, m) - (special.ellipeinc(ph, m) - E / K * x)) < 1e-14
 
 
+@pytest.mark.parametrize("k", [0.002, 0.05, 0.3, 0.6, 0.95, 0.999])
+def test_the_theta_series_of_the_imaginary_parts_are_scipy_s(k):
+    from scipy import special
+
+    from jetgaudin._exact_elliptic import _theta_im, elliptic_constants, zeta_real
+
+    ell = elliptic_constants(k)
+    m1 = 1.0 - k * k  # the imaginary parts' parameter
+    assert ell[7] >= 1  # a theta series (nome q' ≤ 0.6) for every modulus of the compiled route (k ≥ 1e-3)
+    K1, E1 = special.ellipk(m1), special.ellipe(m1)
+    y = np.linspace(-ell[3] / 2, ell[3] / 2, 201)  # |Im| ≤ K'/2 after the reductions
+    got = np.array([_theta_im(v, ell) for v in y])
+    s, c, d, ph = special.ellipj(y, m1)
+    # truncated where q'^{n²} < 1e-18; the multiples' round-off enters damped by q'^{n(n+1)}: a few ulps of the
+    # O(1) values (2e-15 allows ~10 ulps; the largest seen 3.4e-15 at k = 0.002: 5e-15 there)
+    tol = 5e-15 if k < 0.01 else 2e-15
+    assert np.max(np.abs(got[:, :3] - np.stack([s, c, d], -1))) < tol
+    # Z = E(am y) − (E/K) y (A&S 17.4) and the AGM sum; |Z| grows like ln(1/k) as k → 0: 1e-14 absolute there
+    z_ref = special.ellipeinc(ph, m1) - E1 / K1 * y
+    assert np.max(np.abs(got[:, 3] - z_ref)) < (5e-14 if k < 0.01 else 2e-15 * max(1.0, np.abs(z_ref).max()))
+    assert np.max(np.abs(got[:, 3] - np.array([zeta_real(v, m1) for v in y]))) < 5e-14
+
+
 @pytest.mark.parametrize("name", ["Clebsch top (elliptic, one site)", "elliptic, 3 sites"])
 def test_the_compiled_numerical_branch_rule_is_model_nu(name):
     H, x = _models()[name]
@@ -169,3 +192,150 @@ def test_the_recorded_integrals_are_jg_integrals_bit_for_bit():
         record_integrals(H, np.full((2, 9), 1e200))  # refusal, not a silent inf
     tr = jg.solve(H, [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0], (0.0, 2.0), dt=0.1)
     assert np.array_equal(tr.integrals, np.asarray(jg.integrals(tr.X, 1.0)))
+
+
+@pytest.mark.parametrize("name", ["trigonometric", "trigonometric, a site of order 2"])
+def test_the_compiled_uniformized_branch_rule_is_model_nu(name):
+    from jetgaudin._exact_chain_kernels import branch_uniformized
+    from jetgaudin.exact_chain import _branch_ok, _orbit_roots
+
+    H, x0 = _models()[name]
+    model = H.model
+    rng = np.random.default_rng(11)
+    P = float(model.family.period)
+    flips = 0
+    for trial in range(6):
+        x = x0 if trial == 0 else x0 + 0.3 * rng.standard_normal(x0.shape)
+        raw, _ = _orbit_roots(model, x)
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+        args = (1, _family_constants(model.family), model.positions.astype(float),
+                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const, P)
+        # points over a period and both half planes (not only the solve's η: there ν is mostly the principal root)
+        etas = rng.uniform(0, P, 40) + 1j * rng.uniform(-1.5, 1.5, 40)
+        for e in etas:
+            try:
+                nu = complex(np.asarray(model.nu(x, np.array([e])))[0])
+            except jg.BranchPointError:
+                continue
+            flips += (nu / np.sqrt(nu * nu)).real < 0  # the rule's ν is minus the principal root
+            one = np.array([e])
+            # both decide the sign of ±√ν²(η) by the same root product; ν² by the expansion against the Lax
+            # vector (round-off ~1e-15 relative): the decisions agree, tol 1e-8 is the solve's own
+            assert branch_uniformized(*args, one, np.array([nu]), raw.astype(complex), 1e-8)
+            assert not branch_uniformized(*args, one, np.array([-nu]), raw.astype(complex), 1e-8)
+            assert _branch_ok(model, x, one, np.array([nu]), raw)
+    assert flips >= 20  # the sign is not the principal root's at many points: the test sees the rule's choice
+    # the solve's own η on the benchmark state, through the flow
+    flow = jg.ChainExactFlow(H, 0.05)
+    eta, _, nu_end = flow._solve(x0, 0.05, compiled=False)
+    raw, _ = _orbit_roots(model, x0)
+    I = np.asarray(model.integrals(x0), dtype=float)
+    const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+    args = (1, _family_constants(model.family), model.positions.astype(float), np.array(model.orders, dtype=np.int64),
+            np.ascontiguousarray(I[:2 * model.M]), const, P, eta.astype(complex))
+    assert branch_uniformized(*args, nu_end.astype(complex), raw.astype(complex), 1e-8)
+    assert not branch_uniformized(*args, np.array([nu_end[0], -nu_end[1]]), raw.astype(complex), 1e-8)
+
+
+def test_the_backend_picks_the_solve_and_the_stepping_route():
+    from jetgaudin.maps import Backend
+
+    H, x = _models()["Clebsch top (elliptic, one site)"]
+    dt = 0.05
+    auto, comp = jg.ChainExactFlow(H, dt), jg.ChainExactFlow(H, dt, backend="compiled")
+    nump, alias = jg.ChainExactFlow(H, dt, backend="numpy"), jg.ChainExactFlow(H, dt, kernel="numpy")
+    assert (auto.backend, comp.backend, nump.backend, alias.backend) == (Backend.AUTO, Backend.COMPILED,
+                                                                          Backend.NUMPY, Backend.NUMPY)
+    assert alias.kernel is None and nump.inverse().backend is Backend.NUMPY
+    from jetgaudin.maps import map_from_description
+
+    assert map_from_description(nump.describe()).backend is Backend.NUMPY  # a saved run keeps its route
+    old = {k: v for k, v in auto.describe().items() if k != "backend"}  # a description from before the option
+    assert map_from_description(old).backend is Backend.AUTO
+    # each route's parameters are bit for bit its own solve's (the two differ by ~1e-15: another order of sums)
+    for flow, compiled in ((auto, True), (comp, True), (nump, False)):
+        eta, theta = flow.parameters(x)
+        ref = flow._solve(x, dt, compiled=compiled)
+        assert ref is not None and np.array_equal(eta, ref[0]) and theta == ref[1]
+    from jetgaudin.exact import rotate_about_field
+
+    a = np.asarray(comp.iterate(x, 6))
+    b = np.asarray(nump.iterate(x, 6))
+    # the NumPy maps and solve against the compiled ones: round-off of 6 steps (1e-12, as the routes' own tests)
+    assert np.max(np.abs(a - b)) < 1e-12
+    # backend="numpy" steps on the maps' NumPy route: its rows are those of that route, bit for bit, and not the
+    # compiled loop's (which differ at round-off)
+    eta, theta = nump.parameters(x)
+    maps = [H.model.two_point_backlund(e).with_backend("numpy") for e in eta]
+    z, rows = x, []
+    for i in range(6):
+        for mp in maps:
+            z = mp.advance(z, None, 1, 1).X
+        rows.append(rotate_about_field(z, (i + 1) * theta))
+    assert np.array_equal(b[-6:], np.array(rows)) and not np.array_equal(a[-6:], b[-6:])
+
+
+def test_the_backend_refuses_what_it_cannot_run():
+    H, _ = _models()["Clebsch top (elliptic, one site)"]
+    with pytest.raises(jg.InvalidParameterError, match="GPU"):
+        jg.ChainExactFlow(H, 0.05, backend="gpu")
+    with pytest.raises(jg.InvalidParameterError):
+        jg.ChainExactFlow(H, 0.05, backend="fortran")
+    tiny = jg.GaudinModel(0.0, [(0.0, 1), (0.4, 1)], family="elliptic", modulus=1e-4)
+    with pytest.raises(jg.InvalidParameterError, match="modulus"):
+        jg.ChainExactFlow(tiny.hamiltonian([0.5, 0.1, 0.2, 0.0, 0.3]), 0.05, backend="compiled")
+
+
+@pytest.mark.parametrize("name", ["trigonometric", "trigonometric, a site of order 2"])
+def test_the_compiled_trigonometric_branch_points_are_the_model_s(name):
+    from jetgaudin.exact_chain import _orbit_roots, _trig_roots
+
+    H, x0 = _models()[name]
+    model = H.model
+    rng = np.random.default_rng(4)
+    for trial in range(20):
+        x = x0 if trial == 0 else rng.standard_normal(x0.shape) * rng.uniform(0.2, 2.0)
+        I = np.asarray(model.integrals(x), dtype=float)
+        const = float(np.real(model.family.nu2_constant(float(model.b), I[2 * model.M:])))
+        raw, bp = _trig_roots(model, np.ascontiguousarray(I[:2 * model.M]), const, model.positions.astype(float),
+                              np.array(model.orders, dtype=np.int64))
+        raw0, bp0 = _orbit_roots(model, x)
+        # the same samples, DFT and companion matrix; ν² by the expansion instead of the Lax vector (round-off of
+        # the samples, ~1e-15 relative): simple roots agree to ~1e-13 of the largest (tolerance 1e-10, room for
+        # the conditioning of nearby roots); matched as sets (the eigenvalue order may differ)
+        d = np.abs(raw[:, None] - raw0[None, :])
+        assert np.max(np.min(d, axis=1)) < 1e-10 * np.max(np.abs(raw0))
+        assert np.max(np.min(d, axis=0)) < 1e-10 * np.max(np.abs(raw0))
+        assert np.max(np.min(np.abs(bp[:, None] - bp0[None, :]), axis=1)) < 1e-9
+
+
+@pytest.mark.parametrize("name", list(_models()))
+def test_the_coarse_rule_only_starts_newton_on_the_fine_rule(name):
+    from jetgaudin import _exact_chain_kernels as K
+    from jetgaudin.exact_chain import _COARSE_TOL, _ITERATIONS, _STEP_TOL, _orbit_roots, _rules, _static
+
+    H, x = _models()[name]
+    flow = jg.ChainExactFlow(H, 0.05)
+    model, fam = H.model, H.model.family
+    keep, E, _, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(flow)
+    I = np.asarray(model.integrals(x), dtype=float)
+    hI = np.ascontiguousarray(I[:2 * model.M])
+    const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
+    dconst = np.ascontiguousarray(fam.nu2_constant_gradient(float(model.b), I[2 * model.M:]), dtype=float)
+    rho = flow._real_parts(x, k, _orbit_roots(model, x)[1])
+    bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
+    rules = _rules()
+    out = []
+    for coarse in (rules[6:], (rules[6][:0], rules[7][:0], rules[8][:0])):  # with the 16-point phase, without
+        u, om, nu = np.empty(E.shape[0]), np.empty((k, E.shape[0])), np.empty(k, dtype=complex)
+        status, quad = K.newton(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const, dconst,
+                                kidx, E, 0.05 * wkeep, rho, bound, *rules[:6], *coarse, _STEP_TOL, _COARSE_TOL,
+                                _ITERATIONS, u, om, nu)
+        assert status == 0
+        out.append((u.copy(), om.copy(), quad))
+    # both end with Newton on the 64-point rule to a step of 1e-13 |u|: the same solution to round-off (1e-13
+    # relative, the step tolerance), the same weights and quadrature estimate (1e-12 of their scale)
+    assert np.max(np.abs(out[0][0] - out[1][0]) / np.abs(out[1][0])) < 1e-13
+    assert np.max(np.abs(out[0][1] - out[1][1])) < 1e-12 * np.abs(out[1][1]).max()
+    assert abs(out[0][2] - out[1][2]) < 1e-12

@@ -22,13 +22,14 @@ Numba's cache keys this module by its own source: after an edit of :mod:`jetgaud
 from __future__ import annotations
 
 import cmath
+import math
 
 import numpy as np
 from numba import njit
 
 from ._exact_elliptic import psi_elliptic_cached
 
-__all__ = ["newton", "psi_values"]
+__all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "psi_values", "trig_polynomial"]
 
 
 @njit(cache=True, error_model="numpy")
@@ -145,11 +146,13 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
         rq = cmath.sqrt(acc)
-        if abs(rq - v) > abs(rq + v):
+        if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|: the root nearer to v
             rq = -rq
-        if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
-            ok = False
-        if not abs(rq) > 0:
+        # |rq − v| ≤ |rq|/4 or |v|/4, in squares (no hypot), and ν ≠ 0
+        dr = rq.real - v.real
+        di = rq.imag - v.imag
+        a2 = rq.real * rq.real + rq.imag * rq.imag
+        if not (dr * dr + di * di <= 0.0625 * max(a2, v.real * v.real + v.imag * v.imag) and a2 > 0.0):
             ok = False
         v = rq
         inv = 1.0 / rq
@@ -163,42 +166,114 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
 
 
 @njit(cache=True, error_model="numpy")
-def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, om, dom, om2,
-             nu_end, f, psi, s, c, r, d, xcache):
+def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, xsf, permf, wf, om,
+             dom, om2, nu_end, f, psi, s, c, r, d, xcache):
     """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
     ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
-    ``nu_end[j]`` the continued ``ν`` at ``η_j``.  Returns ``False`` where ``ν`` cannot be continued."""
+    ``nu_end[j]`` the continued ``ν`` at ``η_j``.  A segment where ``ν`` cannot be continued over ``xs`` takes the
+    rule ``(xsf, permf, wf)`` when that is not empty (nodes ``xsf[:len(wf)]``, end node 1; no ``om2``).  Returns
+    ``False`` where ``ν`` cannot be continued."""
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
         ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
                           c, r, d, xcache)
+        w = w1
+        m = n1
+        m2 = n2r
+        if not ok and wf.shape[0]:  # this segment on the fallback rule (the others keep theirs)
+            ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xsf, permf, f, psi,
+                              s, c, r, d, xcache)
+            w = wf
+            m = wf.shape[0]
+            m2 = 0
         if not ok:
             return False
         nu_end[j] = nv
         for i in range(kidx.shape[0]):
             acc = 0.0
-            for q in range(n1):
-                acc += w1[q] * f[q, i]
+            for q in range(m):
+                acc += w[q] * f[q, i]
             om[j, i] = -h[j] * acc
-            dom[j, i] = -f[n1, i]
-            if n2r:
+            dom[j, i] = -f[m, i]
+            if m2:
                 acc = 0.0
-                for q in range(n2r):
+                for q in range(m2):
                     acc += w2[q] * f[n1 + 1 + q, i]
                 om2[j, i] = -h[j] * acc
     return True
 
 
+#: the step (relative to ``|u|``) from which Newton on the fine rule alone continues with the estimate pass (``xs2``)
+_FINE_FROM = 1e-9
+
+
+@njit(cache=True, error_model="numpy")
+def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs, perm, w, w2, xsf, permf,
+             wf, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res):
+    """Newton's steps on the rule ``(xs, perm, w)`` from ``u`` until every ``|Δu| ≤ step_tol |u|``; returns 0
+    (converged: ``om``, ``dom``, ``nu_end`` and, with a half rule ``w2`` (nodes ``xs[len(w) + 1:]``), ``om2`` are
+    those of the last point evaluated, ``u`` + the last step), 1 (no solution: diverged, left the bound, ill
+    conditioned, ``ν`` not continued).  A segment where ``ν`` cannot be continued over the nodes ``xs`` is evaluated
+    on the rule ``(xsf, permf, wf)`` when that is not empty (a coarse rule's nodes can be too few for the
+    quarter-size rule where the fine rule's are not; the other segments keep the coarse rule).  (A damped step,
+    halving towards the previous iterate where the coarse continuation fails, saved one evaluation of the fine rule
+    but made steps feasible that are not on the undamped iteration: the Clebsch top's ``dt_max`` 1.07 → 1.79, so
+    the undamped path is kept.)"""
+    k = rho.shape[0]
+    nk = kidx.shape[0]
+    ne = E.shape[1]
+    for _ in range(iterations):
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1
+        if not np.all(np.isfinite(u)):
+            return 1
+        if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs, perm, w, w2, w.shape[0],
+                        xsf, permf, wf, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
+            return 1
+        for i in range(nk):
+            acc = -target[i]
+            for j in range(k):
+                acc += om[j, i]
+                J[i, j] = dom[j, i]
+            for e in range(ne):
+                acc -= E[i, e] * u[k + e]
+                J[i, k + e] = -E[i, e]
+            res[i] = acc
+        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om)) and np.linalg.cond(J) <= 1e12):
+            return 1
+        du = np.linalg.solve(J, res)
+        done = True
+        for i in range(k + ne):
+            u[i] -= du[i]
+            if not abs(du[i]) <= step_tol * abs(u[i]):
+                done = False
+        for j in range(k):
+            if not (abs(u[j]) <= bound[j]):
+                return 1
+        if not np.all(np.isfinite(u)):
+            return 1
+        if done:
+            return 0
+    return 1
+
+
 @njit(cache=True, error_model="numpy")
 def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
-           w2, step_tol, iterations, u, om, nu_end):
+           w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end):
     """Newton's method of ``ChainExactFlow._newton_numpy`` compiled: ``u = (h_1..h_k, extra unknowns)`` with
     ``Σ_j ω(ρ_j + i h_j) − E u_{k:} = target`` on the matched integrals ``kidx``.  The start from the linearisation
     at ``h = 0`` (``∂ω/∂h = −Re[∂ν²/∂I(ρ)/ν(ρ)]``), then steps with the exact Jacobian while ``|h_j| ≤ bound_j``,
-    the Jacobian finite with condition number at most 1e12, until every ``|Δu| ≤ step_tol |u|``; then one pass of
-    the rule ``w1`` and the half rule ``w2`` (nodes ``xs2``, their continuation order ``perm2``) at the solution.
-    Returns ``(status, quadrature estimate)``: status 0 converged (``u``, ``om`` (k, n_keep) by the rule ``w1``,
-    ``nu_end`` (k,) written), 1 no solution (diverged, left the bound, ill conditioned, or ``ν`` not continued)."""
+    the Jacobian finite with condition number at most 1e12: first on the coarse rule ``(xsc, permc, wc)`` to
+    ``|Δu| ≤ coarse_tol |u|`` (cheap iterations far from the solution; a step whose nodes are too few to continue
+    ``ν`` takes the rule ``w1``), else (the coarse phase fails, or ``wc`` is empty) from the linear start on the rule
+    ``w1`` to ``|Δu| ≤ _FINE_FROM |u|``; then steps on the rule ``w1`` with the half rule ``w2`` in the same pass (nodes
+    ``xs2``, their continuation order ``perm2``) until every ``|Δu| ≤ step_tol |u|`` (quadratic convergence: one
+    step where the coarse rule has converged to round-off, else two).  The solution is the fine rule's (the coarse
+    one only gives the start), so the result is that of Newton on the fine rule alone to round-off.  Returns
+    ``(status, quadrature estimate)``: status 0 converged (``u``; ``om`` (k, n_keep) by the rule ``w1`` and
+    ``nu_end`` (k,) at the last point evaluated, ``u`` + the last step: the residual there is ``O(|Δu|)``, and
+    ``ν`` there only chooses the maps' root), 1 no solution."""
     k = rho.shape[0]
     nk = kidx.shape[0]
     ne = E.shape[1]
@@ -208,9 +283,8 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
-    nw1 = w1.shape[0]
-    empty = np.empty(0)
     J = np.empty((nk, k + ne))
+    res = np.empty(nk)
     # the start: the linearisation at h = 0
     for j in range(k):
         _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
@@ -228,52 +302,34 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     if not (np.all(np.isfinite(J)) and np.linalg.cond(J) <= 1e12):
         return 1, 0.0
     u[:] = np.linalg.solve(J, target)
-    res = np.empty(nk)
-    for _ in range(iterations):
+    u0 = u.copy()
+    status = 1
+    none = w1[:0]
+    if wc.shape[0]:
+        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc, wc,
+                          none, xs1, perm1, w1, coarse_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d,
+                          xcache, J, res)
+    if status:  # the coarse phase failed (or none): from the linear start on the fine rule
+        u[:] = u0
+        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1,
+                          none, none, perm1[:0], none, _FINE_FROM, iterations, u, om, dom, om2, nu_end, f, psi, s, c,
+                          r, d, xcache, J, res)
+    if status:
+        return 1, 0.0
+    # the last steps on the fine rule with the half rule's estimate in the same pass (xs2): om, om2, nu_end at
+    # the last point evaluated, u = that point + the last step (|Δu| ≤ step_tol |u|)
+    if _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs2, perm2, w1, w2, none,
+                perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res):
+        return 1, 0.0
+    quad = 0.0
+    scale = 0.0
+    for i in range(nk):
+        tot = 0.0
         for j in range(k):
-            if not (abs(u[j]) <= bound[j]):
-                return 1, 0.0
-        if not np.all(np.isfinite(u)):
-            return 1, 0.0
-        if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs1, perm1, w1, empty,
-                        nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
-            return 1, 0.0
-        for i in range(nk):
-            acc = -target[i]
-            for j in range(k):
-                acc += om[j, i]
-                J[i, j] = dom[j, i]
-            for e in range(ne):
-                acc -= E[i, e] * u[k + e]
-                J[i, k + e] = -E[i, e]
-            res[i] = acc
-        if not (np.all(np.isfinite(J)) and np.all(np.isfinite(om)) and np.linalg.cond(J) <= 1e12):
-            return 1, 0.0
-        du = np.linalg.solve(J, res)
-        done = True
-        for i in range(k + ne):
-            u[i] -= du[i]
-            if not abs(du[i]) <= step_tol * abs(u[i]):
-                done = False
-        for j in range(k):
-            if not (abs(u[j]) <= bound[j]):
-                return 1, 0.0
-        if not np.all(np.isfinite(u)):
-            return 1, 0.0
-        if done:
-            if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs2, perm2, w1, w2,
-                            nw1, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
-                return 1, 0.0
-            quad = 0.0
-            scale = 0.0
-            for i in range(nk):
-                tot = 0.0
-                for j in range(k):
-                    quad = max(quad, abs(om[j, i] - om2[j, i]))
-                    tot += abs(om[j, i])
-                scale = max(scale, tot)
-            return 0, quad / (scale + 1e-300)
-    return 1, 0.0
+            quad = max(quad, abs(om[j, i] - om2[j, i]))
+            tot += abs(om[j, i])
+        scale = max(scale, tot)
+    return 0, quad / (scale + 1e-300)
 
 
 @njit(cache=True, error_model="numpy")
@@ -302,9 +358,13 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
                 acc += hI[cI] * psi[cI]
             rq = cmath.sqrt(acc)
             if q > 0:
-                if abs(rq - v) > abs(rq + v):
+                if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|
                     rq = -rq
-                if not abs(rq - v) <= 0.25 * max(abs(rq), abs(v)):
+                dr = rq.real - v.real
+                di = rq.imag - v.imag
+                # |rq − v| ≤ max(|rq|, |v|)/4, in squares (no hypot)
+                if not dr * dr + di * di <= 0.0625 * max(rq.real * rq.real + rq.imag * rq.imag,
+                                                         v.real * v.real + v.imag * v.imag):
                     ok = False
                     break
             v = rq
@@ -312,3 +372,92 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
             return True, v
         n *= 2
     return False, 0j
+
+
+@njit(cache=True, error_model="numpy")
+def branch_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end, n0, n_max, tol):
+    """Whether every ``nu_end[j]`` is :func:`nu_numerical`'s ``ν(η_j)`` to ``tol`` relative (the solve's branch
+    check, every segment in one call)."""
+    for j in range(eta.shape[0]):
+        ok, ref = nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta[j], n0, n_max)
+        if not (ok and abs(ref - nu_end[j]) <= tol * abs(ref)):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def branch_uniformized(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end, roots, tol):
+    """Whether every ``nu_end[j]`` is the uniformized branch rule's ``ν(η_j)`` to ``tol`` relative: the compiled
+    twin of ``gaudin._curve._nu_uniformized`` for the trigonometric family (``z = e^{2iγλ}``, ``roots`` the orbit's
+    branch points in ``z``): ``ν(η) = ±√ν²(η)``, the sign of ``ν(a) Π_j [(z_a − z_j)/(z − z_j)]^{N_j}
+    Π_k √((z − r_k)/(z_a − r_k))`` (``a = Re η``; ``ν(a) = +√ν²(a)``), ``ν²`` from the expansion.  False where the
+    rule refuses (``Re η`` a site modulo the period, a root on the segment, ``ν`` zero or not finite)."""
+    n2 = hI.shape[0]
+    psi = np.empty(n2, dtype=np.complex128)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    g2 = 2.0 * fp[0]
+    for j in range(eta.shape[0]):
+        e = eta[j]
+        a = e.real
+        for i in range(site_pos.shape[0]):
+            q = (a - site_pos[i]) / period
+            if abs(q - np.round(q)) < 1e-14:
+                return False
+        _psi_point(fid, fp, e, site_pos, site_n, psi, s, c, r, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        direct = cmath.sqrt(acc)
+        _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        ref = cmath.sqrt(acc)
+        z = cmath.exp(1j * g2 * e)
+        za = cmath.exp(1j * g2 * complex(a, 0.0))
+        for i in range(site_pos.shape[0]):
+            zj = cmath.exp(1j * g2 * complex(site_pos[i], 0.0))
+            ref = ref * ((za - zj) / (z - zj)) ** site_n[i]
+        for kk in range(roots.shape[0]):
+            ratio = (z - roots[kk]) / (za - roots[kk])
+            if abs(ratio.imag) <= 1e-13 * abs(ratio) and ratio.real <= 0:
+                return False
+            ref = ref * cmath.sqrt(ratio)
+        test = ((direct / abs(direct)).conjugate() * (ref / abs(ref))).real
+        if not np.isfinite(test):
+            return False
+        nu = direct if test >= 0 else -direct
+        if not abs(nu - nu_end[j]) <= tol * abs(nu):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def trig_polynomial(fp, site_pos, site_n, hI, const, out):
+    """``gaudin._curve._uniform_polynomial`` for the trigonometric family with ``ν²`` from the expansion: the
+    coefficients ``out[n]``, ``n = 0..2M`` (ascending), of ``Q(z) = ν²(λ(z)) Π_j (z − z_j)^{2N_j}``
+    (``z = e^{2iγλ}``, ``z_j = e^{2iγλ_j}``), by the discrete Fourier transform of its ``2M + 1`` values at
+    ``λ_q = qT/(2M + 1) + 0.15i/γ`` (``T = π/γ``: the circle ``|z| = e^{−0.3}``, off the sites' unit circle)."""
+    n2 = hI.shape[0]
+    D = n2 + 1
+    psi = np.empty(n2, dtype=np.complex128)
+    s, c, rr, d, xcache = _psi_scratch(site_pos, site_n)
+    gamma = fp[0]
+    T = math.pi / gamma
+    vals = np.empty(D, dtype=np.complex128)
+    for q in range(D):
+        lam = complex(q * T / D, 0.15 / gamma)
+        z = cmath.exp(2j * gamma * lam)
+        _psi_point(1, fp, lam, site_pos, site_n, psi, s, c, rr, d, xcache)
+        acc = complex(const, 0.0)
+        for cI in range(n2):
+            acc += hI[cI] * psi[cI]
+        for i in range(site_pos.shape[0]):
+            acc *= (z - cmath.exp(2j * gamma * complex(site_pos[i], 0.0))) ** (2 * site_n[i])
+        vals[q] = acc
+    r = math.exp(-0.3)
+    for n in range(D):
+        acc = 0j
+        for q in range(D):
+            acc += vals[q] * cmath.exp(-2j * math.pi * ((q * n) % D) / D)
+        out[n] = acc / D / r ** n

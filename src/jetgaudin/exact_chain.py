@@ -47,10 +47,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
+from ._exact_chain_prep import _NO_ROOTS_RHO, _family_constants, _static, _trig_roots
 from ._system_maps import ExactFlow
 from ._validate import real_number
 from .exact import _EXACT_PROPERTIES, RHO_FACTOR, _gauss_legendre, _node_scales, nonzero_step, rotate_about_field
-from .maps import Advance, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
+from .maps import Advance, Backend, Map, MapProperties, StepByAdvance, check_count, per_orbit_buffers, register_map
 
 __all__ = ["ChainExactFlow"]
 
@@ -62,12 +63,14 @@ def _periodic_real_parts(lc: float, P: float, k: int, points: np.ndarray) -> np.
     grid = lc + P * np.arange(256) / 256
     imgs = np.concatenate([points - P, points, points + P])
     score = np.min(np.abs(grid[:, None] - imgs[None, :]), axis=1)
+    order = np.argsort(-score, kind="stable")
+    free = np.ones(len(grid), dtype=bool)  # at least P/(4k) from every chosen point (the same test, vectorised)
     chosen: list[float] = []
-    for i in np.argsort(-score, kind="stable"):
-        if all(min(abs(grid[i] - c), P - abs(grid[i] - c)) >= P / (4 * k) for c in chosen):
-            chosen.append(float(grid[i]))
-        if len(chosen) == k:
-            break
+    while len(chosen) < k and free.any():
+        c = grid[order[np.argmax(free[order])]]  # the best-scored free point
+        chosen.append(float(c))
+        d = np.abs(grid - c)
+        free &= np.minimum(d, P - d) >= P / (4 * k)
     return np.array(sorted(chosen))
 
 
@@ -97,6 +100,9 @@ _STEP_TOL, _ITERATIONS, _RES_TOL = 1e-13, 30, 1e-11
 #: scale); an orbit whose rule does not converge to it falls back to the adaptive quadrature
 #: (``model.interpolating_weights``, epsrel 1e-13)
 _NODES, _QUAD_TOL = 64, 1e-13
+#: the compiled solve's coarse rule and the step (relative to |u|) at which Newton leaves it for the 64-point rule
+#: (the coarse rule only finds the start of the fine rule's Newton iterations: the solution is the fine rule's)
+_COARSE_NODES, _COARSE_TOL = 16, 1e-9
 #: the smallest ``R`` of the real-part rule: below it (one site and no branch points: the elliptic family, whose
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
@@ -104,15 +110,6 @@ _R_FLOOR = 1e-6
 #: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); any
 #: other family solves on the NumPy route
 COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
-
-
-def _family_constants(fam) -> np.ndarray:
-    """The constants of the compiled basis: trigonometric ``(γ,)``, elliptic ``(k, m, K, K', E, E', k')``."""
-    if fam.name == "elliptic":
-        from ._exact_elliptic import elliptic_constants
-
-        return elliptic_constants(float(fam.modulus))
-    return np.array([float(getattr(fam, "gamma", 0.0))])
 
 
 class _Weights:
@@ -189,14 +186,18 @@ def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: n
 
 @cache
 def _rules() -> tuple[np.ndarray, ...]:
-    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2)``, ``xs1`` the 64-point rule's nodes and
-    the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass), ``perm*`` the
-    order of the continuation (increasing ``|s|``, stable: the NumPy route's order)."""
+    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2, xsc, permc, wc)``, ``xs1`` the 64-point
+    rule's nodes and the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass),
+    ``xsc`` the coarse rule's (``_COARSE_NODES``) with the end point, ``perm*`` the order of the continuation
+    (increasing ``|s|``, stable: the NumPy route's order)."""
     x1, w1 = _gauss_legendre(_NODES)
     x2, w2 = _gauss_legendre(_NODES // 2)
+    xc, wc = _gauss_legendre(_COARSE_NODES)
     xs1 = np.concatenate([x1, [1.0]])
     xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
-    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2)
+    xsc = np.concatenate([xc, [1.0]])
+    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2, xsc,
+            np.argsort(xsc, kind="stable"), wc)
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,13 +212,20 @@ class _ChainExactFlow(StepByAdvance, Map):
     the maps commute), and every row is the unrotated map orbit rotated once through its accumulated angle: the
     rotation's round-off does not accumulate (``docs/integrators.md`` §7).  Each orbit is stepped on its own, so a
     batch member equals its single run bit for bit, and an orbit without parameters raises
-    :class:`~jetgaudin.StepTooLargeError` naming it and its ``dt_max`` (:meth:`max_dt`)."""
+    :class:`~jetgaudin.StepTooLargeError` naming it and its ``dt_max`` (:meth:`max_dt`).
+
+    ``backend`` (alias ``kernel``, the maps' rule): ``"auto"`` (default) the compiled solve and loop where the family
+    has them (:data:`COMPILED_FAMILIES`; an elliptic modulus below 1e-3 solves on NumPy), ``"compiled"`` those
+    (:class:`~jetgaudin.InvalidParameterError` for a family without), ``"numpy"`` the NumPy solve and the maps' NumPy
+    route (the reference; the same parameters to ~1e-15)."""
 
     H: Any  # a jetgaudin.ChainHamiltonian
     dt: float
     rho_factor: float = RHO_FACTOR
     substeps: int = 1
     properties: MapProperties = field(default=_EXACT_PROPERTIES, init=False, repr=False)
+    backend: Any = "auto"
+    kernel: Any = None  # the alias of backend (None once parsed into backend)
     chunk_invariant: ClassVar[bool] = False
     public_name: ClassVar[str] = "ExactFlow"  # the class its messages name (jetgaudin.maps.map_name)
 
@@ -235,6 +243,15 @@ class _ChainExactFlow(StepByAdvance, Map):
             raise InvalidParameterError(f"rho_factor must be > 1, got {rf}")
         object.__setattr__(self, "rho_factor", rf)
         object.__setattr__(self, "substeps", check_count(self.substeps, "substeps", 1))
+        backend = Backend.parse(self.backend if self.kernel is None else self.kernel)
+        if backend is Backend.GPU:
+            raise InvalidParameterError("ChainExactFlow has no GPU route: give backend='auto', 'compiled' or 'numpy'")
+        if backend is Backend.COMPILED and (COMPILED_FAMILIES.get(model.family.name) is None or (
+                model.family.name == "elliptic" and not float(model.family.modulus) >= 1e-3)):
+            raise InvalidParameterError(f"the {model.family.name} family has no compiled exact-step solve here "
+                                        "(elliptic: modulus >= 1e-3): give backend='numpy' or 'auto'")
+        object.__setattr__(self, "backend", backend)
+        object.__setattr__(self, "kernel", None)
 
     @property
     def model(self):
@@ -288,8 +305,19 @@ class _ChainExactFlow(StepByAdvance, Map):
         """``ρ_1..ρ_k`` (module doc); ``None`` where no rule applies (one site, no branch points, no period).
         ``bp``: the orbit's branch points when the caller has them (``model.branch_points(x)``)."""
         model = self.model
-        lc = float(np.mean(model.positions))
         bp = np.ravel(model.branch_points(x) if bp is None else bp)
+        if not bp.size:  # no computed branch points (elliptic): the same real parts for every orbit of the model
+            per_k = _NO_ROOTS_RHO.setdefault(self, {})
+            if k not in per_k:
+                per_k[k] = self._real_parts_of(k, bp)
+            rho = per_k[k]
+            return None if rho is None else rho.copy()
+        return self._real_parts_of(k, bp)
+
+    def _real_parts_of(self, k: int, bp: np.ndarray) -> np.ndarray | None:
+        """:meth:`_real_parts` from the orbit's branch points ``bp`` (1-D)."""
+        model = self.model
+        lc = float(np.mean(model.positions))
         R = max(float(np.max(np.abs(bp - lc))) if bp.size else 0.0, float(np.max(np.abs(model.positions - lc))),
                 _R_FLOOR)
         P = model.family.period
@@ -317,80 +345,97 @@ class _ChainExactFlow(StepByAdvance, Map):
         the families of its ``COMPILED_FAMILIES``) or the NumPy route (:meth:`_newton_numpy`; ``compiled=False``
         forces it: the tests compare the two), then the acceptance (quadrature estimate, residual, branch)."""
         model = self.model
-        keep, E, rate = self._design
-        target = dt * np.asarray(self.H.weights, dtype=float)[keep]
-        k = int(keep.sum()) - E.shape[1]
-        raw, bp = _orbit_roots(model, x)  # once per orbit: the real parts and the branch check
+        keep, E, rate, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(self)
+        target = dt * wkeep
+        fam = model.family
+        fid = COMPILED_FAMILIES.get(fam.name)
+        if fid == 2 and not float(fam.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
+            fid = None
+        if compiled is None:
+            compiled = fid is not None and self.backend is not Backend.NUMPY
+        if compiled and fid is None:
+            raise InvalidParameterError(f"the {fam.name} family has no compiled exact-step solve")
+        if compiled:
+            I = np.asarray(model.integrals(x), dtype=float)  # once: the roots, the solve's ν², the branch check
+            extra = I[2 * model.M:]
+            const = float(np.real(fam.nu2_constant(float(model.b), extra)))
+            hI = np.ascontiguousarray(I[:2 * model.M])
+        # once per orbit: the real parts and the branch check
+        raw, bp = _trig_roots(model, hI, const, pos, orders) if compiled and fid == 1 else _orbit_roots(model, x)
         rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
-        lc = float(np.mean(model.positions))
-        P = model.family.period
         # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
         # points η, η̄ coincide modulo the period 2iK')
-        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * getattr(model.family, "Kp", np.inf))
-        fid = COMPILED_FAMILIES.get(model.family.name)
-        if fid == 2 and not float(model.family.modulus) >= 1e-3:  # the AGM of 1 − m = 1 − k² → 1: NumPy (SciPy)
-            fid = None
-        if compiled is None:
-            compiled = fid is not None
-        if compiled and fid is None:
-            raise InvalidParameterError(f"the {model.family.name} family has no compiled exact-step solve")
-        sol = (self._newton_compiled(x, int(fid), keep, E, target, rho, bound) if compiled  # type: ignore[arg-type]
-               else self._newton_numpy(x, keep, E, target, rho, bound))
+        bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
+        if compiled:
+            sol = self._newton_compiled(x, int(fid), keep, E, target, rho, bound,  # type: ignore[arg-type]
+                                        (hI, const, extra, kidx, pos, orders))
+        else:
+            sol = self._newton_numpy(x, keep, E, target, rho, bound)
         if sol is None:
             return None
         u, om, quad, nu_end = sol
         if quad > _QUAD_TOL:  # the rule has not converged on some segment: the adaptive quadrature
             om = np.array([model.interpolating_weights(x, e) for e in rho + 1j * u[:k]])[:, keep]
-        scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(E @ u[k:])
+        Eu = E @ u[k:]
+        scale = np.abs(om).sum(axis=0) + np.abs(target) + np.abs(Eu)
         eta = rho + 1j * u[:k]
-        if np.max(np.abs(om.sum(axis=0) - E @ u[k:] - target) / scale) > _RES_TOL:
+        if np.max(np.abs(om.sum(axis=0) - Eu - target) / scale) > _RES_TOL:
             return None
-        if compiled and model.family.uniformizer(0.0) is None:  # the numerical branch rule, compiled
-            ok = self._branch_numerical(x, eta, nu_end)
+        if compiled and fam.uniformizer(0.0) is None:  # the numerical branch rule, compiled
+            ok = self._branch_numerical(x, eta, nu_end, (hI, const, pos, orders))
+        elif compiled and fid == 1:  # the trigonometric family's uniformized rule, compiled (the same raw roots)
+            K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+            ok = bool(K.branch_uniformized(1, _family_constants(fam), pos, orders, hI, const, float(P),
+                                           np.ascontiguousarray(eta, dtype=complex),
+                                           np.ascontiguousarray(nu_end, dtype=complex),
+                                           np.ascontiguousarray(np.ravel(raw), dtype=complex), 1e-8))
         else:
             ok = _branch_ok(model, x, eta, nu_end, raw)
         return (eta, -rate * u[k] if rate else 0.0, nu_end) if ok else None
 
-    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray) -> bool:
+    def _branch_numerical(self, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, pre: tuple | None = None
+                          ) -> bool:
         """:func:`_branch_ok` for a family without a uniformizer (elliptic), by the compiled twin of its branch rule
-        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``)."""
+        (``gaudin._curve._nu_numerical``: ``ν`` continued over equally spaced points of ``[Re η_j, η_j]``), every
+        segment in one call; ``pre``: ``(h_I, ν²'s constant, positions, orders)`` where the caller has them."""
         model = self.model
         fam = model.family
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
-        I = np.asarray(model.integrals(x), dtype=float)
-        const = float(np.real(fam.nu2_constant(float(model.b), I[2 * model.M:])))
-        args = (COMPILED_FAMILIES[fam.name], _family_constants(fam), model.positions.astype(float),
-                np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
-                float(fam.period or np.inf))
-        for e, v in zip(eta, nu_end, strict=True):
-            ok, ref = K.nu_numerical(*args, complex(e), 64, 2**16)
-            if not (ok and abs(ref - v) <= 1e-8 * abs(ref)):
-                return False
-        return True
+        if pre is None:
+            I = np.asarray(model.integrals(x), dtype=float)
+            pre = (np.ascontiguousarray(I[:2 * model.M]), float(np.real(fam.nu2_constant(float(model.b),
+                                                                                          I[2 * model.M:]))),
+                   model.positions.astype(float), np.array(model.orders, dtype=np.int64))
+        hI, const, pos, orders = pre
+        return bool(K.branch_numerical(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const,
+                                       float(fam.period or np.inf), np.ascontiguousarray(eta, dtype=complex),
+                                       np.ascontiguousarray(nu_end, dtype=complex), 64, 2**16, 1e-8))
 
-    def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound):
+    def _newton_compiled(self, x, fid: int, keep, E, target, rho, bound, pre: tuple | None = None):
         """:meth:`_newton_numpy` in one compiled call: ``(u, ω (k, n_keep), quadrature estimate, ν(η_j))`` or
-        ``None``."""
+        ``None``; ``pre``: ``(h_I, ν²'s constant, extra integrals, kidx, positions, orders)`` where the caller has
+        them."""
         model = self.model
         fam = model.family
-        I = np.asarray(model.integrals(x), dtype=float)
-        extra = I[2 * model.M:]
-        const = float(np.real(fam.nu2_constant(float(model.b), extra)))
+        if pre is None:
+            I = np.asarray(model.integrals(x), dtype=float)
+            pre = (np.ascontiguousarray(I[:2 * model.M]), float(np.real(fam.nu2_constant(float(model.b),
+                                                                                          I[2 * model.M:]))),
+                   I[2 * model.M:], np.flatnonzero(keep).astype(np.int64), model.positions.astype(float),
+                   np.array(model.orders, dtype=np.int64))
+        hI, const, extra, kidx, pos, orders = pre
         dconst = np.ascontiguousarray(fam.nu2_constant_gradient(float(model.b), extra), dtype=float)
         k = len(rho)
         u = np.empty(E.shape[0])
         om = np.empty((k, E.shape[0]))
         nu_end = np.empty(k, dtype=complex)
         K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
-        xs1, perm1, w1, xs2, perm2, w2 = _rules()
-        status, quad = K.newton(fid, _family_constants(fam), model.positions.astype(float),
-                              np.array(model.orders, dtype=np.int64), np.ascontiguousarray(I[:2 * model.M]), const,
-                              dconst, np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(E, dtype=float),
-                              np.ascontiguousarray(target), np.ascontiguousarray(rho, dtype=float),
-                              np.ascontiguousarray(bound, dtype=float), xs1, perm1, w1, xs2, perm2, w2, _STEP_TOL,
-                              _ITERATIONS, u, om, nu_end)
+        status, quad = K.newton(fid, _family_constants(fam), pos, orders, hI, const, dconst, kidx,
+                                np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(target),
+                                np.ascontiguousarray(rho, dtype=float), np.ascontiguousarray(bound, dtype=float),
+                                *_rules(), _STEP_TOL, _COARSE_TOL, _ITERATIONS, u, om, nu_end)
         return None if status else (u, om, quad, nu_end)
 
     def _newton_numpy(self, x, keep, E, target, rho, bound):
@@ -483,7 +528,9 @@ class _ChainExactFlow(StepByAdvance, Map):
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
         maps = [self.model.two_point_backlund(eta[j]) for j in used]
-        if maps and all(mp.has_compiled for mp in maps):
+        if self.backend is Backend.NUMPY:
+            maps = [mp.with_backend(Backend.NUMPY) for mp in maps]
+        elif maps and all(mp.has_compiled for mp in maps):
             return self._orbit_compiled(x, maps, nu[used], theta, steps, save_every, rows)
         z, done = x, 0
         while done < steps:
@@ -531,11 +578,11 @@ class _ChainExactFlow(StepByAdvance, Map):
                        imag_max=zeros)
 
     def inverse(self) -> _ChainExactFlow:
-        return _ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps)
+        return _ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps, backend=self.backend)
 
     def describe(self) -> dict:
         return {"kind": "chain_exact", **self.model.describe(), "weights": np.asarray(self.H.weights).tolist(),
-                "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps}
+                "dt": self.dt, "rho_factor": self.rho_factor, "substeps": self.substeps, "backend": str(self.backend)}
 
 
 #: the old name of :class:`jetgaudin.ExactFlow` for chains: the same class (``isinstance`` holds both ways)
@@ -547,7 +594,8 @@ def _chain_exact_from(d: dict) -> ExactFlow:
 
     model = GaudinModel.from_description(d)
     return ExactFlow(model.hamiltonian(np.asarray(d["weights"], dtype=float)), float(d["dt"]),
-                     rho_factor=float(d.get("rho_factor", RHO_FACTOR)), substeps=int(d.get("substeps", 1)))
+                     rho_factor=float(d.get("rho_factor", RHO_FACTOR)), substeps=int(d.get("substeps", 1)),
+                     backend=d.get("backend", "auto"))
 
 
 register_map("chain_exact", _chain_exact_from)
