@@ -330,8 +330,8 @@ def test_exact_refusals_name_what_is_accepted():
     for bad in (1.0, CHAIN, None):
         with pytest.raises(InvalidParameterError, match="IntegralHamiltonian .*model.hamiltonian"):
             jg.ExactFlow(bad, 0.1)
-    with pytest.raises(InvalidParameterError, match="backend"):
-        jg.ExactFlow(H_CHAIN, 0.02, backend="compiled")
+    with pytest.raises(InvalidParameterError, match="no GPU route: give backend="):  # a chain's routes: numpy, compiled
+        jg.ExactFlow(H_CHAIN, 0.02, backend="gpu")
     with pytest.raises(InvalidParameterError, match="dt must be nonzero"):
         jg.ExactFlow(H_CHAIN, 0.0)
     with pytest.raises(InvalidParameterError, match="^ExactFlow matches the weights"):

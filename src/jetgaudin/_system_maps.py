@@ -372,8 +372,9 @@ class ExactFlow(_SystemMap):
     ``H``: an :class:`~jetgaudin.IntegralHamiltonian` (the top of any ``N ≥ 2``, field ``b e_3``: the route
     :class:`jetgaudin.exact._TopExactFlow`, ``kind`` ``"exact"``; ``backend`` ``NUMPY`` or ``COMPILED``, ``AUTO``:
     compiled) or a chain's Hamiltonian ``model.hamiltonian(weights)`` (:class:`~jetgaudin.ChainHamiltonian`, every
-    family: the route :class:`jetgaudin.exact_chain._ChainExactFlow`, ``kind`` ``"chain_exact"``; each map on its own
-    route inside).  ``dt``: either sign (``−dt`` is :meth:`inverse`).  It preserves the integrals, is a Poisson map
+    family: the route :class:`jetgaudin.exact_chain._ChainExactFlow`, ``kind`` ``"chain_exact"``; ``backend``
+    NUMPY, or COMPILED: the compiled solve and loop, ``AUTO``: compiled where the family has them).  ``dt``: either
+    sign (``−dt`` is :meth:`inverse`).  It preserves the integrals, is a Poisson map
     and real; the step *is* the flow (``order = None``).  Not chunk-invariant (``chunk_invariant = False``: the run
     layer cuts runs into fixed chunks).  ``ChainExactFlow`` is this class (its old name for chains; its old third and
     fourth positional arguments were ``rho_factor, substeps``: pass them by keyword).
@@ -410,11 +411,7 @@ class ExactFlow(_SystemMap):
         kw: dict[str, Any] = {"substeps": substeps}
         if rho_factor is not None:
             kw["rho_factor"] = rho_factor
-        if "backend" in getattr(cls, "__dataclass_fields__", {}):
-            kw.update(backend=backend, kernel=kernel)
-        elif {Backend.parse(backend), Backend.parse(kernel or "auto")} - {Backend.AUTO, Backend.NUMPY}:
-            raise InvalidParameterError("the exact flow of a chain has no backend choice (each of its maps runs on its "
-                                        "own route inside): backend (kernel) must be 'auto' or 'numpy'")
+        kw.update(backend=backend, kernel=kernel)  # both implementations take the maps' rule (numpy, compiled, auto)
         self._adopt(cls(H, dt, **kw), sk)
 
     @classmethod
