@@ -45,9 +45,11 @@ class Health:
         """``drift / max(1, |I(X_0)|)``, shape ``(..., k)``."""
         return self.drift / self.scale
 
-    def check(self, steps: list[int], S: np.ndarray) -> Failure | None:
+    def check(self, steps: list[int], S: np.ndarray, *, record: bool = True) -> Failure | None:
         """Check the states ``S`` ``(m, ..., n)`` reached at ``steps``; update the maxima with the rows up to the
-        first bad one; return the first breach or ``None``."""
+        first bad one; return the first breach or ``None``.  ``record=False`` (a state that is not saved, e.g. the
+        end of a kernel call off the save grid, where calls end by the clock): checked, but the maxima are updated
+        only if it breaches, so the reported drift is that of the saved rows, the same at any call length."""
         if len(steps) == 0:
             return None
         S = np.asarray(S)
@@ -58,6 +60,8 @@ class Health:
         rows = rel.reshape(len(steps), -1)
         bad_row = ~np.all(np.isfinite(rows), axis=1) | np.any(rows > self.limits.max_drift, axis=1)
         first = int(np.argmax(bad_row)) if np.any(bad_row) else len(steps)
+        if first == len(steps) and not record:
+            return None
         upto = min(first + 1, len(steps))
         fin = np.where(np.isfinite(d[:upto]), d[:upto], 0.0)
         self.drift = np.maximum(self.drift, fin.max(axis=0))
