@@ -129,8 +129,9 @@ def test_chain_flow_map_is_a_map_rebuilt_from_its_description(tmp_path):
 def test_reported_drift_is_the_saved_rows_at_any_flush_interval(tmp_path, monkeypatch, flush):
     # The end of a kernel call off the save grid is health-checked but, unless it breaches, not folded into the
     # reported maxima: the drift must not depend on where the clock ended the calls (flush 0: every call is checked
-    # and appended on its own; calls of 2 steps on a save grid of 7 end off the grid; 1e9: one append per chunk). Exact equality: the same integrals of the same states. (Planted: the end state recorded again -> the
-    # flush-0 case fails; that the max over the saved rows differs from the max over every step is checked below.)
+    # and appended on its own; calls of 2 steps on a save grid of 7 end off the grid; 1e9: one append per chunk).
+    # Exact equality: the same integrals of the same states. (Planted: the end state recorded again -> the flush-0
+    # case fails; that the max over the saved rows differs from the max over every step is checked below.)
     from jetgaudin.run import driver
 
     monkeypatch.setattr(driver, "FLUSH_SECONDS", flush)
