@@ -376,15 +376,15 @@ def _device_health_class(base: Any) -> type:
         def sphere(self, value: float) -> None:
             self.__dict__["_sphere"] = float(value)
 
-        def check(self, steps: list[int], S: np.ndarray) -> Any:
+        def check(self, steps: list[int], S: np.ndarray, *, record: bool = True) -> Any:
             r = self.resident
-            if not r.taken:
-                return base.check(self, steps, S)
+            if not r.taken:  # e.g. the end of a call off the save grid (record=False): on the host, as on the CPU
+                return base.check(self, steps, S, record=record)
             first = r.check_taken(len(steps))
             if first is None:
                 return None
             if first < 0:
-                return base.check(self, steps, S)
+                return base.check(self, steps, S, record=record)
             bad = base.check(self, [steps[first]], np.asarray(S)[first:first + 1])  # worded as on the CPU route
             if bad is not None:
                 bad.index = first
