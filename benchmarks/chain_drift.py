@@ -5,6 +5,12 @@ exponent p of ``max drift ~ n^p`` on an ensemble of orbits (issue 33: round-off 
     python benchmarks/chain_drift.py --orbits 64 --compiled-max 100000 --numpy-max 1000
     python benchmarks/chain_drift.py --compiled-max 0 --only rational   # the NumPy route only
     python benchmarks/chain_drift.py --compiled-max 0 --numpy-max 1000000 --only elliptic --jsonl /tmp/ell.jsonl
+    python benchmarks/chain_drift.py --persistence 1000000 --only rational      # a bias per orbit (compiled)
+
+``--persistence N``: a bias whose sign depends on the orbit leaves the ensemble's mean (``z``) at zero but makes
+each orbit drift linearly.  The compiled route's ``N`` steps are cut into four quarters; for each integral the
+correlation over the orbits of the changes in two quarters, averaged over the six pairs, is printed (a random walk's
+quarters are independent: ~0 ± 0.13 with 64 orbits; an orbit-wise linear drift: up to 1).
 
 ``--jsonl PATH`` appends one JSON line per point ``n`` as it is reached (map, route, orbits, n, drift, the fit so far,
 ``z``, machine) and keeps the ensemble's state after every ``--chunk`` steps in ``PATH.<map>.<route>.npz``: a run
@@ -51,6 +57,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--compiled-max", type=int, default=10**6, help="longest compiled run (from 10^3)")
     ap.add_argument("--numpy-max", type=int, default=10**5, help="longest NumPy run (from 10^3)")
     ap.add_argument("--only", default="", help="run the maps whose name contains this text")
+    ap.add_argument("--persistence", type=int, default=0, help="steps of the per-orbit bias test (compiled)")
     ap.add_argument("--jsonl", default="", help="append one JSON line per point n; resume from its checkpoints")
     ap.add_argument("--chunk", type=int, default=10000, help="steps between checkpoints (with --jsonl)")
     return ap
@@ -111,6 +118,22 @@ def _save(path: str, X, carry, done: int, out: list[float], worst: float) -> Non
     os.replace(tmp, path)
 
 
+def persistence(changes: np.ndarray) -> np.ndarray:
+    """The mean over the pairs of quarters of the correlation over the orbits of each integral's changes in them:
+    ``changes`` ``(4, orbits, k)`` (the change in each quarter) -> ``(k,)`` (module docstring)."""
+    c = [[np.corrcoef(changes[i, :, k], changes[j, :, k])[0, 1] for i in range(4) for j in range(i + 1, 4)]
+         for k in range(changes.shape[2])]
+    return np.mean(c, axis=1)
+
+
+def quarter_changes(m, X0: np.ndarray, n: int) -> np.ndarray:
+    """The relative change of every integral of every orbit in each quarter of ``n`` steps, ``(4, orbits, k)``."""
+    I0 = m.integrals(X0)
+    rows = m.advance(X0, None, n - n % 4, n // 4).rows
+    I = (m.integrals(rows) - I0) / np.maximum(1.0, np.abs(I0))
+    return np.diff(np.concatenate([np.zeros((1,) + I.shape[1:]), I]), axis=0)
+
+
 def exponent(ns: list[int], d: list[float]) -> float:
     return float(np.polyfit(np.log(ns), np.log(d), 1)[0]) if len(ns) > 1 else float("nan")
 
@@ -122,6 +145,12 @@ def main(argv=None) -> None:
         if args.only not in name:
             continue
         X0 = states(m, args.orbits)
+        if args.persistence:
+            p = persistence(quarter_changes(m.with_backend("compiled"), X0, args.persistence))
+            names = m.integral_names() if hasattr(m, "integral_names") else [f"I{k}" for k in range(len(p))]
+            cells = "  ".join(f"{k}: {v:+.2f}" for k, v in zip(names, p, strict=True))
+            print(f"{name:20s} compiled  persistence over {args.persistence} steps   {cells}", flush=True)
+            continue
         for route, n_max in (("compiled", args.compiled_max), ("numpy", args.numpy_max)):
             ns = grid(n_max)
             if not ns:

@@ -290,3 +290,46 @@ def test_the_kernels_products_with_two_word_constants_are_rounded_once_and_unbia
         err = np.array(err)
         assert np.max(np.abs(err)) <= bound and abs(err.mean()) < 0.05, (name, np.max(np.abs(err)), err.mean())
     assert np.mean(ep) < -0.2  # the bias the low word removes
+
+
+def _chain_drift_module():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "chain_drift.py"
+    spec = importlib.util.spec_from_file_location("_test_chain_drift_bench", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_persistence_score_tells_an_orbitwise_bias_from_a_random_walk(rng):
+    """``benchmarks/chain_drift.py --persistence`` (docs/reliability.md, "Drift like round-off"): the mean
+    correlation over the orbits of the changes in two quarters.  Synthetic changes ``(4, 64, 2)``: independent steps
+    of a random walk give a score near 0 (the correlation of 64 pairs has sd ~1/√61 = 0.13; the mean of six pairs
+    is within ±0.3 at > 3 sd), a drift per orbit of random sign twice the walk's size gives > 0.6 (the expected
+    correlation is 4/(4 + 1) = 0.8, the sd again ~0.1).  Planted: the quarters' changes taken from different
+    orbits (the orbits shuffled between quarters) give ~0 for the drift too and fail."""
+    cd = _chain_drift_module()
+    walk = rng.normal(size=(4, 64, 2))
+    bias = 2.0 * rng.choice([-1.0, 1.0], size=(1, 64, 2)) * rng.uniform(0.5, 1.5, size=(1, 64, 2))
+    assert np.all(np.abs(cd.persistence(walk)) < 0.3), cd.persistence(walk)
+    assert np.all(cd.persistence(walk + bias) > 0.6), cd.persistence(walk + bias)
+
+
+def test_quarter_changes_add_up_to_the_whole_change():
+    """``quarter_changes`` returns each quarter's change (a difference of the cumulative changes), so that the four
+    add up to the change over all ``n`` steps, relative to ``max(1, |I_0|)`` (100 steps of the NumPy rational chain,
+    64 orbits; the cumulative changes evaluated here on the same rows, ``integrals`` of a different batch shape
+    rounds differently at ~2e-16).  Tolerance 1e-29 absolute: the changes are ~1e-15 and the differences and their
+    sum round at ~1e-31; a cumulative change returned in place of the quarter's is off by ~1e-15."""
+    cd = _chain_drift_module()
+    B = MODEL.two_point_backlund(ETA, kernel="numpy")
+    q = cd.quarter_changes(B, X0, 100)
+    I0 = B.integrals(X0)
+    rows = B.advance(X0, None, 100, 25).rows
+    cumulative = (B.integrals(rows) - I0) / np.maximum(1.0, np.abs(I0))
+    assert q.shape == (4, 64, 6) and np.array_equal(rows[-1], B.advance(X0, None, 100, 100).X)
+    assert np.mean(cumulative[-1] != 0) > 0.5  # changes to add up
+    assert np.allclose(q.sum(axis=0), cumulative[-1], rtol=0, atol=1e-29)
+    assert np.array_equal(q[0], cumulative[0])
