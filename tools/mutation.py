@@ -61,7 +61,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     # the test_bite_* files (issue 33) first in a selection: pytest -x stops at the first failure, and they are fast
     "_fs.py": ("tests/test_bite_disk.py", "tests/test_fs.py"),
     # the disk-space reservation before HDF5 writes (fallocate, RLIMIT_FSIZE, the reserve file)
-    "_space.py": ("tests/test_bite_run.py", "tests/test_fs.py"),
+    "_space.py": ("tests/test_bite_disk.py", "tests/test_bite_run.py", "tests/test_fs.py"),
     # the GPU drivers, tested on Numba's CUDA simulator (tests/test_gpu.py sets NUMBA_ENABLE_CUDASIM=1 before
     # numba.cuda is imported: the kernels run as Python, so a mutated kernel needs no compiler and no GPU)
     "gpu/_device.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
