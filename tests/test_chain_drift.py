@@ -380,3 +380,42 @@ def test_the_rational_chain_drifts_by_no_bias_per_orbit():
     B = GM(1.0, [(-0.5, 1), (0.4, 2)]).two_point_backlund(1.5 + 0.2j, kernel="compiled")
     score = cd.persistence(cd.quarter_changes(B, cd.states(B, 64), 10**6))
     assert np.all(score < 0.4), score
+
+
+@pytest.mark.parametrize("family, kw", [("trigonometric", {"gamma": 1.0}), ("elliptic", {"modulus": 0.6})])
+def test_the_vectorised_compensated_sums_are_the_term_by_term_sums_bit_for_bit(family, kw):
+    """``family_lax`` and ``family_site_series`` (``gaudin/_compensated.py``) sum all entries side by side, one NumPy
+    call per term (the NumPy route's speed: issue 33, the NumPy drift runs to 10⁶); each entry must be the
+    compensated sum of its own nonzero terms in increasing order, bit for bit (the arithmetic the drift fits measured).
+    Reference: the sums entry by entry with :func:`acc` / :func:`cacc`, zero constants skipped.  Exact comparison:
+    the same operations in the same order.  Planted: the low word dropped in either vectorised sum fails (the
+    terms in reverse order do not: a compensated sum is the exact sum rounded once, whatever the order)."""
+    from jetgaudin.gaudin._compensated import acc, cacc, exact_tables, family_lax, family_site_series
+
+    model = GaudinModel(1.0 if family == "trigonometric" else 0.0, [(-0.5, 1), (0.4, 2)], family=family, **kw)
+    X = 0.5 * np.random.default_rng(3).normal(size=(16, model.n_state))
+    c = np.random.default_rng(4).normal(size=(16, model.family.n_dressing)) * (1 + 0.5j)
+    f, T, _ = exact_tables(model, ETA)
+    y = X.reshape(16, model.M, 3)
+    L = family_lax(model, X, ETA)
+    comp = []
+    for a in range(3):
+        z = np.zeros(16)
+        sr, si, er, ei = z + (model.b if a == 2 else 0.0), z.copy(), z.copy(), z.copy()
+        for k in range(model.M):
+            sr, er = acc(sr, er, y[:, k, a], f[0, a, k].real, f[1, a, k].real)
+            si, ei = acc(si, ei, y[:, k, a], f[0, a, k].imag, f[1, a, k].imag)
+        comp.append((sr + er) + 1j * (si + ei))
+    x1, x2, u = comp
+    for got, ref in ((L[:, 0, 0], u), (L[:, 0, 1], x1 - 1j * x2), (L[:, 1, 0], x1 + 1j * x2), (L[:, 1, 1], -u)):
+        assert np.array_equal(got, ref)
+    series = family_site_series(model, c, ETA)
+    for i, (_, N) in enumerate(model.sites):
+        for n in range(N):
+            for e in range(4):
+                z = np.zeros(16)
+                sr, si, er, ei = z, z.copy(), z.copy(), z.copy()
+                for p in range(c.shape[-1]):
+                    if T[0, i, n, p, e] != 0:
+                        sr, si, er, ei = cacc(sr, si, er, ei, c[:, p], T[0, i, n, p, e], T[1, i, n, p, e])
+                assert np.array_equal(series[i][0][n][:, e // 2, e % 2], (sr + er) + 1j * (si + ei)), (i, n, e)

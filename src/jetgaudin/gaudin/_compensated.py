@@ -154,7 +154,9 @@ def _series_plan(model, xi: complex) -> tuple[np.ndarray, np.ndarray, np.ndarray
     the terms in increasing ``p``; an entry with fewer than ``K`` terms is padded with zero constants, which add
     exact zeros (``a·0 = ±0``, ``two_prod``'s error ``0``: the sums and their errors never being ``−0``, the same bits
     as the term left out)."""
-    T = exact_tables(model, xi)[1]  # (2, S, Nmax, P, 4)
+    tables = exact_tables(model, xi)
+    assert tables is not None  # called by family_site_series after its own check
+    T = tables[1]  # (2, S, Nmax, P, 4)
     terms = [[p for p in range(T.shape[3]) if T[0, i, n, p, e] != 0]
              for i, (_, N) in enumerate(model.sites) for n in range(N) for e in range(4)]
     where = [(i, n, e) for i, (_, N) in enumerate(model.sites) for n in range(N) for e in range(4)]
