@@ -82,3 +82,47 @@ def test_a_bounded_read_asks_for_at_most_one_byte_past_the_cap(tmp_path, monkeyp
     with pytest.raises(RunDirectoryError, match="larger than the 1000 bytes"):
         fs.read_bytes(tmp_path, "g", cap)
     assert sum(asked) == cap + 1  # read one byte past the cap, then refused: no more is taken in
+
+
+def test_the_file_size_limit_is_checked_on_the_size_plus_the_bytes_to_the_byte(tmp_path, monkeypatch):
+    """``_space.reserve_space`` under a soft ``RLIMIT_FSIZE`` of 1000 bytes (faked; fallocate faked to succeed): a
+    file of 100 bytes takes 900 more (``size + nbytes`` equal to the limit is allowed), not 901, and nothing is
+    written.  Written for the mutants of that line (``docs/mutation.md``, issue 33 sample of ``_space.py``):
+    ``size + nbytes`` → ``size × nbytes`` or ``size ÷ nbytes``, ``>`` → ``≤``, ``soft != RLIM_INFINITY`` →
+    ``soft < RLIM_INFINITY`` (``RLIM_INFINITY`` is −1 on Linux: the check never fires)."""
+    import resource
+
+    from jetgaudin import _space
+    from jetgaudin._errors import RunIOError
+
+    (tmp_path / "f").write_bytes(b"x" * 100)
+    real = resource.getrlimit
+    monkeypatch.setattr(resource, "getrlimit",
+                        lambda which: (1000, resource.RLIM_INFINITY) if which == resource.RLIMIT_FSIZE else real(which))
+    monkeypatch.setattr(_space, "_fallocate_keep_size", lambda fd, offset, length: None)
+    _space.reserve_space(tmp_path, "f", 900)
+    with pytest.raises(RunIOError, match="file size limit"):
+        _space.reserve_space(tmp_path, "f", 901)
+    assert (tmp_path / "f").stat().st_size == 100
+
+
+def test_without_fallocate_the_free_space_is_checked_to_the_byte(tmp_path, monkeypatch):
+    """Where ``fallocate`` is unsupported (``EOPNOTSUPP``, faked) ``reserve_space`` compares the bytes with the file
+    system's free space ``f_bavail × f_frsize`` (faked: 10 blocks of 4096 bytes): 40960 bytes fit, 40961 are a
+    full disk, one line naming it.  Written for the mutants ``f_bavail × f_frsize`` → ``f_bavail + f_frsize`` and
+    ``<`` → ``==`` (``docs/mutation.md``)."""
+    from types import SimpleNamespace
+
+    from jetgaudin import _space
+    from jetgaudin._errors import RunIOError
+
+    def unsupported(fd, offset, length):
+        raise OSError(errno.EOPNOTSUPP, "fallocate is not available")
+
+    (tmp_path / "f").write_bytes(b"")
+    monkeypatch.setattr(_space, "_fallocate_keep_size", unsupported)
+    monkeypatch.setattr(_space.os, "fstatvfs", lambda fd: SimpleNamespace(f_bavail=10, f_frsize=4096))
+    _space.reserve_space(tmp_path, "f", 40960)
+    with pytest.raises(RunIOError, match="disk full") as e:
+        _space.reserve_space(tmp_path, "f", 40961)
+    assert "\n" not in str(e.value)

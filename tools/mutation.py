@@ -60,6 +60,8 @@ GROUPS: dict[str, tuple[str, ...]] = {
                      "tests/test_reliability_runlayer.py"),
     # the test_bite_* files (issue 33) first in a selection: pytest -x stops at the first failure, and they are fast
     "_fs.py": ("tests/test_bite_disk.py", "tests/test_fs.py"),
+    # the disk-space reservation before HDF5 writes (fallocate, RLIMIT_FSIZE, the reserve file)
+    "_space.py": ("tests/test_bite_disk.py", "tests/test_bite_run.py", "tests/test_fs.py"),
     # the GPU drivers, tested on Numba's CUDA simulator (tests/test_gpu.py sets NUMBA_ENABLE_CUDASIM=1 before
     # numba.cuda is imported: the kernels run as Python, so a mutated kernel needs no compiler and no GPU)
     "gpu/_device.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
@@ -75,7 +77,7 @@ PER_MODULE = {"backlund/kernels/_scalar.py": 5, "backlund/kernels/_n3.py": 5, "b
               "families/trigonometric.py": 4, "families/elliptic.py": 4, "families/_jacobi.py": 4,
               "gaudin/model.py": 4, "gaudin/maps.py": 3, "gaudin/_backend.py": 4, "gaudin/_curve.py": 2,
               "exact.py": 6, "exact_chain.py": 6, "events.py": 12, "solve.py": 12,
-              "run/driver.py": 5, "run/health.py": 3, "run/store.py": 5, "_fs.py": 12,
+              "run/driver.py": 5, "run/health.py": 3, "run/store.py": 5, "_fs.py": 12, "_space.py": 10,
               "gpu/_device.py": 2, "gpu/_drivers.py": 4, "gpu/_kernels.py": 4, "gpu/_resident.py": 4}
 DEFAULT_PER_MODULE = 6
 
@@ -90,7 +92,7 @@ AREAS: dict[str, tuple[str, ...]] = {
     "events": ("events.py",),
     "solve": ("solve.py",),
     "run": ("run/driver.py", "run/health.py", "run/store.py"),
-    "disk": ("_fs.py",),
+    "disk": ("_fs.py", "_space.py"),
     "gpu": ("gpu/_device.py", "gpu/_drivers.py", "gpu/_kernels.py", "gpu/_resident.py"),
 }
 

@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit, prange
 
 from ._compensated import exact_tables
-from ._kernels import _abs2, _ctw, _put_site, _tw  # first: it applies the Bäcklund kernels' Numba target
+from ._kernels import _abs2, _ctw, _put_site, _split, _tw  # first: it applies the Bäcklund kernels' Numba target
 
 
 @njit(cache=True)
@@ -127,14 +127,20 @@ def _coefficients(rule, gk, a1, a2, c):
     # determinant at every step, whose reciprocal then rounds alike at every step (a linear drift of the integrals;
     # gaudin.maps.monic_series, issue 33); the dressing D ℓ adj D / det D does not depend on D's scale
     if rule == 0:  # rational: n (1, M0_00, M0_01, M0_10, 1, M0_11), M0 of backlund._dressing.real_two_point_M0
+        # each product with η's parts split and rounded once (gaudin._kernels._split: a decimal η, 0.2 = the double
+        # nearest 1/5, rounds its products with a bias of its own, a linear drift of each orbit's integrals)
         eta = gk[0]
-        cc = 2j * eta.imag
+        ra, rb = _split(eta.real)
+        ia, ib = _split(eta.imag)
+        er = _tw(n, ra, rb)
+        ei = _tw(n, ia, ib) - _tw(q, 2.0 * ia, 2.0 * ib)
+        t1 = complex(_tw(a1.imag, 2.0 * ia, 2.0 * ib), -_tw(a1.real, 2.0 * ia, 2.0 * ib))  # −cc a1, cc = 2i Im η
         c[0] = n
-        c[1] = -eta * n + cc * q
-        c[2] = -cc * a1 * a2.conjugate()
-        c[3] = -cc * a1.conjugate() * a2
+        c[1] = complex(-er, -ei)  # −η n + cc q
+        c[2] = t1 * a2.conjugate()
+        c[3] = complex(-t1.real, t1.imag) * a2  # −cc ā1 = −conj(−cc a1)
         c[4] = n
-        c[5] = -eta.conjugate() * n - cc * q
+        c[5] = complex(-er, ei)  # −η̄ n − cc q
     elif rule == 2:
         _elliptic_coefficients(gk, a1, a2, c)
     else:  # trigonometric: families.trigonometric.gauge_rule("symmetric")

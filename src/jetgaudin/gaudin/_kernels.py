@@ -76,6 +76,25 @@ def _ctw(a, h, lo):
     return complex(re, im)
 
 
+#: the generic factor of :func:`_split` (the fixed point of cos: a mantissa with no short period)
+_KAPPA = 0.7390851332151607
+
+
+@njit(cache=True, inline="always")
+def _split(c):
+    """``c = a + b`` exactly, ``a = fl(κ c)`` with the generic ``κ`` = :data:`_KAPPA` (``b = c − a`` is exact:
+    ``a`` is within a factor 2 of ``c``).
+
+    Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): the rounding of ``c·x`` is biased when ``c``'s
+    binary mantissa has a short period, as the site and ``η`` constants typed as decimals do (``0.2``, ``0.4`` are
+    the doubles nearest ``1/5``, ``2/5``: over uniformly random mantissas of ``x``, ``fl(0.2 x)`` is low by 0.006 ulp
+    on average, 30 standard errors, because the bits it drops are those of ``x·4/5 mod 1``, five clusters rather than a
+    uniform spread).  ``_tw(x, a, b) = fma(x, a, fl(x·b))`` is ``c·x`` rounded once after the generic product
+    ``x·b``'s own rounding error: the final rounding is dithered and unbiased."""
+    a = c * _KAPPA
+    return a, c - a
+
+
 @njit(cache=True, inline="always")
 def _mm(a00, a01, a10, a11, b00, b01, b10, b11):
     return (a00 * b00 + a01 * b10, a00 * b01 + a01 * b11, a10 * b00 + a11 * b10, a10 * b01 + a11 * b11)
@@ -150,15 +169,23 @@ def _step(x, out, b, eta, nu_prev, f, flo, g, site_pos, site_off, site_n, M, w0,
     # K = n2 (λ + M0) (eq. (mm) times |k|², no division): the dressing does not depend on the factor, and with a
     # factor varying along the orbit the rounding of K and of 1/det K changes from step to step (a normalised K has
     # a constant det whose reciprocal rounds alike at every step: a linear drift; gaudin.maps.monic_series, issue 33)
-    t = 2j * eta.imag
+    # every product with η's parts and the sites as c·x = _tw(x, a, b), c = a + b split by _split: a decimal constant
+    # (0.2 = the double nearest 1/5) rounds its products with a bias of its own (_split), which made each orbit's
+    # integrals drift linearly, the sign depending on the orbit (benchmarks/chain_drift.py --persistence)
+    ra, rb = _split(eta.real)
+    ia, ib = _split(eta.imag)
     ak2 = _abs2(k2)
-    m00 = -eta * n2 + t * ak2
-    m01 = -t * k1 * k2.conjugate()
-    m10 = -t * k1.conjugate() * k2
-    m11 = -eta.conjugate() * n2 - t * ak2
+    er = _tw(n2, ra, rb)  # Re η · n2
+    ei = _tw(n2, ia, ib) - _tw(ak2, 2.0 * ia, 2.0 * ib)  # Im η · (n2 − 2|k2|²)
+    m00 = complex(-er, -ei)  # −η n2 + t |k2|², t = 2i Im η
+    m11 = complex(-er, ei)  # −η̄ n2 − t |k2|²
+    tk1 = complex(_tw(k1.imag, 2.0 * ia, 2.0 * ib), -_tw(k1.real, 2.0 * ia, 2.0 * ib))  # −t k1
+    m01 = tk1 * k2.conjugate()
+    m10 = complex(-tk1.real, tk1.imag) * k2  # −t k̄1 = −conj(−t k1)
     s2 = n2 * n2
     for i in range(site_pos.shape[0]):
-        lam = site_pos[i] * n2
+        pa, pb = _split(site_pos[i])
+        lam = _tw(n2, pa, pb)
         o = site_off[i]
         N = site_n[i]
         K00 = m00 + lam
