@@ -308,15 +308,7 @@ class _TopExactFlow(FixedStep, Map):
     into fixed chunks, which keeps resume bit for bit); ``AUTO``: compiled.  No carry (zeros): each kernel call
     takes ``ν(η_j)`` by the branch rule.  Not an integrator with an order: the step *is* the flow
     (``order = None``); it preserves the integrals, is a Poisson map (a composition of Poisson maps and a rotation)
-    and real.
-
-    >>> import jetgaudin as jg, numpy as np
-    >>> H = jg.physical_hamiltonian(3, 1.0)
-    >>> X0 = [-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0]
-    >>> X1 = jg.ExactFlow(H, 0.05).iterate(X0, 2)[-1]
-    >>> ref = jg.integrate(H, X0, 0.1, rtol=1e-13, atol=1e-13).X[-1]
-    >>> bool(np.max(np.abs(X1 - ref)) < 1e-12)
-    True
+    and real.  (The example is the public class's, :class:`jetgaudin.ExactFlow`.)
     """
 
     H: IntegralHamiltonian

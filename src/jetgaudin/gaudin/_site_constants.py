@@ -34,6 +34,7 @@ from .._errors import InvalidParameterError
 from .._validate import jet_constants
 from ..lax import jet_coefficients
 from ..maps import Advance, Backend, Map, MapProperties
+from ._model_map import ModelMap
 
 __all__ = ["split_sites", "jet_matrix", "SiteConstantsMap", "conjugated"]
 
@@ -127,10 +128,12 @@ def forms(S: np.ndarray, q: np.ndarray, lin: np.ndarray) -> tuple[np.ndarray, np
 
 
 @dataclass(frozen=True)
-class SiteConstantsMap(Map):
+class SiteConstantsMap(ModelMap, Map):
     r"""``X ↦ P^{-1} B(P X)``: the map ``inner`` of ``model.reduced`` on the model ``model`` with jet constants (module
-    doc; ``P = model.to_reduced``).  The same properties as ``inner`` (a Poisson isomorphism conjugates a Poisson,
-    integral-preserving map into one); ``carry`` is ``inner``'s (``ν(η)`` is the same on both sides)."""
+    doc; ``P = model.to_reduced``); ``n_state``, ``integrals``, the integral and state labels are the model's
+    (:class:`~jetgaudin.gaudin._model_map.ModelMap`).  The same properties as ``inner`` (a Poisson isomorphism
+    conjugates a Poisson, integral-preserving map into one); ``carry`` is ``inner``'s (``ν(η)`` is the same on both
+    sides)."""
 
     model: Any
     inner: Map
@@ -149,9 +152,6 @@ class SiteConstantsMap(Map):
     def properties(self) -> MapProperties:  # type: ignore[override]
         return self.inner.properties
 
-    @property
-    def n_state(self) -> int:
-        return int(self.model.n_state)
 
     @property
     def has_compiled(self) -> bool:
@@ -185,16 +185,8 @@ class SiteConstantsMap(Map):
     def prepare_kernels(self, X=None, steps=None, notify=None):
         return self._inner().prepare_kernels(None if X is None else self.model.to_reduced(X), steps, notify)
 
-    def integrals(self, X) -> np.ndarray:
-        return self.model.integrals(X)
 
-    def integral_names(self) -> list[str]:
-        """The model's integral labels (the run layer's reports)."""
-        return self.model.integral_labels()
 
-    def state_labels(self) -> list[str]:
-        """The model's state labels (the run layer's ``orbit.csv`` columns)."""
-        return self.model.labels()
 
     def start(self, X) -> np.ndarray:
         return self._inner().start(self.model.to_reduced(X))
