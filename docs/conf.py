@@ -125,6 +125,13 @@ def _api_lines(title: str, module: str, names, seen: dict) -> list[str]:
         if name == "__version__":
             continue
         obj = getattr(mod, name)
+        if inspect.isclass(obj) and obj.__name__ != name and getattr(mod, obj.__name__, None) is obj:
+            # an old name of a class of this page (ChainTwoPointBacklund is TwoPointBacklund): its own short entry
+            target = obj.__name__
+            lines += [f".. py:class:: {name}", "",
+                      f"   The same class as :class:`{target}`, under its old name (``isinstance`` holds both ways; "
+                      "its old signature is accepted).", ""]
+            continue
         if (inspect.isclass(obj) or inspect.isfunction(obj)) and id(obj) in seen:
             again.append(f":py:obj:`{name} <{seen[id(obj)]}>`")
             continue
