@@ -1,6 +1,7 @@
 """Python-side constants of :class:`jetgaudin.ChainExactFlow`'s compiled solve (private): the family constants of the
 compiled basis (per family parameter), the model-only constants of a flow (per flow, weak keys: nothing outlives its
-flow), and the trigonometric branch points from the compiled polynomial.  Split from :mod:`jetgaudin.exact_chain`
+flow), the trigonometric branch points from the compiled polynomial, the real parts of a periodic family's
+parameters and the linear identities among the matched integrals.  Split from :mod:`jetgaudin.exact_chain`
 (its size); Numba is imported on first use only."""
 
 from __future__ import annotations
@@ -74,3 +75,41 @@ def _trig_roots(model, hI: np.ndarray, const: float, pos: np.ndarray, orders: np
             "branch rule of nu needs b != 0 or J != 0")
     raw = _roots(Q)
     return raw, model.family.uniformizer_inverse(raw)
+
+
+def _periodic_real_parts(lc: float, P: float, k: int, points: np.ndarray) -> np.ndarray:
+    """``k`` real parts in one period ``[lc, lc + P)`` (a periodic family): greedily the points of a 256-point grid
+    farthest from every site and branch point (``points``, with their images at ``± P``), at least ``P/(4k)`` apart
+    from each other (the rational rule ``λ_c + cR/t_j`` could wrap onto a site)."""
+    grid = lc + P * np.arange(256) / 256
+    imgs = np.concatenate([points - P, points, points + P])
+    score = np.min(np.abs(grid[:, None] - imgs[None, :]), axis=1)
+    order = np.argsort(-score, kind="stable")
+    free = np.ones(len(grid), dtype=bool)  # at least P/(4k) from every chosen point (the same test, vectorised)
+    chosen: list[float] = []
+    while len(chosen) < k and free.any():
+        c = grid[order[np.argmax(free[order])]]  # the best-scored free point
+        chosen.append(float(c))
+        d = np.abs(grid - c)
+        free &= np.minimum(d, P - d) >= P / (4 * k)
+    return np.array(sorted(chosen))
+
+
+@lru_cache(maxsize=64)
+def _periodic_real_parts_of_sites(lc: float, P: float, k: int, sites: tuple[float, ...]) -> np.ndarray:
+    """:func:`_periodic_real_parts` for points that are the sites only (a read-only array, cached)."""
+    out = _periodic_real_parts(lc, P, k, np.array(sites, dtype=complex))
+    out.setflags(write=False)
+    return out
+
+
+def _identities(model, keep: np.ndarray) -> np.ndarray:
+    """Orthonormal rows ``c`` with ``Σ_I c_I I(X)`` constant on every state: the linear identities among the matched
+    integrals (elliptic: ``Σ_i h_{i,1} = 0``, the residue theorem; trigonometric: one between the ``h_{i,1}`` and
+    ``J``; rational with ``b = 0``: ``Σ_i h_{i,1} = 0``), from the integrals at ``4 n`` random states (singular values
+    below ``1e-10`` of the largest).  Weights along them do not change the flow: each is a free unknown."""
+    rng = np.random.default_rng(20251125)
+    V = np.asarray(model.integrals(rng.standard_normal((4 * model.n_integrals + 8, model.n_state))))[:, keep]
+    _, sv, vt = np.linalg.svd(V - V.mean(axis=0))
+    sv = np.concatenate([sv, np.zeros(vt.shape[0] - len(sv))])
+    return vt[sv <= 1e-10 * sv[0]]

@@ -41,7 +41,7 @@ from .._system_maps import OnePointBacklund
 from ..backlund._dressing import adj, spectral_s
 from ..lax import ell_coefficients, ell_from_xi, state_from_ell
 from ..maps import Backend, Branch, MapProperties, register_map
-from ._dressing import dressing_at, site_series
+from ._dressing import dress_parts, dress_sites, dressing_at, site_series
 from ._model_map import register_model_map
 from .maps import (
     _RESIDUAL_TOL,
@@ -51,8 +51,6 @@ from .maps import (
     _ell_at,
     _residual,
     _sites,
-    dress_parts,
-    dress_sites,
 )
 from .model import GaudinModel
 

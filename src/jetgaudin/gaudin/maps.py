@@ -43,7 +43,7 @@ from ..maps import Advance, Backend, Branch, Map, MapProperties, check_count, ch
 from ._backend import AUTO_MIN_WORK, CHAIN_COMPILE_S, resolve_backend
 from ._compensated import acc, family_lax, family_site_series, scaled_two_point_K0
 from ._curve import nu_with_roots
-from ._dressing import dressing_at, real_coefficients, site_series
+from ._dressing import dress_sites, dressing_at, monic_series, real_coefficients, site_series
 from ._model_map import register_model_map
 from .model import GaudinModel
 
@@ -110,85 +110,6 @@ def _ell_at(model, parts, lam):
         si, ei = acc(si, ei, P.real, f[c].imag, flo[c].imag)
         si, ei = acc(si, ei, P.imag, f[c].real, flo[c].real)
     return (sr + er) + 1j * (si + ei)
-
-
-def _inv_series(d, order):
-    """Taylor coefficients of ``1/(d + z)``: ``(−1)^p d^{−(p+1)}``, ``p < order``."""
-    return [(-1) ** p * d ** (-(p + 1)) for p in range(order)]
-
-
-def dress_parts(model, parts, K0, E, A0, Ea, zeros):
-    r"""Principal parts of ``K ℓ adj(K)/Π_r(λ − ζ_r)`` at every site (module docstring), ``(B, M, 2, 2)``.
-
-    ``K = λE + K0``, ``adj K = λE_a + A0`` (``K0``, ``A0``: ``(B, 2, 2)``), ``zeros``: the scalars ``ζ_r``."""
-    series = []
-    for lam_i, N in model.sites:
-        g = np.zeros(N, dtype=complex)
-        g[0] = 1.0
-        for z in zeros:
-            g = np.convolve(g, _inv_series(lam_i - z, N))[:N]
-        series.append(((K0 + lam_i * E, np.broadcast_to(E, K0.shape)),
-                       (A0 + lam_i * Ea, np.broadcast_to(Ea, A0.shape)), g))
-    return dress_sites(model, parts, series)
-
-
-def dress_sites(model, parts, series):
-    r"""Principal parts of ``D ℓ adj(D) / det D`` at every site, ``(B, M, 2, 2)``, from ``series[i] = (Ka, Aa, g)``:
-    the Taylor coefficients at ``λ_i`` of ``D`` and ``adj D`` (sequences of ``(B, 2, 2)``) and of ``1/det D``
-    (``(N_i,)`` or ``(N_i, B)``): ``ℓ̆_k = Σ_{j ≥ k} Σ_{a+c+e = j−k} D_a ℓ_j A_c g_e`` (module docstring)."""
-    out = np.empty_like(parts)
-    for i, (_, N) in enumerate(model.sites):
-        o = model.offsets[i]
-        Ka, Aa, g = series[i]
-        g = np.asarray(g)[..., None, None] if np.ndim(g) > 1 else g  # (N, B): one series per batch member
-        for k in range(N):
-            acc = np.zeros(parts.shape[:-3] + (2, 2), dtype=complex)
-            for j in range(k, N):
-                Pj = parts[..., o + j, :, :]
-                for a in range(min(len(Ka), j - k + 1)):
-                    KP = mm(Ka[a], Pj)
-                    for c in range(min(len(Aa), j - k - a + 1)):
-                        e = j - k - a - c
-                        acc = acc + g[e] * mm(KP, Aa[c])
-            out[..., o + k, :, :] = acc
-    return out
-
-
-def monic_series(model, M0, A0, scale=None, *, scaled=False):
-    r"""The Taylor series at every site of ``K = s(λ + M0)``, ``adj K = s(λ + A0)`` and ``1/det K`` for
-    :func:`dress_sites` (the dressing ``K ℓ adj K / det K`` does not depend on the factor ``s``, ``scale`` ``(B,)``,
-    default 1), with ``1/det K`` from the computed ``K`` itself: ``det K(λ_i + z) = d_0 + d_1 z + s² z²``,
-    ``d_0 = det K(λ_i)``, ``d_1 = s tr K(λ_i)``, inverted as a series: ``g_0 = 1/d_0``, ``g_1 = −d_1 (g_0 g_0)``,
-    ``g_m = −(d_1 (g_{m−1} g_0) + s² (g_{m−2} g_0))``.
-
-    Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): a quantity whose exact value is the same at every
-    step rounds (nearly) alike at every step, and a relative error repeated at every step is a linear drift.
-    ``det(λ + M0) = (λ − η)(λ − η̄)`` is such a constant (and the rounded ``1/((λ_i − η)(λ_i − η̄))`` used before
-    multiplied each site's Casimir by the same ``1 + δ`` at every step), and so are ``d_1 g_0`` and ``s² g_0``.  With
-    ``s`` varying along the orbit (the two-point map passes ``|k|²`` of its eigenvector) and the products grouped as
-    above, every rounded quantity varies from step to step: the rounding errors add up as a random walk.
-
-    ``scaled=True``: ``M0``, ``A0`` are already ``s M0``, ``s A0`` (``K(λ_i) = M0 + (s λ_i)``, the compiled kernel's
-    form, :func:`jetgaudin.gaudin._compensated.scaled_two_point_K0`: no normalised ``M0`` is ever rounded)."""
-    s = np.ones(M0.shape[:-2]) if scale is None else np.asarray(scale, dtype=float)
-    sI = s[..., None, None] * _ID
-    series = []
-    for lam_i, N in model.sites:
-        if scaled:
-            K = M0 + (s * lam_i)[..., None, None] * _ID
-            A = A0 + (s * lam_i)[..., None, None] * _ID
-        else:
-            K = s[..., None, None] * (M0 + lam_i * _ID)
-            A = s[..., None, None] * (A0 + lam_i * _ID)
-        g0 = 1.0 / (K[..., 0, 0] * K[..., 1, 1] - K[..., 0, 1] * K[..., 1, 0])
-        d1 = s * (K[..., 0, 0] + K[..., 1, 1])
-        g = [g0]
-        if N > 1:
-            g.append(-d1 * (g0 * g0))
-        for _ in range(2, N):
-            g.append(-(d1 * (g[-1] * g0) + s * s * (g[-2] * g0)))
-        series.append(((K, sI), (A, sI), np.array(g)))
-    return series
 
 
 def _residual(K, L, A, scale):
