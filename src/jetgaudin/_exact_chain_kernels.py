@@ -33,18 +33,19 @@ __all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_site(fid, fp, z, order, out, s, c, r, d, xc):
-    """``out[m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
-    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xc`` (8,) the
-    elliptic functions of ``Re z`` kept between points of one segment, zeros before the first)."""
+def _psi_site(fid, fp, z, order, out, o, s, c, r, d, xcache, ic):
+    """``out[o + m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
+    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xcache[ic]`` (8
+    values) the elliptic functions of ``Re z`` kept between points of one segment, zeros before the first).  Offsets,
+    not array views (a view costs Numba's reference counting at every node)."""
     if fid == 2:
-        psi_elliptic_cached(z, fp, order, out, s, c, r, d, xc)
+        psi_elliptic_cached(z, fp, order, out, o, s, c, r, d, xcache, ic)
         return
     if fid == 0:
         inv = 1.0 / z
         p = inv
         for m in range(order):
-            out[m] = p
+            out[o + m] = p
             p = p * inv
         return
     gamma = fp[0]
@@ -80,16 +81,19 @@ def _psi_site(fid, fp, z, order, out, s, c, r, d, xc):
         acc = 0j
         for p in range(n + 1):
             acc += c[p] * r[n - p]
-        out[n] = acc if n % 2 == 0 else -acc
+        out[o + n] = acc if n % 2 == 0 else -acc
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache):
-    """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``)."""
+def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot):
+    """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``);
+    the elliptic functions of ``Re(λ − λ_i)`` kept in the row ``slot · (number of sites) + i`` of ``xcache`` (one slot
+    per vertical segment: Newton's passes over the ``k`` segments then evaluate them once per segment and solve,
+    not once per pass)."""
     o = 0
     for i in range(site_pos.shape[0]):
         order = 2 * site_n[i]
-        _psi_site(fid, fp, lam - site_pos[i], order, psi[o:o + order], s, c, r, d, xcache[i])
+        _psi_site(fid, fp, lam - site_pos[i], order, psi, o, s, c, r, d, xcache, slot * site_pos.shape[0] + i)
         o += order
 
 
@@ -100,15 +104,15 @@ def psi_values(fid: int, fp: np.ndarray, lam: np.ndarray, site_pos: np.ndarray, 
 
 
 @njit(cache=True, error_model="numpy")
-def _psi_scratch(site_pos, site_n):
-    """The scratch of :func:`_psi_point`: the series buffers ``s, c, r, d`` (the largest ``2 N_j``) and the per-site
-    cache ``xcache``."""
+def _psi_scratch(site_pos, site_n, slots):
+    """The scratch of :func:`_psi_point`: the series buffers ``s, c, r, d`` (the largest ``2 N_j``) and the cache
+    ``xcache`` (``slots`` segments × the sites)."""
     nmax = 1
     for i in range(site_n.shape[0]):
         nmax = max(nmax, 2 * site_n[i])
     return (np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
             np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
-            np.zeros((site_pos.shape[0], 8)))
+            np.zeros((slots * site_pos.shape[0], 8)))
 
 
 @njit(cache=True, error_model="numpy")
@@ -117,19 +121,22 @@ def _psi_many(fid, fp, lam, site_pos, site_n):
     for i in range(site_n.shape[0]):
         n2 += 2 * site_n[i]
     out = np.empty((lam.shape[0], n2), dtype=np.complex128)
-    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n, 1)
+    psi = np.empty(n2, dtype=np.complex128)
     for q in range(lam.shape[0]):
-        _psi_point(fid, fp, lam[q], site_pos, site_n, out[q], s, c, r, d, xcache)
+        _psi_point(fid, fp, lam[q], site_pos, site_n, psi, s, c, r, d, xcache, 0)
+        for m in range(n2):
+            out[q, m] = psi[m]
     return out
 
 
 @njit(cache=True, error_model="numpy")
-def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache):
+def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache, slot):
     """``f[q, i] = Re[∂ν²/∂I_{kidx[i]}(λ_q)/ν(λ_q)]`` at ``λ_q = a + i h xs[q]``, ``ν`` continued from ``+√ν²(a)``
     along ``perm`` (the nodes by increasing ``xs``); returns ``(ok, ν at the end point xs = 1)`` (``ok`` false: a step
     moved ``ν`` by more than a quarter of its size, or ``ν = 0``)."""
     n2 = hI.shape[0]
-    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
+    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache, slot)
     acc = complex(const, 0.0)
     for cI in range(n2):
         acc += hI[cI] * psi[cI]
@@ -141,7 +148,7 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
     for t in range(perm.shape[0]):
         q = perm[t]
         lam = complex(a, h * xs[q])
-        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
+        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -176,13 +183,13 @@ def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, per
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
         ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
-                          c, r, d, xcache)
+                          c, r, d, xcache, j)
         w = w1
         m = n1
         m2 = n2r
         if not ok and wf.shape[0]:  # this segment on the fallback rule (the others keep theirs)
             ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xsf, permf, f, psi,
-                              s, c, r, d, xcache)
+                              s, c, r, d, xcache, j)
             w = wf
             m = wf.shape[0]
             m2 = 0
@@ -279,7 +286,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     ne = E.shape[1]
     n2 = hI.shape[0]
     psi = np.empty(n2, dtype=np.complex128)
-    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n, k)  # one cache slot per segment
     f = np.empty((xs2.shape[0], nk))
     dom = np.empty((k, nk))
     om2 = np.empty((k, nk))
@@ -287,7 +294,7 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     res = np.empty(nk)
     # the start: the linearisation at h = 0
     for j in range(k):
-        _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
+        _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache, j)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -345,14 +352,14 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
             return False, 0j
     n2 = hI.shape[0]
     psi = np.empty(n2, dtype=np.complex128)
-    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n, 1)
     n = n0
     while n <= n_max:
         ok = True
         v = 0j
         for q in range(n + 1):
             lam = complex(a, eta.imag * (q / n))
-            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache)
+            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, 0)
             acc = complex(const, 0.0)
             for cI in range(n2):
                 acc += hI[cI] * psi[cI]
@@ -394,7 +401,7 @@ def branch_uniformized(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end
     rule refuses (``Re η`` a site modulo the period, a root on the segment, ``ν`` zero or not finite)."""
     n2 = hI.shape[0]
     psi = np.empty(n2, dtype=np.complex128)
-    s, c, r, d, xcache = _psi_scratch(site_pos, site_n)
+    s, c, r, d, xcache = _psi_scratch(site_pos, site_n, 1)
     g2 = 2.0 * fp[0]
     for j in range(eta.shape[0]):
         e = eta[j]
@@ -403,12 +410,12 @@ def branch_uniformized(fid, fp, site_pos, site_n, hI, const, period, eta, nu_end
             q = (a - site_pos[i]) / period
             if abs(q - np.round(q)) < 1e-14:
                 return False
-        _psi_point(fid, fp, e, site_pos, site_n, psi, s, c, r, d, xcache)
+        _psi_point(fid, fp, e, site_pos, site_n, psi, s, c, r, d, xcache, 0)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
         direct = cmath.sqrt(acc)
-        _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache)
+        _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache, 0)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -441,14 +448,14 @@ def trig_polynomial(fp, site_pos, site_n, hI, const, out):
     n2 = hI.shape[0]
     D = n2 + 1
     psi = np.empty(n2, dtype=np.complex128)
-    s, c, rr, d, xcache = _psi_scratch(site_pos, site_n)
+    s, c, rr, d, xcache = _psi_scratch(site_pos, site_n, 1)
     gamma = fp[0]
     T = math.pi / gamma
     vals = np.empty(D, dtype=np.complex128)
     for q in range(D):
         lam = complex(q * T / D, 0.15 / gamma)
         z = cmath.exp(2j * gamma * lam)
-        _psi_point(1, fp, lam, site_pos, site_n, psi, s, c, rr, d, xcache)
+        _psi_point(1, fp, lam, site_pos, site_n, psi, s, c, rr, d, xcache, 0)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]

@@ -58,6 +58,41 @@ def _static(flow) -> tuple:
     return out
 
 
+#: per flow, the quadratic forms of its model's integrals for the compiled pass (:func:`_integrals_row`)
+_FORMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _integrals_row(flow, x: np.ndarray) -> np.ndarray:
+    """``model.integrals(x)`` of one orbit ``x`` (3M,) by the compiled pass of :mod:`jetgaudin.gaudin._record` (the
+    model's quadratic forms, cached per flow: ~1 µs against ~16 µs of NumPy for the Clebsch top; equal to
+    ``model.integrals`` to ``n ε Σ|terms|``, not bit for bit); ``model.integrals`` itself where the pass is not finite
+    (which refuses an overflow)."""
+    model = flow.model
+    f = _FORMS.get(flow)
+    if f is None and np.ndim(model.b) == 0:
+        q, lin = model._forms
+        lin = np.ascontiguousarray(lin, dtype=float)
+        forms = np.ascontiguousarray(np.asarray(model.family.extra_integrals(model.sites)[1], dtype=float)
+                                     .reshape(-1, model.n_state))
+        f = (np.ascontiguousarray(q, dtype=float), lin, float(model.b), forms,
+             (q.shape[0] if q.ndim == 3 else q.shape[1]) + forms.shape[0])
+        _FORMS[flow] = f
+    if f is None:  # a field per site (not a scalar b): NumPy
+        return np.asarray(model.integrals(x), dtype=float)
+    q, lin, b, forms, n = f
+    from .gaudin._record import chain_integrals, chain_integrals_gram
+
+    out = np.empty((1, n))
+    X = np.ascontiguousarray(x, dtype=float).reshape(1, -1)
+    if q.ndim == 3:  # the rational forms (one q for the three components)
+        chain_integrals_gram(X, q, lin, b, out)
+    else:
+        chain_integrals(X, q, lin, b, forms, out)
+    if not np.isfinite(out).all():
+        return np.asarray(model.integrals(x), dtype=float)
+    return out[0]
+
+
 def _trig_roots(model, hI: np.ndarray, const: float, pos: np.ndarray, orders: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
     """``exact_chain._orbit_roots`` for the trigonometric family with the polynomial compiled

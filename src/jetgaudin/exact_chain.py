@@ -41,7 +41,7 @@ from __future__ import annotations
 import importlib
 import math
 from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cache, cached_property, lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
@@ -51,6 +51,7 @@ from ._exact_chain_prep import (
     _NO_ROOTS_RHO,
     _family_constants,
     _identities,
+    _integrals_row,
     _periodic_real_parts,
     _periodic_real_parts_of_sites,
     _static,
@@ -81,6 +82,10 @@ _R_FLOOR = 1e-6
 #: the families whose basis ``ψ_m`` the compiled solve has (their ids in :mod:`jetgaudin._exact_chain_kernels`); any
 #: other family solves on the NumPy route
 COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
+#: the elliptic family's branch points as ``gaudin._curve.branch_points`` gives them (none: its branch rule is the
+#: numerical continuation), read-only
+_NO_ROOTS = np.zeros(0, dtype=complex)
+_NO_ROOTS.setflags(write=False)
 
 
 class _Weights:
@@ -153,6 +158,28 @@ def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: n
 
     ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, raw))
     return bool(np.all(np.abs(ref - nu_end) <= 1e-8 * np.abs(ref)))
+
+
+_MODULES: dict[str, Any] = {}
+
+
+def _kernel_module(name: str) -> Any:
+    """The compiled module ``name`` (Numba imported on first use; then a dictionary look-up, ~1 µs less a call than
+    ``importlib.import_module``)."""
+    mod = _MODULES.get(name)
+    if mod is None:
+        mod = _MODULES[name] = importlib.import_module(name)
+    return mod
+
+
+@lru_cache(maxsize=64)
+def _stacked_constants(model, etas: tuple) -> tuple:
+    """The stepping loop's kernel constants of the maps ``etas`` of ``model`` (``gaudin.maps._orbit_constants`` per map,
+    stacked by ``_exact_chain_loop.stack_constants``), cached per ``(model, η…)`` as the per-map constants are (the
+    loop only reads them)."""
+    from .gaudin.maps import _orbit_constants
+
+    return _kernel_module("jetgaudin._exact_chain_loop").stack_constants([_orbit_constants(model, e) for e in etas])
 
 
 @cache
@@ -327,12 +354,17 @@ class _ChainExactFlow(StepByAdvance, Map):
         if compiled and fid is None:
             raise InvalidParameterError(f"the {fam.name} family has no compiled exact-step solve")
         if compiled:
-            I = np.asarray(model.integrals(x), dtype=float)  # once: the roots, the solve's ν², the branch check
+            I = _integrals_row(self, x)  # once (compiled forms): the roots, the solve's ν², the branch check
             extra = I[2 * model.M:]
             const = float(np.real(fam.nu2_constant(float(model.b), extra)))
             hI = np.ascontiguousarray(I[:2 * model.M])
         # once per orbit: the real parts and the branch check
-        raw, bp = _trig_roots(model, hI, const, pos, orders) if compiled and fid == 1 else _orbit_roots(model, x)
+        if compiled and fid == 1:
+            raw, bp = _trig_roots(model, hI, const, pos, orders)
+        elif compiled and fid == 2:  # no computed branch points (gaudin._curve.branch_points: the numerical rule)
+            raw = bp = _NO_ROOTS
+        else:
+            raw, bp = _orbit_roots(model, x)
         rho = self._real_parts(x, k, bp)
         if rho is None:
             return None
@@ -357,7 +389,7 @@ class _ChainExactFlow(StepByAdvance, Map):
         if compiled and fam.uniformizer(0.0) is None:  # the numerical branch rule, compiled
             ok = self._branch_numerical(x, eta, nu_end, (hI, const, pos, orders))
         elif compiled and fid == 1:  # the trigonometric family's uniformized rule, compiled (the same raw roots)
-            K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+            K: Any = _kernel_module("jetgaudin._exact_chain_kernels")
             ok = bool(K.branch_uniformized(1, _family_constants(fam), pos, orders, hI, const, float(P),
                                            np.ascontiguousarray(eta, dtype=complex),
                                            np.ascontiguousarray(nu_end, dtype=complex),
@@ -373,7 +405,7 @@ class _ChainExactFlow(StepByAdvance, Map):
         segment in one call; ``pre``: ``(h_I, ν²'s constant, positions, orders)`` where the caller has them."""
         model = self.model
         fam = model.family
-        K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")
+        K: Any = _kernel_module("jetgaudin._exact_chain_kernels")
         if pre is None:
             I = np.asarray(model.integrals(x), dtype=float)
             pre = (np.ascontiguousarray(I[:2 * model.M]), float(np.real(fam.nu2_constant(float(model.b),
@@ -402,7 +434,7 @@ class _ChainExactFlow(StepByAdvance, Map):
         u = np.empty(E.shape[0])
         om = np.empty((k, E.shape[0]))
         nu_end = np.empty(k, dtype=complex)
-        K: Any = importlib.import_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
+        K: Any = _kernel_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
         status, quad = K.newton(fid, _family_constants(fam), pos, orders, hI, const, dconst, kidx,
                                 np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(target),
                                 np.ascontiguousarray(rho, dtype=float), np.ascontiguousarray(bound, dtype=float),
@@ -498,11 +530,20 @@ class _ChainExactFlow(StepByAdvance, Map):
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
+        model = self.model
+        fam = model.family
+        if used and self.backend is not Backend.NUMPY and (fam.uniform or fam.kernel_rule is not None):
+            # the maps' compiled route (ChainTwoPointBacklund.has_compiled) without building the maps: the same
+            # checks of η (gaudin.maps._check_eta) and the same kernel constants (per (model, η), cached)
+            from .gaudin.maps import _check_eta
+
+            return self._orbit_compiled(x, [_check_eta(model, eta[j]) for j in used], nu[used], theta, steps,
+                                        save_every, rows)
         maps = [self.model.two_point_backlund(eta[j]) for j in used]
         if self.backend is Backend.NUMPY:
             maps = [mp.with_backend(Backend.NUMPY) for mp in maps]
         elif maps and all(mp.has_compiled for mp in maps):
-            return self._orbit_compiled(x, maps, nu[used], theta, steps, save_every, rows)
+            return self._orbit_compiled(x, [mp.eta for mp in maps], nu[used], theta, steps, save_every, rows)
         z, done = x, 0
         while done < steps:
             n = min(save_every - done % save_every, steps - done)
@@ -513,20 +554,20 @@ class _ChainExactFlow(StepByAdvance, Map):
                 rows[done // save_every - 1] = rotate_about_field(z, (done * s) * theta)
         return rotate_about_field(z, (steps * s) * theta)
 
-    def _orbit_compiled(self, x: np.ndarray, maps: list, nu: np.ndarray, theta: float, steps: int, save_every: int,
+    def _orbit_compiled(self, x: np.ndarray, etas: list, nu: np.ndarray, theta: float, steps: int, save_every: int,
                         rows: np.ndarray) -> np.ndarray:
-        from .gaudin.maps import _orbit_constants
-
-        L: Any = importlib.import_module("jetgaudin._exact_chain_loop")  # Numba dispatchers (untyped for mypy)
+        """The compiled loop of :meth:`_orbit` for the maps ``etas`` (their kernel constants stacked, cached per
+        ``(model, η…)``)."""
+        L: Any = _kernel_module("jetgaudin._exact_chain_loop")  # Numba dispatchers (untyped for mypy)
 
         x = np.ascontiguousarray(x, dtype=float)
         nu = np.array(nu, dtype=complex)  # the solve's ν(η_j) on the maps' branch (the kernels continue from it)
-        consts = L.stack_constants([_orbit_constants(self.model, mp.eta) for mp in maps])
+        consts = _stacked_constants(self.model, tuple(complex(e) for e in etas))
         out = np.empty((steps // save_every, x.size))
         final = np.empty(x.size)
         tail = (float(theta), steps, save_every, self.substeps, out, final)
         if len(consts) == 5:
-            L.rows_rational(x, float(self.model.b), np.array([mp.eta for mp in maps]), nu, *consts, *tail)
+            L.rows_rational(x, float(self.model.b), np.array(etas, dtype=complex), nu, *consts, *tail)
         else:
             L.rows_family(x, float(self.model.b), nu, *consts, *tail)
         if not (np.all(np.isfinite(out)) and np.all(np.isfinite(final))):

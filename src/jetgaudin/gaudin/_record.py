@@ -4,8 +4,9 @@ issue 33): the quadratic forms of :meth:`jetgaudin.GaudinModel._forms`,
 .. math:: h_I = \sum_{a=1}^{3} \sum_{c,d} q_{a,I,c,d}\, y_c^a y_d^a + 2 b \sum_c l_{I,c}\, y_c^3, \qquad
           e_E = \sum_k F_{E,k} X_k
 
-(the rational family's ``q`` is the same for the three components ``a``; the trigonometric family's weights
-differ per component and it has the linear extras ``e_E``), row by row without NumPy temporaries.  The same sums
+(the rational family's ``q`` is the same for the three components ``a``; the trigonometric and elliptic families'
+weights differ per component, the trigonometric family has the linear extras ``e_E`` and the elliptic one the form
+of ``c_0`` as one more ``h_I``), row by row without NumPy temporaries.  The same sums
 as the NumPy form (``np.einsum``) in another order: equal to round-off (tested against it with the bound
 ``n ε Σ |terms|``), not bit for bit.
 """

@@ -84,14 +84,14 @@ class _ChainHamiltonian:
 
     def record_integrals(self, X) -> np.ndarray:
         """The integrals :func:`jetgaudin.integrate` records along the flow (the chain's ``h_{i,m}``): for real
-        finite float rows of the rational and trigonometric families one compiled pass over the rows
+        finite float rows of the rational, trigonometric and elliptic families one compiled pass over the rows
         (:mod:`jetgaudin.gaudin._record`, the model's quadratic forms; equal to
         :meth:`GaudinModel.integrals` to round-off), else :meth:`GaudinModel.integrals` (which also refuses an
         overflow)."""
         m = self.model
         X = np.asarray(X)
         if (X.dtype == np.float64 and X.ndim >= 1 and X.size and X.shape[-1] == 3 * m.M
-                and getattr(m.family, "name", None) in ("rational", "trigonometric") and np.ndim(m.b) == 0
+                and getattr(m.family, "name", None) in ("rational", "trigonometric", "elliptic") and np.ndim(m.b) == 0
                 and np.isfinite(X).all()):
             from ._record import chain_integrals, chain_integrals_gram
 
