@@ -64,7 +64,7 @@ def elliptic_constants(k: float) -> np.ndarray:
     return np.array(head + [float(L), math.pi / (2.0 * Kp), t3 / t2, t4 / t2, t4 / t3] + o + e)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _theta_im(y, ell):
     """``(sn, cn, dn, Z)(y | 1 − m)`` of a real ``y`` with ``|y| ≤ K'/2`` by the theta series of the nome ``q'``
     (DLMF 22.2.4–6, 22.16.32; ``ζ = πy/(2K')``): ``sn = S ϑ1/ϑ4``, ``cn = C ϑ2/ϑ4``, ``dn = D ϑ3/ϑ4``,
@@ -178,7 +178,7 @@ def _ode_series(s0, c0, d0, m, order, S, C, D):
         D[n + 1] = -m * r * sc
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def psi_elliptic_cached(z, ell, order, out, o, S, C, D, ns, xcache, ic):
     """``out[o + m − 1] = ψ_m(z) = (−1)^{m−1} [x^{m−1}] F(z + x)``, ``m = 1..order`` (``S, C, D, ns`` complex scratch
     of length ``order``), with the functions of ``Re z`` kept in the row ``xcache[ic]`` (8 values; zeros before the

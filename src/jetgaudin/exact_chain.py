@@ -86,6 +86,8 @@ COMPILED_FAMILIES = {"rational": 0, "trigonometric": 1, "elliptic": 2}
 #: numerical continuation), read-only
 _NO_ROOTS = np.zeros(0, dtype=complex)
 _NO_ROOTS.setflags(write=False)
+#: the elliptic family's ``∂c_0/∂extra`` (``EllipticFamily.nu2_constant_gradient``: ones; its extra is ``c_0``)
+_ONES = np.ones(4)
 
 
 class _Weights:
@@ -371,7 +373,20 @@ class _ChainExactFlow(StepByAdvance, Map):
         # the monotone branch of ω(h) (the fold is at h ~ ρ − λ_c); an elliptic segment stays below 0.9 K' (at K' the
         # points η, η̄ coincide modulo the period 2iK')
         bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
-        if compiled:
+        if compiled and fid == 2:  # the whole solve in one call (Newton, residual, branch check)
+            u = np.empty(E.shape[0])
+            om = np.empty((k, E.shape[0]))
+            nu_end = np.empty(k, dtype=complex)
+            status, quad = _kernel_module("jetgaudin._exact_chain_kernels").solve_numerical(
+                2, _family_constants(fam), pos, orders, hI, const, _ONES[:len(extra)], kidx, E, target, rho, bound,
+                *_rules(), _STEP_TOL, _COARSE_TOL, _ITERATIONS, u, om, nu_end, _QUAD_TOL, _RES_TOL, float(P), 64,
+                2**16, 1e-8)
+            if status == 1:
+                return None
+            if status == 0:
+                return rho + 1j * u[:k], 0.0, nu_end  # elliptic: no rotation (rate 0)
+            sol = (u, om, quad, nu_end)  # the rule's estimate above _QUAD_TOL: the adaptive quadrature below
+        elif compiled:
             sol = self._newton_compiled(x, int(fid), keep, E, target, rho, bound,  # type: ignore[arg-type]
                                         (hI, const, extra, kidx, pos, orders))
         else:
