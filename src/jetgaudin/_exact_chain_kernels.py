@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from ._exact_elliptic import psi_elliptic_cached
+from ._exact_kernels import _csqrt
 
 __all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "psi_values", "solve_numerical",
            "trig_polynomial"]
@@ -245,7 +246,8 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
-        rq = cmath.sqrt(acc)
+        qr, qi = _csqrt(acc.real, acc.imag)  # a root in real arithmetic (which one: the continuation's test)
+        rq = complex(qr, qi)
         if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|: the root nearer to v
             rq = -rq
         # |rq − v| ≤ |rq|/4 or |v|/4, in squares (no hypot), and ν ≠ 0
@@ -255,11 +257,11 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
         if not (dr * dr + di * di <= 0.0625 * max(a2, v.real * v.real + v.imag * v.imag) and a2 > 0.0):
             ok = False
         v = rq
-        inv = 1.0 / rq
+        ia2 = 1.0 / a2  # Re(F/ν) = Re(F ν̄)/|ν|²: one real division, no complex one
         for i in range(kidx.shape[0]):
             col = kidx[i]
             F = psi[col] if col < n2 else complex(dconst[col - n2], 0.0)
-            f[q, i] = (F * inv).real
+            f[q, i] = (F.real * rq.real + F.imag * rq.imag) * ia2
         if xs[q] == 1.0:
             nu_last = rq
     return ok, nu_last
@@ -504,7 +506,11 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
             acc = complex(const, 0.0)
             for cI in range(n2):
                 acc += hI[cI] * psi[cI]
-            rq = cmath.sqrt(acc)
+            if q == 0:
+                rq = cmath.sqrt(acc)  # the start: the principal root (the rule's ν(Re η))
+            else:  # a root in real arithmetic (which one: the continuation's test)
+                qr, qi = _csqrt(acc.real, acc.imag)
+                rq = complex(qr, qi)
             if q > 0:
                 if (rq.real * v.real + rq.imag * v.imag) < 0.0:  # |rq − v| > |rq + v|
                     rq = -rq

@@ -210,11 +210,11 @@ def psi_elliptic_cached(z, ell, order, out, o, S, C, D, ns, xcache, ic):
     if math.isfinite(Kp):
         ny = np.rint(y / (2.0 * Kp))
         y = y - 2.0 * Kp * ny
-        const = -1j * math.pi / K * ny
         if abs(y) > 0.5 * Kp:
             row = 1.0 if y > 0 else -1.0
         y = y - Kp * row
-        const = const - row * 1j * math.pi / (2.0 * K)
+        if ny != 0.0 or row != 0.0:  # −iπ ny/K − row iπ/(2K) (zero on the segments of the solve: no complex ops)
+            const = complex(0.0, -(math.pi / K) * ny - (row * math.pi) / (2.0 * K))
     if ell[7] > 0.0:
         s1, c1, d1, zy = _theta_im(y, ell)
     else:
