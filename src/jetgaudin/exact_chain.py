@@ -40,8 +40,9 @@ from __future__ import annotations
 
 import importlib
 import math
+import weakref
 from dataclasses import dataclass, field
-from functools import cache, cached_property, lru_cache
+from functools import cache, cached_property
 from typing import Any, ClassVar
 
 import numpy as np
@@ -174,14 +175,26 @@ def _kernel_module(name: str) -> Any:
     return mod
 
 
-@lru_cache(maxsize=64)
-def _stacked_constants(model, etas: tuple) -> tuple:
-    """The stepping loop's kernel constants of the maps ``etas`` of ``model`` (``gaudin.maps._orbit_constants`` per map,
-    stacked by ``_exact_chain_loop.stack_constants``), cached per ``(model, η…)`` as the per-map constants are (the
-    loop only reads them)."""
-    from .gaudin.maps import _orbit_constants
+#: per flow, the stacked kernel constants of its last maps (:func:`_stacked_constants`)
+_STACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
-    return _kernel_module("jetgaudin._exact_chain_loop").stack_constants([_orbit_constants(model, e) for e in etas])
+
+def _stacked_constants(flow, etas: tuple) -> tuple:
+    """The stepping loop's kernel constants of the maps ``etas`` of the flow's model (``gaudin.maps._orbit_constants``
+    per map, stacked by ``_exact_chain_loop.stack_constants``), cached per flow and ``(η…)`` (up to 64; the key
+    hashes the ``η`` only, not the model: ~3 µs less a call); the loop only reads them."""
+    per_flow = _STACKED.get(flow)
+    if per_flow is None:
+        per_flow = _STACKED[flow] = {}
+    out = per_flow.get(etas)
+    if out is None:
+        from .gaudin.maps import _orbit_constants
+
+        if len(per_flow) >= 64:
+            per_flow.clear()
+        out = per_flow[etas] = _kernel_module("jetgaudin._exact_chain_loop").stack_constants(
+            [_orbit_constants(flow.model, e) for e in etas])
+    return out
 
 
 @cache
@@ -493,8 +506,11 @@ class _ChainExactFlow(StepByAdvance, Map):
         eta, theta, _ = self._parameters(x)
         return eta, theta
 
-    def _parameters(self, x: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-        x = np.asarray(self.model.check_state(x), dtype=float)
+    def _parameters(self, x: np.ndarray, checked: bool = False) -> tuple[np.ndarray, float, np.ndarray]:
+        """:meth:`parameters` and the maps' first ``ν1``; ``checked``: ``x`` is one orbit already checked by
+        ``model.check_state`` as floats (:meth:`advance`'s)."""
+        if not checked:
+            x = np.asarray(self.model.check_state(x), dtype=float)
         if x.ndim != 1:
             raise InvalidParameterError(f"parameters take one orbit (shape ({self.n_state},)), got {x.shape}")
         dt = self.dt / self.substeps
@@ -541,7 +557,7 @@ class _ChainExactFlow(StepByAdvance, Map):
         a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
         each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s``
         steps of each map per call of its NumPy route (the maps commute)."""
-        eta, theta, nu = self._parameters(x)
+        eta, theta, nu = self._parameters(x, checked=True)  # advance checked X (per_orbit_buffers)
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
@@ -577,7 +593,7 @@ class _ChainExactFlow(StepByAdvance, Map):
 
         x = np.ascontiguousarray(x, dtype=float)
         nu = np.array(nu, dtype=complex)  # the solve's ν(η_j) on the maps' branch (the kernels continue from it)
-        consts = _stacked_constants(self.model, tuple(complex(e) for e in etas))
+        consts = _stacked_constants(self, tuple(complex(e) for e in etas))
         out = np.empty((steps // save_every, x.size))
         final = np.empty(x.size)
         tail = (float(theta), steps, save_every, self.substeps, out, final)
