@@ -37,23 +37,36 @@ def _family_constants_of(name: str, param: float) -> np.ndarray:
     return out
 
 
-#: per flow and ``k``, the real parts of a model without computed branch points (:meth:`ChainExactFlow._real_parts`)
+#: per flow and per model (the flows of one model share one dictionary), by ``(k, rho_factor)``, the real parts of a
+#: model without computed branch points (:meth:`ChainExactFlow._real_parts`)
 _NO_ROOTS_RHO: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_NO_ROOTS_RHO_MODEL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 #: per flow, the compiled solve's constants that depend on the model and weights only (:func:`_static`)
 _STATIC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+#: per model (weak keys), the model-only part of :func:`_static` (``jg.solve`` builds a new flow at every call: the
+#: linear identities alone, an SVD of the integrals at random states, took ~0.4 ms of a Clebsch top's call)
+_MODEL_STATIC: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _static(flow) -> tuple:
     """``(keep, E, rate, k, weights_keep, kidx, positions, orders, λ_c, P, K')`` of a flow (cached per flow: the
-    Python around the compiled solve was ~1/3 of a Clebsch top's solve)."""
+    Python around the compiled solve was ~1/3 of a Clebsch top's solve; all but the weights per model too; shared:
+    the callers only read them — not flagged read-only, which would give the kernels another Numba signature)."""
     out = _STATIC.get(flow)
     if out is None:
         model = flow.model
-        keep, E, rate = flow._design
-        out = (keep, np.ascontiguousarray(E, dtype=float), rate, int(keep.sum()) - E.shape[1],
-               np.asarray(flow.H.weights, dtype=float)[keep], np.flatnonzero(keep).astype(np.int64),
-               np.ascontiguousarray(model.positions, dtype=float), np.array(model.orders, dtype=np.int64),
-               float(np.mean(model.positions)), model.family.period, getattr(model.family, "Kp", np.inf))
+        part = _MODEL_STATIC.get(model)
+        if part is None:
+            keep, E, rate = flow._design
+            part = (keep, np.ascontiguousarray(E, dtype=float), rate, int(keep.sum()) - E.shape[1],
+                    np.flatnonzero(keep).astype(np.int64), np.ascontiguousarray(model.positions, dtype=float),
+                    np.array(model.orders, dtype=np.int64), float(np.mean(model.positions)), model.family.period,
+                    getattr(model.family, "Kp", np.inf))
+            _MODEL_STATIC[model] = part
+        keep, E, rate, k = part[:4]
+        out = (keep, E, rate, k, np.asarray(flow.H.weights, dtype=float)[keep]) + part[4:]
         _STATIC[flow] = out
     return out
 

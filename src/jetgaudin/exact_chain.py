@@ -50,6 +50,7 @@ import numpy as np
 from ._errors import BranchPointError, InvalidParameterError, SingularStepError, StepTooLargeError
 from ._exact_chain_prep import (
     _NO_ROOTS_RHO,
+    _NO_ROOTS_RHO_MODEL,
     _family_constants,
     _identities,
     _integrals_row,
@@ -175,17 +176,19 @@ def _kernel_module(name: str) -> Any:
     return mod
 
 
-#: per flow, the stacked kernel constants of its last maps (:func:`_stacked_constants`)
+#: per flow and per model (the flows of one model share one dictionary), the stacked kernel constants of its last
+#: maps (:func:`_stacked_constants`)
 _STACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_STACKED_MODEL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def _stacked_constants(flow, etas: tuple) -> tuple:
     """The stepping loop's kernel constants of the maps ``etas`` of the flow's model (``gaudin.maps._orbit_constants``
-    per map, stacked by ``_exact_chain_loop.stack_constants``), cached per flow and ``(η…)`` (up to 64; the key
-    hashes the ``η`` only, not the model: ~3 µs less a call); the loop only reads them."""
+    per map, stacked by ``_exact_chain_loop.stack_constants``), cached per model and ``(η…)`` (up to 64), looked up
+    through the flow (hashing the model costs ~3 µs a call); the loop only reads them."""
     per_flow = _STACKED.get(flow)
-    if per_flow is None:
-        per_flow = _STACKED[flow] = {}
+    if per_flow is None:  # a new flow: its model's (jg.solve builds a flow at every call)
+        per_flow = _STACKED[flow] = _STACKED_MODEL.setdefault(flow.model, {})
     out = per_flow.get(etas)
     if out is None:
         from .gaudin.maps import _orbit_constants
@@ -320,10 +323,12 @@ class _ChainExactFlow(StepByAdvance, Map):
         model = self.model
         bp = np.ravel(model.branch_points(x) if bp is None else bp)
         if not bp.size:  # no computed branch points (elliptic): the same real parts for every orbit of the model
-            per_k = _NO_ROOTS_RHO.setdefault(self, {})
-            if k not in per_k:
-                per_k[k] = self._real_parts_of(k, bp)
-            rho = per_k[k]
+            per_k = _NO_ROOTS_RHO.get(self)
+            if per_k is None:  # a new flow: the model's (jg.solve builds a flow at every call)
+                per_k = _NO_ROOTS_RHO[self] = _NO_ROOTS_RHO_MODEL.setdefault(self.model, {})
+            if (k, self.rho_factor) not in per_k:
+                per_k[k, self.rho_factor] = self._real_parts_of(k, bp)
+            rho = per_k[k, self.rho_factor]
             return None if rho is None else rho.copy()
         return self._real_parts_of(k, bp)
 
