@@ -15,6 +15,11 @@ node by node from ``+√ν²(ρ)`` in the order of ``|s|`` (the root nearer to t
 by more than a quarter of its size, or ``ν = 0``: a branch point near the segment, the solve fails), the derivative
 ``∂ω_I/∂h = −Re[∂ν²/∂I(η)/ν(η)]`` at the end point; the extras' column ``∂ν²/∂I`` is the constant ``dconst``.
 
+Newton's ``cond₂(J) ≤ 1e12`` test and its steps are small dense linear algebra done here (:func:`_cond_at_most`:
+one-sided Jacobi; :func:`_lu_solve`: partial pivoting), not LAPACK through Numba (~2 µs an iteration, as much as ten
+nodes); the elliptic family's whole solve (Newton, the residual test, the branch check) is one call,
+:func:`solve_numerical`.
+
 Numba's cache keys this module by its own source: after an edit of :mod:`jetgaudin._exact_elliptic`, clear
 ``jetgaudin/__pycache__/_exact_chain_kernels.*`` (the compiled callers keep the old elliptic code otherwise).
 """
