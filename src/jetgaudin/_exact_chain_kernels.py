@@ -42,9 +42,8 @@ __all__ = ["branch_numerical", "branch_uniformized", "newton", "nu_numerical", "
 @njit(cache=True, error_model="numpy")
 def _psi_site(fid, fp, z, order, out, o, s, c, r, d, xcache, ic):
     """``out[o + m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
-    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xcache[ic]`` (8
-    values) the elliptic functions of ``Re z`` kept between points of one segment, zeros before the first).  Offsets,
-    not array views (a view costs Numba's reference counting at every node)."""
+    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xcache[ic]`` (9
+    values) the elliptic functions of ``Re z`` kept between points of one segment, zeros before the first)."""
     if fid == 2:
         psi_elliptic_cached(z, fp, order, out, o, s, c, r, d, xcache, ic)
         return
@@ -127,7 +126,7 @@ def _psi_scratch(site_pos, site_n, slots):
         nmax = max(nmax, 2 * site_n[i])
     return (np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
             np.empty(nmax, dtype=np.complex128), np.empty(nmax, dtype=np.complex128),
-            np.zeros((slots * site_pos.shape[0], 8)))
+            np.zeros((slots * site_pos.shape[0], 9)))
 
 
 @njit(cache=True, error_model="numpy")
