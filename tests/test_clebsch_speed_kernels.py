@@ -181,3 +181,32 @@ def test_the_fused_solve_applies_each_acceptance_test_at_its_threshold(name):
     assert 0 < mismatch < 1e-8
     assert run(branch_tol=mismatch * (1 - 1e-6))[0] == 1 and run(branch_tol=mismatch * (1 + 1e-6))[0] == 0
     assert quad > 0 and run(quad_tol=quad * (1 - 1e-9))[0] == 2 and run(quad_tol=quad)[0] == 0
+
+
+@pytest.mark.parametrize("name", ["Clebsch top", "elliptic, 3 sites", "trigonometric"])
+def test_the_loop_without_the_maps_is_the_loop_of_the_maps(name):
+    """The every-row call takes the maps' kernel constants without building the maps: its rows are bit for bit
+    those of the loop on the constants of ``model.two_point_backlund(η_j)`` (the route before), and ``η`` on a site
+    is refused as the maps refuse it."""
+    from jetgaudin import _exact_chain_loop as L
+    from jetgaudin.gaudin.maps import _check_eta, _orbit_constants
+
+    cases = _elliptic_cases()
+    trig = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="trigonometric", gamma=0.5)
+    cases["trigonometric"] = (trig.hamiltonian([0.3, 0, -0.2, 0, 0.5, 0, 0.4]),
+                              np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6]))
+    H, x = cases[name]
+    flow = jg.ChainExactFlow(H, 0.05)
+    model = flow.model
+    steps = 7
+    got = flow.advance(x, None, steps, 1)
+    eta, theta, nu = flow._parameters(x)
+    maps = [model.two_point_backlund(e) for e in eta]
+    consts = L.stack_constants([_orbit_constants(model, mp.eta) for mp in maps])
+    rows, final = np.empty((steps, x.size)), np.empty(x.size)
+    L.rows_family(x, float(model.b), np.array(nu, dtype=complex), *consts, float(theta), steps, 1, 1, rows, final)
+    assert np.array_equal(got.rows[:, ...], rows) and np.array_equal(got.X, final)
+    with pytest.raises(jg.InvalidParameterError, match="is a site"):
+        _check_eta(model, complex(model.positions[0], 0.3))
+    with pytest.raises(jg.InvalidParameterError, match="is a site"):
+        model.two_point_backlund(complex(model.positions[0], 0.3))

@@ -568,9 +568,11 @@ class _ChainExactFlow(StepByAdvance, Map):
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
         model = self.model
         fam = model.family
-        if used and self.backend is not Backend.NUMPY and (fam.uniform or fam.kernel_rule is not None):
+        if (used and self.backend is not Backend.NUMPY and (fam.uniform or fam.kernel_rule is not None)
+                and model.algebra == "su(2)"):
             # the maps' compiled route (ChainTwoPointBacklund.has_compiled) without building the maps: the same
-            # checks of η (gaudin.maps._check_eta) and the same kernel constants (per (model, η), cached)
+            # checks of η (gaudin.maps._check_eta; the models the maps take: su(2), no jet constants, which the
+            # constructor refuses) and the same kernel constants (per (model, η), cached)
             from .gaudin.maps import _check_eta
 
             return self._orbit_compiled(x, [_check_eta(model, eta[j]) for j in used], nu[used], theta, steps,
