@@ -81,11 +81,12 @@ _ALIVE = _C0 + NCONST
 _STATUS = _ALIVE + 1
 _REDO = _ALIVE + 2
 _SAVED = _ALIVE + 3
-# the power of two q of _n3._scale3 (per orbit and call)
+# the power of two q of _n3._scale3 (per orbit and call), b²
 _Q = _ALIVE + 4
+_BB = _ALIVE + 5
 # scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
 # eigenvector valid), the residual tolerance
-_MID = _ALIVE + 5
+_MID = _ALIVE + 6
 _ROWS = _MID + 6
 
 
@@ -123,7 +124,7 @@ def _lanes_pass(buf, newton):
         buf[M + 4 * L + l] = S._sel(S._sel(take, not r[6], False), 1.0, 0.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
         buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
-                                   buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
+                                   buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[_BB * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
                buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
@@ -198,7 +199,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     buf = np.empty(_ROWS * L)
     carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
     I0 = np.empty(6)
-    Ib = np.empty(6)
+    Ib = np.empty(12)
     for k in range(k0, k1):
         i0 = k * L
         W = min(L, B - i0)  # orbits of this block
@@ -217,6 +218,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             for i in range(NCONST):
                 buf[(_C0 + i) * L + l] = carr[i]
             buf[11 * L + l] = b[o]
+            buf[_BB * L + l] = b[o] * b[o]
             buf[_Q * L + l] = _scale3(X0[o, 0], X0[o, 1], X0[o, 2], X0[o, 3], X0[o, 4], X0[o, 5], X0[o, 6],
                                       X0[o, 7], X0[o, 8], b[o])
             buf[_ALIVE * L + l] = 1.0
@@ -270,6 +272,6 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
                 for m in range(6):
                     drift[o, m] = 0.0
-                S._integrals(X0[o], b[o], 3, I0)
+                S._integrals3(X0[o], b[o], I0)
                 last = (fail[o] if status[o] != STATUS_OK else steps) // save_every
                 S._drift_pass(out[:, o], final[o], last, b[o], 3, I0, Ib, drift[o])
