@@ -198,8 +198,6 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     L = LANES
     buf = np.empty(_ROWS * L)
     carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
-    I0 = np.empty(6)
-    Ib = np.empty(12)
     for k in range(k0, k1):
         i0 = k * L
         W = min(L, B - i0)  # orbits of this block
@@ -270,8 +268,5 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                 final[o, i] = buf[i * L + l]
             nu_last[o] = complex(buf[9 * L + l], buf[10 * L + l])
             if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
-                for m in range(6):
-                    drift[o, m] = 0.0
-                S._integrals3(X0[o], b[o], I0)
                 last = (fail[o] if status[o] != STATUS_OK else steps) // save_every
-                S._drift_pass(out[:, o], final[o], last, b[o], 3, I0, Ib, drift[o])
+                S._drift_pass3(out, o, final, last, b[o], X0[o], drift[o])
