@@ -101,3 +101,27 @@ def test_the_lanes_drift_is_the_single_orbit_routes():
         single(X[i], b[i], eta[i], nu0[i], False, 60, 20, o, f, d, True)
         assert np.array_equal(d, drift[i])
         assert np.all(d < 1e-12)  # a drift of round-off: 60 steps of a map that preserves these integrals
+
+
+@pytest.mark.parametrize("size", [1e140, 1e165, 1e200, 1e300])
+def test_huge_states_fail_in_the_lanes_as_on_the_single_orbit_route(size):
+    # whether a lane steps reaches the dressing in the sign of r = 1/(q|k|²) (q = 0 beyond ~1e162): huge lanes must
+    # step and fail as on the single-orbit route, never be left unstepped with status 0, beside ordinary lanes of
+    # the same blocks; statuses, failing steps and final states equal exactly, lane by lane
+    rng = np.random.default_rng(5)
+    B = 19
+    X = rng.normal(size=(B, 9))
+    X[::3] *= size  # every third orbit huge, the others ordinary, in the same blocks
+    b = np.full(B, 0.9)
+    eta = np.full(B, 1.3 + 0.4j)
+    small = X.copy()
+    small[::3] /= size
+    nu0 = kernels.nu_default(small, b, eta, 1)  # (the branch rule overflows on the huge states: any ν0 serves here,
+    nu0[::3] *= size  # both routes start from the same one)
+    out, final, drift, nu_last, status, fail = kernels.run_batch(X, b, eta, nu0, False, 12, 4)
+    single = kernels.kernel_module("_n3").run_orbit3
+    for i in range(B):
+        o, f, d = np.empty((4, 9)), np.empty(9), np.empty(6)
+        st, n, _ = single(X[i], b[i], eta[i], nu0[i], False, 12, 4, o, f, d, False)
+        assert (st, n) == (status[i], fail[i])
+        assert np.array_equal(f, final[i])

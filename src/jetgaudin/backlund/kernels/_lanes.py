@@ -84,10 +84,9 @@ _SAVED = _ALIVE + 3
 # the power of two q of _n3._scale3 (per orbit and call), b²
 _Q = _ALIVE + 4
 _BB = _ALIVE + 5
-# scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
-# eigenvector valid), the residual tolerance
+# scratch rows between the two halves of a step: n' (3), r (its sign: whether the lane steps), the residual tolerance
 _MID = _ALIVE + 6
-_ROWS = _MID + 6
+_ROWS = _MID + 5
 
 
 @block(inline="always")
@@ -109,7 +108,11 @@ def _lanes_pass(buf, newton):
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
                        buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
         # a lane alive and not to be redone takes its new ν1 (in place) and, if its eigenvector failed, the status;
-        # the others keep their values.  The dressing gets one flag: the lane steps, its eigenvector valid
+        # the others keep their values.  Whether the lane steps (alive, not to be redone, its eigenvector valid)
+        # goes to the dressing in the sign of the row of r (a row of its own cost a 512-bit store, ~1.6 FMA-pipe
+        # cycles on Zen 4): r = 1/(q|k|²) > 0 where the lane steps (|k|² > 0 finite there, q > 0 a power of two, or
+        # 0 with r = +inf beyond ~1e162, where |ℓ(η)|² has overflowed and the eigenvector failed), −1.0 where not;
+        # the dressing steps where ``not (r < 0)`` (a NaN would step, and fail, as on the single-orbit route)
         alive = buf[_ALIVE * L + l] != 0.0
         take = S._sel(alive, not r[5], False)
         buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
@@ -120,10 +123,9 @@ def _lanes_pass(buf, newton):
         buf[M + l] = r[1]
         buf[M + L + l] = r[2]
         buf[M + 2 * L + l] = r[3]
-        buf[M + 3 * L + l] = r[4]
-        buf[M + 4 * L + l] = S._sel(S._sel(take, not r[6], False), 1.0, 0.0)
+        buf[M + 3 * L + l] = S._sel(S._sel(take, not r[6], False), r[4], -1.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
-        buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+        buf[M + 4 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                    buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[_BB * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
@@ -132,11 +134,11 @@ def _lanes_pass(buf, newton):
                buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-        go = buf[M + 4 * L + l] != 0.0
+        go = not (buf[M + 3 * L + l] < 0.0)
         Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l], buf[M + L + l],
                   buf[M + 2 * L + l], buf[M + 3 * L + l], cst)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l],
-                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 5 * L + l], False, False)
+                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 4 * L + l], False, False)
         # in place: the state of a lane that steps (``go``: alive, not to be redone, its eigenvector valid) without
         # failure, and the status of a lane that steps; any other lane keeps its values (selects of the old values,
         # stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
