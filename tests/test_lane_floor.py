@@ -125,3 +125,30 @@ def test_huge_states_fail_in_the_lanes_as_on_the_single_orbit_route(size):
         st, n, _ = single(X[i], b[i], eta[i], nu0[i], False, 12, 4, o, f, d, False)
         assert (st, n) == (status[i], fail[i])
         assert np.array_equal(f, final[i])
+
+
+def test_failures_late_in_the_orbit_are_recorded_at_their_step():
+    # a lane's failure goes to the status row as its code + 8 × its step, read when the block ends (no row is read
+    # right after the pass that wrote it): orbits scaled to ~1e153.6 overflow at steps 45-125 of 200 (found by a
+    # scan with the single-orbit route), beside ordinary orbits in the same block; statuses, failing steps, rows
+    # and frozen final states equal the single-orbit route's exactly
+    from jetgaudin.ensemble import sample_on_leaf
+
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], 30, seed=4)
+    b = np.ones(30)
+    eta = np.full(30, 5 + 0.1j)
+    nu = kernels.nu_default(X, b, eta)
+    for i, e in ((8, 153.7), (20, 153.65), (23, 153.6), (29, 153.65)):
+        X[i] *= 10.0**e
+        b[i] = 10.0**e
+        nu[i] *= 10.0**e
+    out, final, _, nu_last, status, fail = kernels.run_batch(X, b, eta, nu, False, 200, 1)
+    single = kernels.kernel_module("_n3").run_orbit3
+    late = 0
+    for i in range(30):
+        ref, ref_final = np.empty((201, 9)), np.empty(9)
+        st, n, _ = single(X[i], b[i], eta[i], nu[i], False, 200, 1, ref, ref_final, np.empty(6), False)
+        assert (status[i], fail[i]) == (st, n)
+        assert np.array_equal(out[i, : n + 1], ref[: n + 1]) and np.array_equal(final[i], ref_final)
+        late += bool(st) and n > 0
+    assert late == 4

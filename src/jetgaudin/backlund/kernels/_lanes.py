@@ -9,6 +9,8 @@ redone by a second pass with ``ν1`` continued by the closest root (:func:`run_l
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -74,24 +76,23 @@ def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, ba
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 32
-# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status, redo (the lane
-# needs the closest-root fallback) and a copy of alive during the second pass
+# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then the status (0: the lane is alive;
+# a failure's code + 8 × its step: the lane is frozen; −1 during a second pass: not redone) and redo (the lane needs
+# the closest-root fallback)
 _C0 = 12
-_ALIVE = _C0 + NCONST
+_STATUS = _C0 + NCONST
 assert NCONST == 17  # _fill_constants writes them one by one
-_STATUS = _ALIVE + 1
-_REDO = _ALIVE + 2
-_SAVED = _ALIVE + 3
+_REDO = _STATUS + 1
 # the power of two q of _n3._scale3 (per orbit and call), b²
-_Q = _ALIVE + 4
-_BB = _ALIVE + 5
+_Q = _STATUS + 2
+_BB = _STATUS + 3
 # scratch rows between the two halves of a step: n' (3), r (its sign: whether the lane steps), the residual tolerance
-_MID = _ALIVE + 6
+_MID = _STATUS + 4
 _ROWS = _MID + 5
 
 
 @block(inline="always")
-def _lanes_pass(buf, newton):
+def _lanes_pass(buf, newton, n8):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
     the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
     in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
@@ -114,12 +115,11 @@ def _lanes_pass(buf, newton):
         # cycles on Zen 4): r = 1/(q|k|²) > 0 where the lane steps (|k|² > 0 finite there, q > 0 a power of two, or
         # 0 with r = +inf beyond ~1e162, where |ℓ(η)|² has overflowed and the eigenvector failed), −1.0 where not;
         # the dressing steps where ``not (r < 0)`` (a NaN would step, and fail, as on the single-orbit route)
-        alive = buf[_ALIVE * L + l] != 0.0
+        alive = buf[_STATUS * L + l] == 0.0
         take = S._sel(alive, not r[5], False)
         buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
         buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
-        pre = S._sel(r[6], r[7], 0.0)
-        buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
+        buf[_STATUS * L + l] = S._sel(S._sel(take, r[6], False), r[7] + n8, buf[_STATUS * L + l])
         buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
         buf[M + l] = r[1]
         buf[M + L + l] = r[2]
@@ -153,7 +153,7 @@ def _lanes_pass(buf, newton):
         buf[6 * L + l] = S._sel(new, r[7], x6)
         buf[7 * L + l] = S._sel(new, r[8], x7)
         buf[8 * L + l] = S._sel(new, r[9], x8)
-        buf[_STATUS * L + l] = S._sel(go, float(r[0]), buf[_STATUS * L + l])
+        buf[_STATUS * L + l] = S._sel(go, float(r[0]) + S._sel(r[10], 0.0, n8), buf[_STATUS * L + l])
 
 
 @block(inline="always")
@@ -236,7 +236,6 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             buf[_BB * L + l] = b[o] * b[o]
             buf[_Q * L + l] = _scale3(X0[o, 0], X0[o, 1], X0[o, 2], X0[o, 3], X0[o, 4], X0[o, 5], X0[o, 6],
                                       X0[o, 7], X0[o, 8], b[o])
-            buf[_ALIVE * L + l] = 1.0
             buf[_STATUS * L + l] = 0.0
             buf[_REDO * L + l] = 0.0
         _fill_constants(buf, M)
@@ -247,6 +246,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             fail[o] = steps
         for n in range(steps):
             newton = n > 0 or cont
+            n8 = 8.0 * n  # a failure at step n writes its code + 8n to the status row
             redo = False
             for second in (False, True):  # one call site of the pass (LLVM inlines it once)
                 if second:
@@ -262,19 +262,13 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                             nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
                             buf[9 * L + l] = nu.real
                             buf[10 * L + l] = nu.imag
-                    for l in range(L):  # the second pass steps those lanes alone
-                        buf[_SAVED * L + l] = buf[_ALIVE * L + l]
-                        buf[_ALIVE * L + l] = buf[_REDO * L + l]
-                _lanes_pass(buf, newton and not second)
+                        elif buf[_STATUS * L + l] == 0.0:  # alive, not redone: out of the second pass
+                            buf[_STATUS * L + l] = -1.0
+                _lanes_pass(buf, newton and not second, n8)
             if redo:
                 for l in range(L):
-                    buf[_ALIVE * L + l] = buf[_SAVED * L + l]
-            for l in range(L if _any_row(buf, _STATUS * L) else 0):
-                if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
-                    buf[_ALIVE * L + l] = 0.0
-                    if l < W:
-                        status[i0 + l] = int(buf[_STATUS * L + l])
-                        fail[i0 + l] = n
+                    if buf[_STATUS * L + l] == -1.0:
+                        buf[_STATUS * L + l] = 0.0
             if (n + 1) % save_every == 0:
                 j = (n + 1) // save_every
                 for l in range(W):
@@ -282,6 +276,11 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                         out[j, i0 + l, i] = buf[i * L + l]
         for l in range(W):
             o = i0 + l
+            st = buf[_STATUS * L + l]
+            if st != 0.0:  # failed: code + 8 × its step (no row of the block is read right after the pass that
+                at = math.floor(st / 8.0)  # wrote it: a load of a lane's masked store in flight waits for it)
+                status[o] = int(st - 8.0 * at)
+                fail[o] = int(at)
             for i in range(9):
                 final[o, i] = buf[i * L + l]
             nu_last[o] = complex(buf[9 * L + l], buf[10 * L + l])
