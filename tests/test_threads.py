@@ -69,6 +69,24 @@ def test_pieces_cover_the_range_once():
         assert sorted(seen) == list(range(n))
 
 
+@pytest.mark.parametrize(("n", "threads", "least"),
+                         [(625, 2, 5), (100000, 2, 8192), (7, 4, 1), (3, 2, 5), (1000, 16, 1)])
+def test_guided_pieces_shrink_to_the_least_piece(n, threads, least):
+    # each piece 1/(2 threads) of what is left, at least `least` (or what is left): the pieces cover [0, n) in
+    # order, never grow, and the last ones are small, so that the threads finish within about a least piece of each
+    # other; at least one piece per thread where n allows
+    e = _drivers.guided_edges(n, threads, least)
+    sizes = np.diff(e)
+    assert e[0] == 0 and e[-1] == n and np.all(sizes > 0)
+    assert np.all(np.diff(sizes) <= 0)
+    lo = max(1, min(least, n // threads))
+    assert np.all(sizes[:-1] >= lo)
+    assert sizes[-1] <= max(lo, -(-n // (2 * threads)))
+    assert len(sizes) >= min(n, threads)
+    left = n - np.array(e[:-1])
+    assert np.all(sizes == np.minimum(left, np.maximum(lo, -(-left // (2 * threads)))))
+
+
 def test_an_interruption_stops_the_helpers():
     # the calling thread raises (as KeyboardInterrupt would) in its first piece: the helper finishes the piece it
     # holds and takes no other; the exception reaches the caller
@@ -83,8 +101,8 @@ def test_an_interruption_stops_the_helpers():
 
     with pytest.raises(KeyboardInterrupt):
         _drivers.in_threads(part, 64, 2)
-    # of 16 pieces the helper takes 1 (at most a few if the calling thread is descheduled for a while); without the
-    # stop it would take the other 15 (0.75 s)
+    # of 13 guided pieces the helper takes 1 (at most a few if the calling thread is descheduled for a while);
+    # without the stop it would take the other 12 (0.6 s)
     assert len(done) < 8
 
 

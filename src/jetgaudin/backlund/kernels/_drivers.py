@@ -242,18 +242,31 @@ def _threads(n: int, per_thread: int) -> int:
     return max(1, min(numba.get_num_threads(), most))
 
 
+def guided_edges(n: int, threads: int, min_piece: int = 1) -> list[int]:
+    """The edges ``0 = e_0 < e_1 < … = n`` of :func:`in_threads`' pieces: each ``⌈left/(2 threads)⌉`` items, at least
+    ``min_piece`` (and at least one piece per thread where ``n`` allows)."""
+    least = max(1, min(int(min_piece), n // max(1, threads)))
+    edges = [0]
+    while edges[-1] < n:
+        left = n - edges[-1]
+        edges.append(edges[-1] + min(left, max(least, -(-left // (2 * threads)))))
+    return edges
+
+
 def in_threads(part: Callable[[int, int], None], n: int, threads: int, min_piece: int = 1) -> None:
     """``part(i0, i1)`` over the ranges of a split of ``[0, n)``, on the calling thread and ``threads − 1`` helper
     threads (``part`` is a compiled kernel that releases the GIL, writing disjoint parts of its outputs).  The
-    range is cut in up to ``8 × threads`` pieces of at least ``min_piece`` items (a piece should last ~1 ms, so
-    that the calls' Python overhead stays small), taken in turn by whichever thread is free (a thread slowed by
-    other jobs of the machine takes fewer); an exception on the calling thread (``KeyboardInterrupt``) stops the
-    helpers after their current piece."""
+    range is cut in pieces of decreasing size (guided: each ``1/(2 threads)`` of what is left, at least
+    ``min_piece`` items: a piece should last ~1 ms, so that the calls' Python overhead stays small), taken in turn
+    by whichever thread is free (a thread slowed by other jobs of the machine takes fewer), so that the threads
+    finish within about a smallest piece of each other (equal pieces left up to one large piece to the last
+    thread); an exception on the calling thread (``KeyboardInterrupt``) stops the helpers after their current
+    piece."""
     if threads <= 1 or n <= 1:
         part(0, n)
         return
-    pieces = max(threads, min(n, 8 * threads, n // max(1, min_piece)))
-    edges = [n * k // pieces for k in range(pieces + 1)]
+    edges = guided_edges(n, threads, min_piece)
+    pieces = len(edges) - 1
     todo = list(range(pieces - 1, -1, -1))
     lock = threading.Lock()
 

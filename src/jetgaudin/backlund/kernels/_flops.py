@@ -25,8 +25,8 @@ def flops_per_step(N: int, route: str = "auto") -> dict[str, int]:
             "eigenvector": 35,  # two |k|², the scale of the branch-point test
             "axis": 16,  # n' = |k|² n̂ from k: 1/|k|², k̄1 k2, |k2|² − |k1|²
             "Z": 29 + 40 + 36,  # K'y_0..K'y_3 (2 + 3 cross products); c/|k|², v_0..v_3; Z'_k = K'v_k (4 cross products)
-            "division": 29 + 44,  # 1/|k|² in α, −2c; the recurrence f, g, h; residuals e_A, e_B and their two tests
-            "checks_and_state": 17 + 9 + 9,  # |ℓ| scale of the residual test; ỹ = y − 2cW; finiteness
+            "division": 29 + 41,  # 1/|k|² in α, −2c; the recurrence f, g, h; residuals e_A, e_B and their two tests
+            "checks_and_state": 14 + 9 + 9,  # max |ℓ_m|² of the residual test (b² per run); ỹ = y − 2cW; finiteness
         }
     elif route == "generic":
         parts = {

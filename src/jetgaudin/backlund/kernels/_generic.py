@@ -220,7 +220,7 @@ def run_orbit(x0, b, eta, nu0, cont, steps, save_every, out, final, drift, want_
     n3 = x0.shape[0]
     N = n3 // 3
     I0 = np.empty(2 * N)
-    Ib = np.empty(2 * N)
+    Ib = np.empty(4 * N)
     _integrals(x0, b, N, I0)
     for k in range(2 * N):
         drift[k] = 0.0

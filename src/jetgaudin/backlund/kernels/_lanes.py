@@ -9,6 +9,8 @@ redone by a second pass with ``ν1`` continued by the closest root (:func:`run_l
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -74,23 +76,23 @@ def _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, b, n1, n2, rk, Z, cst, t, ba
 #: of one buffer, LLVM proves that the rows do not overlap and vectorises the loop over the lanes without
 #: run-time alias checks (with run-time strides it does not vectorise this loop body at all).
 LANES = 32
-# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then alive, status, redo (the lane
-# needs the closest-root fallback) and a copy of alive during the second pass
+# rows: 0-8 state, 9-10 ν, 11 b, 12-28 the constants of _n3._constants3, then the status (0: the lane is alive;
+# a failure's code + 8 × its step: the lane is frozen; −1 during a second pass: not redone) and redo (the lane needs
+# the closest-root fallback)
 _C0 = 12
-_ALIVE = _C0 + NCONST
-_STATUS = _ALIVE + 1
-_REDO = _ALIVE + 2
-_SAVED = _ALIVE + 3
-# the power of two q of _n3._scale3 (per orbit and call)
-_Q = _ALIVE + 4
-# scratch rows between the two halves of a step: n' (3), r, go (the lane steps: alive, not to be redone, its
-# eigenvector valid), the residual tolerance
-_MID = _ALIVE + 5
-_ROWS = _MID + 6
+_STATUS = _C0 + NCONST
+assert NCONST == 17  # _fill_constants writes them one by one
+_REDO = _STATUS + 1
+# the power of two q of _n3._scale3 (per orbit and call), b²
+_Q = _STATUS + 2
+_BB = _STATUS + 3
+# scratch rows between the two halves of a step: n' (3), r (its sign: whether the lane steps), the residual tolerance
+_MID = _STATUS + 4
+_ROWS = _MID + 5
 
 
 @block(inline="always")
-def _lanes_pass(buf, newton):
+def _lanes_pass(buf, newton, n8):
     """One step of the alive lanes of ``buf`` (``_ROWS × LANES``), vectorised across the lanes, in two loops over
     the lanes (the axis ``n'``, then the dressing) joined by scratch rows; the dressing loop writes the new values
     in place.  Two shorter loop bodies ran faster than one (docs/performance.md); the operations, hence the bits,
@@ -108,22 +110,24 @@ def _lanes_pass(buf, newton):
                        buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l], buf[17 * L + l],
                        buf[_Q * L + l], complex(buf[9 * L + l], buf[10 * L + l]), newton)
         # a lane alive and not to be redone takes its new ν1 (in place) and, if its eigenvector failed, the status;
-        # the others keep their values.  The dressing gets one flag: the lane steps, its eigenvector valid
-        alive = buf[_ALIVE * L + l] != 0.0
+        # the others keep their values.  Whether the lane steps (alive, not to be redone, its eigenvector valid)
+        # goes to the dressing in the sign of the row of r (a row of its own cost a 512-bit store, ~1.6 FMA-pipe
+        # cycles on Zen 4): r = 1/(q|k|²) > 0 where the lane steps (|k|² > 0 finite there, q > 0 a power of two, or
+        # 0 with r = +inf beyond ~1e162, where |ℓ(η)|² has overflowed and the eigenvector failed), −1.0 where not;
+        # the dressing steps where ``not (r < 0)`` (a NaN would step, and fail, as on the single-orbit route)
+        alive = buf[_STATUS * L + l] == 0.0
         take = S._sel(alive, not r[5], False)
         buf[9 * L + l] = S._sel(take, r[0].real, buf[9 * L + l])
         buf[10 * L + l] = S._sel(take, r[0].imag, buf[10 * L + l])
-        pre = S._sel(r[6], r[7], 0.0)
-        buf[_STATUS * L + l] = S._sel(take, pre, buf[_STATUS * L + l])
+        buf[_STATUS * L + l] = S._sel(S._sel(take, r[6], False), r[7] + n8, buf[_STATUS * L + l])
         buf[_REDO * L + l] = S._sel(S._sel(alive, r[5], False), 1.0, 0.0)
         buf[M + l] = r[1]
         buf[M + L + l] = r[2]
         buf[M + 2 * L + l] = r[3]
-        buf[M + 3 * L + l] = r[4]
-        buf[M + 4 * L + l] = S._sel(S._sel(take, not r[6], False), 1.0, 0.0)
+        buf[M + 3 * L + l] = S._sel(S._sel(take, not r[6], False), r[4], -1.0)
         # the residual tolerance (from the state alone) here, where the loop has idle issue slots
-        buf[M + 5 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
-                                   buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[11 * L + l])
+        buf[M + 4 * L + l] = _tol3(buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
+                                   buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l], buf[_BB * L + l])
     for l in range(L):
         cst = (buf[12 * L + l], buf[13 * L + l], buf[14 * L + l], buf[15 * L + l], buf[16 * L + l],
                buf[17 * L + l], buf[18 * L + l], buf[19 * L + l], buf[20 * L + l], buf[21 * L + l],
@@ -131,11 +135,11 @@ def _lanes_pass(buf, newton):
                buf[27 * L + l], buf[28 * L + l])
         x0, x1, x2, x3, x4, x5, x6, x7, x8 = (buf[l], buf[L + l], buf[2 * L + l], buf[3 * L + l], buf[4 * L + l],
                                               buf[5 * L + l], buf[6 * L + l], buf[7 * L + l], buf[8 * L + l])
-        go = buf[M + 4 * L + l] != 0.0
+        go = not (buf[M + 3 * L + l] < 0.0)
         Z = _zed3(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l], buf[M + L + l],
                   buf[M + 2 * L + l], buf[M + 3 * L + l], cst)
         r = _lane_dress(x0, x1, x2, x3, x4, x5, x6, x7, x8, buf[11 * L + l], buf[M + l],
-                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 5 * L + l], False, False)
+                        buf[M + L + l], buf[M + 3 * L + l], Z, cst, buf[M + 4 * L + l], False, False)
         # in place: the state of a lane that steps (``go``: alive, not to be redone, its eigenvector valid) without
         # failure, and the status of a lane that steps; any other lane keeps its values (selects of the old values,
         # stored whole: AVX-512 masked stores where LLVM makes them, as cheap as plain ones on Zen 4)
@@ -149,7 +153,7 @@ def _lanes_pass(buf, newton):
         buf[6 * L + l] = S._sel(new, r[7], x6)
         buf[7 * L + l] = S._sel(new, r[8], x7)
         buf[8 * L + l] = S._sel(new, r[9], x8)
-        buf[_STATUS * L + l] = S._sel(go, float(r[0]), buf[_STATUS * L + l])
+        buf[_STATUS * L + l] = S._sel(go, float(r[0]) + S._sel(r[10], 0.0, n8), buf[_STATUS * L + l])
 
 
 @block(inline="always")
@@ -164,12 +168,31 @@ def _any_row(buf, start):
     return acc != 0
 
 
-@block()
-def _fill_constants(carr, eta):
-    """``carr[:] = _constants3(η)`` (:func:`._n3._constants3`)."""
-    c = _constants3(eta)
-    for i in range(NCONST):
-        carr[i] = c[i]
+@block(inline="always")
+def _fill_constants(buf, M):
+    """The rows of the constants of :func:`._n3._constants3` of every lane from its ``η`` in the scratch rows ``M``,
+    ``M + LANES``: a loop over the lanes that LLVM vectorises (the constants of an ensemble whose orbits each have
+    their own ``η``, one by one, were ~0.4 ms of a call of 2·10⁴ orbits)."""
+    L = LANES
+    for l in range(L):
+        c = _constants3(complex(buf[M + l], buf[M + L + l]))
+        buf[_C0 * L + l] = c[0]
+        buf[(_C0 + 1) * L + l] = c[1]
+        buf[(_C0 + 2) * L + l] = c[2]
+        buf[(_C0 + 3) * L + l] = c[3]
+        buf[(_C0 + 4) * L + l] = c[4]
+        buf[(_C0 + 5) * L + l] = c[5]
+        buf[(_C0 + 6) * L + l] = c[6]
+        buf[(_C0 + 7) * L + l] = c[7]
+        buf[(_C0 + 8) * L + l] = c[8]
+        buf[(_C0 + 9) * L + l] = c[9]
+        buf[(_C0 + 10) * L + l] = c[10]
+        buf[(_C0 + 11) * L + l] = c[11]
+        buf[(_C0 + 12) * L + l] = c[12]
+        buf[(_C0 + 13) * L + l] = c[13]
+        buf[(_C0 + 14) * L + l] = c[14]
+        buf[(_C0 + 15) * L + l] = c[15]
+        buf[(_C0 + 16) * L + l] = c[16]
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -195,33 +218,27 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
     other jobs, and ~2 s less first-use compile (no parallel region; docs/performance.md)."""
     B = X0.shape[0]
     L = LANES
+    M = _MID * L
     buf = np.empty(_ROWS * L)
-    carr = np.empty(NCONST)  # the constants of the current η (an array: a tuple indexed in a loop is slow)
-    I0 = np.empty(6)
-    Ib = np.empty(6)
     for k in range(k0, k1):
         i0 = k * L
         W = min(L, B - i0)  # orbits of this block
         # the block's buffer: lane l holds orbit i0 + l (the first orbit again in unused lanes)
-        cur = eta[i0]
-        _fill_constants(carr, cur)
         for l in range(L):
             o = i0 + (l if l < W else 0)
             for i in range(9):
                 buf[i * L + l] = X0[o, i]
             buf[9 * L + l] = nu0[o].real
             buf[10 * L + l] = nu0[o].imag
-            if eta[o] != cur:  # the constants of one η are computed once
-                cur = eta[o]
-                _fill_constants(carr, cur)
-            for i in range(NCONST):
-                buf[(_C0 + i) * L + l] = carr[i]
+            buf[M + l] = eta[o].real  # (the scratch rows hold η until the constants are computed)
+            buf[M + L + l] = eta[o].imag
             buf[11 * L + l] = b[o]
+            buf[_BB * L + l] = b[o] * b[o]
             buf[_Q * L + l] = _scale3(X0[o, 0], X0[o, 1], X0[o, 2], X0[o, 3], X0[o, 4], X0[o, 5], X0[o, 6],
                                       X0[o, 7], X0[o, 8], b[o])
-            buf[_ALIVE * L + l] = 1.0
             buf[_STATUS * L + l] = 0.0
             buf[_REDO * L + l] = 0.0
+        _fill_constants(buf, M)
         for o in range(i0, i0 + W):
             for i in range(9):
                 out[0, o, i] = X0[o, i]
@@ -229,6 +246,7 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
             fail[o] = steps
         for n in range(steps):
             newton = n > 0 or cont
+            n8 = 8.0 * n  # a failure at step n writes its code + 8n to the status row
             redo = False
             for second in (False, True):  # one call site of the pass (LLVM inlines it once)
                 if second:
@@ -244,19 +262,13 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                             nu = S._continue_nu(u, v, w, complex(buf[9 * L + l], buf[10 * L + l]))
                             buf[9 * L + l] = nu.real
                             buf[10 * L + l] = nu.imag
-                    for l in range(L):  # the second pass steps those lanes alone
-                        buf[_SAVED * L + l] = buf[_ALIVE * L + l]
-                        buf[_ALIVE * L + l] = buf[_REDO * L + l]
-                _lanes_pass(buf, newton and not second)
+                        elif buf[_STATUS * L + l] == 0.0:  # alive, not redone: out of the second pass
+                            buf[_STATUS * L + l] = -1.0
+                _lanes_pass(buf, newton and not second, n8)
             if redo:
                 for l in range(L):
-                    buf[_ALIVE * L + l] = buf[_SAVED * L + l]
-            for l in range(L if _any_row(buf, _STATUS * L) else 0):
-                if buf[_STATUS * L + l] != 0.0 and buf[_ALIVE * L + l] != 0.0:
-                    buf[_ALIVE * L + l] = 0.0
-                    if l < W:
-                        status[i0 + l] = int(buf[_STATUS * L + l])
-                        fail[i0 + l] = n
+                    if buf[_STATUS * L + l] == -1.0:
+                        buf[_STATUS * L + l] = 0.0
             if (n + 1) % save_every == 0:
                 j = (n + 1) // save_every
                 for l in range(W):
@@ -264,12 +276,14 @@ def run_lanes3(X0, b, eta, nu0, cont, steps, save_every, out, final, drift, stat
                         out[j, i0 + l, i] = buf[i * L + l]
         for l in range(W):
             o = i0 + l
+            st = buf[_STATUS * L + l]
+            if st != 0.0:  # failed: code + 8 × its step (no row of the block is read right after the pass that
+                at = math.floor(st / 8.0)  # wrote it: a load of a lane's masked store in flight waits for it)
+                status[o] = int(st - 8.0 * at)
+                fail[o] = int(at)
             for i in range(9):
                 final[o, i] = buf[i * L + l]
             nu_last[o] = complex(buf[9 * L + l], buf[10 * L + l])
             if want_drift:  # else ``drift`` is left as given (zeros: run_batch)
-                for m in range(6):
-                    drift[o, m] = 0.0
-                S._integrals(X0[o], b[o], 3, I0)
                 last = (fail[o] if status[o] != STATUS_OK else steps) // save_every
-                S._drift_pass(out[:, o], final[o], last, b[o], 3, I0, Ib, drift[o])
+                S._drift_pass3(out, o, final, last, b[o], X0[o], drift[o])
