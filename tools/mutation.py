@@ -68,6 +68,18 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gpu/_drivers.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     "gpu/_kernels.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py", "tests/test_gpu_sun.py"),
     "gpu/_resident.py": ("tests/test_gpu.py",),
+    # added since the seed-33 sample (issue 33, item 5: the seed-35 round): one model (the route table of the maps,
+    # the registry, jet constants as a site option), the dressing split from gaudin/maps.py, the chain Hamiltonian,
+    # solve's route table and the exact chain's Python-side constants
+    "_system_maps.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
+    "gaudin/_model_map.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
+    "gaudin/_site_constants.py": ("tests/test_site_constants.py", "tests/test_top_as_model.py"),
+    "gaudin/_dressing.py": ("tests/test_gaudin_maps.py", "tests/test_trigonometric_maps.py",
+                            "tests/test_chain_drift.py"),
+    "gaudin/hamiltonian.py": ("tests/test_gaudin.py", "tests/test_solve_models.py"),
+    "_exact_chain_prep.py": ("tests/test_bite_exact.py", "tests/test_exact_chain_compiled.py",
+                             "tests/test_exact_chain.py"),
+    "methods.py": ("tests/test_bite_solve.py", "tests/test_solve_models.py", "tests/test_top_as_model.py"),
 }
 
 #: the default sample size per module (the kernels recompile for every mutant: fewer there)
@@ -78,7 +90,10 @@ PER_MODULE = {"backlund/kernels/_scalar.py": 5, "backlund/kernels/_n3.py": 5, "b
               "gaudin/model.py": 4, "gaudin/maps.py": 3, "gaudin/_backend.py": 4, "gaudin/_curve.py": 2,
               "exact.py": 6, "exact_chain.py": 6, "events.py": 12, "solve.py": 12,
               "run/driver.py": 5, "run/health.py": 3, "run/store.py": 5, "_fs.py": 12, "_space.py": 10,
-              "gpu/_device.py": 2, "gpu/_drivers.py": 4, "gpu/_kernels.py": 4, "gpu/_resident.py": 4}
+              "gpu/_device.py": 2, "gpu/_drivers.py": 4, "gpu/_kernels.py": 4, "gpu/_resident.py": 4,
+              # the seed-35 round's additions
+              "_system_maps.py": 4, "gaudin/_model_map.py": 2, "gaudin/_site_constants.py": 4,
+              "gaudin/_dressing.py": 4, "gaudin/hamiltonian.py": 3, "_exact_chain_prep.py": 4, "methods.py": 4}
 DEFAULT_PER_MODULE = 6
 
 #: the areas whose kill rate docs/mutation.md reports (issue 33: at least 90 % each), and their modules
@@ -87,10 +102,11 @@ AREAS: dict[str, tuple[str, ...]] = {
              "backlund/closed_form.py", "backlund/generating.py", "backlund/kernels/_scalar.py",
              "backlund/kernels/_n3.py", "backlund/kernels/_generic.py", "backlund/kernels/_branch.py"),
     "families": ("families/trigonometric.py", "families/elliptic.py", "families/_jacobi.py"),
-    "gaudin": ("gaudin/model.py", "gaudin/maps.py", "gaudin/_backend.py", "gaudin/_curve.py"),
-    "exact": ("exact.py", "exact_chain.py"),
+    "gaudin": ("gaudin/model.py", "gaudin/maps.py", "gaudin/_backend.py", "gaudin/_curve.py", "_system_maps.py",
+               "gaudin/_model_map.py", "gaudin/_site_constants.py", "gaudin/_dressing.py", "gaudin/hamiltonian.py"),
+    "exact": ("exact.py", "exact_chain.py", "_exact_chain_prep.py"),
     "events": ("events.py",),
-    "solve": ("solve.py",),
+    "solve": ("solve.py", "methods.py"),
     "run": ("run/driver.py", "run/health.py", "run/store.py"),
     "disk": ("_fs.py", "_space.py"),
     "gpu": ("gpu/_device.py", "gpu/_drivers.py", "gpu/_kernels.py", "gpu/_resident.py"),
