@@ -50,7 +50,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
                        "tests/test_chain_compiled_start.py"),
     "gaudin/_backend.py": ("tests/test_auto_route.py",),
     "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py", "tests/test_bite_exact.py"),
-    "exact.py": ("tests/test_exact.py", "tests/test_exact_first_class.py"),
+    "exact.py": ("tests/test_bite_exact.py", "tests/test_exact.py", "tests/test_exact_first_class.py"),
     "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain.py", "tests/test_exact_first_class.py"),
     "events.py": ("tests/test_bite_events.py", "tests/test_solve.py"),
     "solve.py": ("tests/test_bite_solve.py", "tests/test_solve.py", "tests/test_exact_first_class.py"),
