@@ -51,7 +51,10 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gaudin/_backend.py": ("tests/test_auto_route.py",),
     "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py", "tests/test_bite_exact.py"),
     "exact.py": ("tests/test_bite_exact.py", "tests/test_exact.py", "tests/test_exact_first_class.py"),
-    "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain.py", "tests/test_exact_first_class.py"),
+    # test_exact_chain_compiled.py compares the NumPy route of the solve with the compiled one (seed 35: the NumPy
+    # Newton method and its continuation of ν ran in no test of the selection before)
+    "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain_compiled.py", "tests/test_exact_chain.py",
+                       "tests/test_exact_first_class.py"),
     "events.py": ("tests/test_bite_events.py", "tests/test_solve.py"),
     "solve.py": ("tests/test_bite_solve.py", "tests/test_solve.py", "tests/test_exact_first_class.py"),
     "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
