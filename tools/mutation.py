@@ -70,7 +70,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gpu/_device.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     "gpu/_drivers.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     "gpu/_kernels.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py", "tests/test_gpu_sun.py"),
-    "gpu/_resident.py": ("tests/test_gpu.py",),
+    "gpu/_resident.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     # added since the seed-33 sample (issue 33, item 5: the seed-35 round): one model (the route table of the maps,
     # the registry, jet constants as a site option), the dressing split from gaudin/maps.py, the chain Hamiltonian,
     # solve's route table and the exact chain's Python-side constants
