@@ -57,7 +57,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
                        "tests/test_exact_first_class.py"),
     "events.py": ("tests/test_bite_events.py", "tests/test_solve.py"),
     "solve.py": ("tests/test_bite_solve.py", "tests/test_solve.py", "tests/test_exact_first_class.py"),
-    "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
+    "run/driver.py": ("tests/test_run.py", "tests/test_run_compile.py", "tests/test_reliability_runlayer.py"),
     "run/health.py": ("tests/test_bite_run.py", "tests/test_run.py", "tests/test_reliability_runlayer.py"),
     "run/store.py": ("tests/test_bite_run.py", "tests/test_run.py", "tests/test_data_safety_io.py",
                      "tests/test_reliability_runlayer.py"),
