@@ -166,3 +166,36 @@ def test_a_batch_whose_second_orbit_fails_in_the_compiled_loop_raises_naming_it(
     E = jg.ExactFlow(jg.physical_hamiltonian(3, 1.0), 0.05, backend="compiled")
     with pytest.raises(jg.SingularStepError, match="of orbit 1"):
         E.advance(np.stack([_X3, 0.9 * _X3]), None, 4, 1)
+
+
+def test_the_compiled_solve_refuses_what_the_numpy_solve_refuses_without_a_branch_rule():
+    """A trigonometric chain at ``b = 0`` with ``J = Σ y_0^3 = 0``: ``ν²`` vanishes as ``Im λ → −∞`` (``b + iγJ = 0``)
+    and the family's branch rule of ``ν`` is undefined.  The NumPy solve refuses the step (no parameters "at any step
+    size"); the compiled solve, a faster copy of it, must refuse the same state the same way, never step on a guessed
+    branch.  Written for the mutant ``abs(Q[0])`` → ``abs(Q[1])`` in the compiled route's test of the polynomial's
+    leading coefficient (the compiled solve then stepped)."""
+    m = jg.GaudinModel(0.0, ((0.0, 1), (0.4, 1), (0.9, 1)), family="trigonometric", gamma=0.5)
+    X = np.random.default_rng(3).standard_normal(m.n_state) * 0.5
+    X[2::3] -= X[2::3].mean()  # J = 0
+    w = np.zeros(m.n_integrals)
+    w[~m.casimir_mask()] = [0.5, 0.2, 0.3, 0.1][: int((~m.casimir_mask()).sum())]
+    H = m.hamiltonian(w)
+    for backend in ("numpy", "compiled"):
+        with pytest.raises(jg.StepTooLargeError, match="at any step size"):
+            ChainExactFlow(H, 0.02, backend=backend)(X)
+
+
+def test_the_real_parts_of_a_periodic_family_are_the_farthest_points_of_the_whole_grid():
+    """``_periodic_real_parts(λ_c, P, k, points)``: greedily the points of the 256-point grid ``λ_c + jP/256``,
+    ``j = 0..255``, farthest from every point and its images at ``± P``.  One point at ``P/2 − 3P/1024`` (period 1):
+    the farthest grid point is the last one, ``255/256`` (distance ``(1/2 − 1/1024)``, against ``1/2 − 3/1024`` for
+    ``j = 0``); for ``k = 2`` the second is at least ``P/8`` from it.  Exact (grid points).  Written for the mutant
+    ``np.arange(256)`` → ``np.arange(255)`` (the grid's last point dropped)."""
+    from jetgaudin._exact_chain_prep import _periodic_real_parts
+
+    pts = np.array([0.5 - 3 / 1024], dtype=complex)
+    assert _periodic_real_parts(0.0, 1.0, 1, pts).tolist() == [255 / 256]
+    two = _periodic_real_parts(0.0, 1.0, 2, pts)
+    assert 255 / 256 in two.tolist() and len(two) == 2
+    d = abs(two[0] - two[1])
+    assert min(d, 1 - d) >= 1 / 8
