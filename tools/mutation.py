@@ -222,6 +222,8 @@ def main(argv: list[str] | None = None) -> int:
         # some tests read the documentation (docs/chains.md's examples run in tests/test_gaudin.py)
         shutil.copytree(ROOT / "docs", work / "docs",
                         ignore=shutil.ignore_patterns("_build", "*.png", "*.gif", "*.mp4"))
+        # tests/test_chain_drift.py loads benchmarks/chain_drift.py (its persistence score)
+        shutil.copytree(ROOT / "benchmarks", work / "benchmarks", ignore=ignore)
         shutil.copy(ROOT / "pyproject.toml", work / "pyproject.toml")
         for module in modules:
             k = args.per_module if args.per_module is not None else PER_MODULE.get(module, DEFAULT_PER_MODULE)
