@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import jetgaudin as jg
 from jetgaudin.run.health import Health
@@ -121,3 +122,35 @@ def test_a_failed_flush_is_one_line_naming_the_file(tmp_path, monkeypatch):
     assert res.state is rl.RunStatus.FAILED_IO
     assert "while flushing" in res.status and str(tmp_path / "r" / "orbit.h5") in res.status
     assert "\n" not in res.status and "I/O error" in res.status
+
+
+# --- the seed-35 sample (issue 33, item 5) --------------------------------------------------------------------------
+
+def test_a_checkpoint_file_beyond_its_bound_is_refused_before_it_is_read(tmp_path):
+    """``read_checkpoint_npz`` reads a checkpoint of ``B`` orbits of ``n`` components only up to its bound (its
+    arrays: ``X``, ``ν1`` and the anchor's, the drift, and 64 KiB for the zip's own bytes): a checkpoint at its
+    largest (every array, 4 orbits of 9) is read; one that matches its digest but carries 1 MiB more (a planted
+    extra array) is refused naming its size, never read into memory.  Exact (byte counts).  Written for the mutant
+    ``8 B n + (1 << 16)`` → ``8 B n ** (1 << 16)`` (no bound)."""
+    import hashlib
+    import io
+
+    from jetgaudin.run.store import read_checkpoint_npz
+
+    B, n = 4, 9
+    rng = np.random.default_rng(0)
+    arrays = {"step": np.int64(10), "X": rng.normal(size=(B, n)), "nu1": rng.normal(size=B) + 1j,
+              "drift": rng.normal(size=(B, 6)), "anchor_step": np.int64(8), "anchor_X": rng.normal(size=(B, n)),
+              "anchor_nu1": rng.normal(size=B) + 1j}
+
+    def write(name: str, **extra) -> dict:
+        buf = io.BytesIO()
+        np.savez(buf, **arrays, **extra)
+        data = buf.getvalue()
+        (tmp_path / name).write_bytes(data)
+        return {"file": name, "sha256": hashlib.sha256(data).hexdigest()}
+
+    got = read_checkpoint_npz(tmp_path, write("ck0.npz"), (B, n))
+    assert np.array_equal(got["X"], arrays["X"]) and np.array_equal(got["anchor_nu1"], arrays["anchor_nu1"])
+    with pytest.raises(jg.RunDirectoryError, match="more than the"):
+        read_checkpoint_npz(tmp_path, write("ck1.npz", pad=np.zeros(1 << 17)), (B, n))
