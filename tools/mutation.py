@@ -42,7 +42,8 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "backlund/kernels/_generic.py": ("tests/test_routes.py", "tests/test_kernels.py"),
     "backlund/kernels/_branch.py": ("tests/test_branch_rule.py", "tests/test_kernels.py"),
     # added since the last sample (issue 33): families, gaudin, exact steps, events, solve, the run layer, disk
-    "families/trigonometric.py": ("tests/test_trigonometric.py", "tests/test_trig_one_point.py"),
+    "families/trigonometric.py": ("tests/test_bite_families.py", "tests/test_trigonometric.py",
+                                  "tests/test_trig_one_point.py"),
     "families/elliptic.py": ("tests/test_elliptic.py",),
     "families/_jacobi.py": ("tests/test_jacobi.py",),
     "gaudin/model.py": ("tests/test_bite_gaudin.py", "tests/test_gaudin.py"),
