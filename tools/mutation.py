@@ -49,7 +49,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gaudin/model.py": ("tests/test_bite_gaudin.py", "tests/test_gaudin.py"),
     "gaudin/maps.py": ("tests/test_gaudin_maps.py", "tests/test_chain_drift.py", "tests/test_chain_refusals.py",
                        "tests/test_chain_compiled_start.py"),
-    "gaudin/_backend.py": ("tests/test_auto_route.py",),
+    "gaudin/_backend.py": ("tests/test_bite_gaudin.py", "tests/test_auto_route.py"),
     "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py", "tests/test_bite_exact.py"),
     "exact.py": ("tests/test_bite_exact.py", "tests/test_exact.py", "tests/test_exact_first_class.py"),
     # test_exact_chain_compiled.py compares the NumPy route of the solve with the compiled one (seed 35: the NumPy
@@ -77,7 +77,8 @@ GROUPS: dict[str, tuple[str, ...]] = {
     # solve's route table and the exact chain's Python-side constants
     "_system_maps.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
     "gaudin/_model_map.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
-    "gaudin/_site_constants.py": ("tests/test_site_constants.py", "tests/test_top_as_model.py"),
+    "gaudin/_site_constants.py": ("tests/test_bite_gaudin.py", "tests/test_site_constants.py",
+                                  "tests/test_top_as_model.py"),
     "gaudin/_dressing.py": ("tests/test_gaudin_maps.py", "tests/test_trigonometric_maps.py",
                             "tests/test_chain_drift.py"),
     "gaudin/hamiltonian.py": ("tests/test_gaudin.py", "tests/test_solve_models.py"),
