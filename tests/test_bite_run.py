@@ -154,3 +154,22 @@ def test_a_checkpoint_file_beyond_its_bound_is_refused_before_it_is_read(tmp_pat
     assert np.array_equal(got["X"], arrays["X"]) and np.array_equal(got["anchor_nu1"], arrays["anchor_nu1"])
     with pytest.raises(jg.RunDirectoryError, match="more than the"):
         read_checkpoint_npz(tmp_path, write("ck1.npz", pad=np.zeros(1 << 17)), (B, n))
+
+
+def test_a_checkpoint_before_the_first_durable_row_must_be_the_start():
+    """``replay`` of a run with no durable row yet (``store.rows == 0``: the run starts again from ``X0``): only the
+    start itself is accepted -- step 0 at ``X0``, bit for bit; a checkpoint at step 5 still at ``X0``, or at step 0
+    with another state (edited), is refused (``RecordingError``, "does not match").  Written for the mutant
+    ``pos.n != 0 or not array_equal(pos.X, X0)`` → ``and`` (either edit alone passed)."""
+    import types
+
+    from jetgaudin import run as rl
+    from jetgaudin.run.driver import Position
+    from jetgaudin.run.replay import replay
+
+    spec = rl.RunSpec(MAP, X3, 100, 10)
+    store = types.SimpleNamespace(rows=0, dn=np.zeros(0, dtype=np.int64), dS=np.zeros((0, 9)))
+    assert replay(store, spec, Position(0, X3.copy(), None), None, "run.json") is spec
+    for pos in (Position(5, X3.copy(), None), Position(0, X3 + 1e-9, None)):
+        with pytest.raises(jg.RecordingError, match="does not match"):
+            replay(store, spec, pos, None, "run.json")

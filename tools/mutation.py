@@ -93,7 +93,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gaudin/_forms.py": ("tests/test_gaudin.py", "tests/test_gaudin_maps.py", "tests/test_trigonometric_maps.py"),
     "gaudin/_compensated.py": ("tests/test_chain_drift.py",),
     "run/spec.py": ("tests/test_bite_run.py", "tests/test_run.py"),
-    "run/replay.py": ("tests/test_data_safety.py", "tests/test_reliability_refusals.py"),
+    "run/replay.py": ("tests/test_bite_run.py", "tests/test_data_safety.py", "tests/test_reliability_refusals.py"),
 }
 
 #: the default sample size per module (the kernels recompile for every mutant: fewer there)
