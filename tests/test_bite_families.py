@@ -39,3 +39,18 @@ def test_spectral_rows_are_the_null_vectors_of_both_rows(gamma):
     gauge = np.abs(r1[:, 0] * r1[:, 1] - r2[:, 1] * r2[:, 2])
     assert np.max(gauge / (np.abs(r1[:, 0] * r1[:, 1]) + np.abs(r2[:, 1] * r2[:, 2]))) < 1e-13
     assert np.min(np.abs(r2[:, 1])) > 1e-3  # not the zero vector
+
+
+def test_sites_that_coincide_modulo_the_period_are_refused_and_only_those():
+    """A trigonometric chain's sites must differ modulo its period ``T`` (its Lax matrix is periodic in ``λ``):
+    ``0.3`` and ``0.3 + T`` are refused naming both, ``0.2`` and ``T − 0.2`` (whose sum is a period) are a valid
+    chain.  Written for the mutant ``(p − q)/T`` → ``(p + q)/T`` in ``Family.check`` (the sum tested, not the
+    difference)."""
+    import jetgaudin as jg
+
+    fam = jg.GaudinModel(0.8, [(0.0, 1), (1.0, 1)], family="trigonometric", gamma=0.5).family
+    T = fam.period
+    with pytest.raises(jg.InvalidParameterError, match="coincide modulo its period"):
+        jg.GaudinModel(0.8, [(0.3, 1), (0.3 + T, 1)], family="trigonometric", gamma=0.5)
+    m = jg.GaudinModel(0.8, [(0.2, 1), (T - 0.2, 1)], family="trigonometric", gamma=0.5)
+    assert m.M == 2

@@ -87,7 +87,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "methods.py": ("tests/test_bite_solve.py", "tests/test_solve_models.py", "tests/test_top_as_model.py"),
     # modules older than the seed-33 sample that hold logic and were in no area: the families' contract and series,
     # the chain's one-point maps, integrals as forms and compensated arithmetic, the run's spec and replay
-    "families/_base.py": ("tests/test_trigonometric.py", "tests/test_elliptic.py"),
+    "families/_base.py": ("tests/test_bite_families.py", "tests/test_trigonometric.py", "tests/test_elliptic.py"),
     "families/_series.py": ("tests/test_trigonometric_maps.py", "tests/test_elliptic.py"),
     "gaudin/_one_point.py": ("tests/test_trig_one_point.py", "tests/test_gaudin_maps.py"),
     "gaudin/_forms.py": ("tests/test_gaudin.py", "tests/test_gaudin_maps.py", "tests/test_trigonometric_maps.py"),
