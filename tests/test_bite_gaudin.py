@@ -76,3 +76,21 @@ def test_a_map_with_jet_constants_changes_its_backend():
     assert Tn.backend is Backend.NUMPY and Tc.backend is Backend.COMPILED
     a, b = Tn.iterate(X, 10), Tc.iterate(X, 10)
     assert np.max(np.abs(a - b)) < 1e-12 and np.max(np.abs(a[-1] - X)) > 1e-3
+
+
+def test_the_one_point_map_declares_the_properties_of_its_implementations():
+    """``jg.OnePointBacklund`` of a top and of a chain declares what its route's implementation declares
+    (``gaudin._one_point._ChainOnePoint``, written out on its own there): integral-preserving, Poisson, symmetric,
+    complex, of no order, and not the time-1 flow of ``G_η`` (``interpolates_flow=False``: only the real two-point map
+    is, ``docs/architecture.md``).  Written for the mutant ``interpolates_flow=False`` → ``True`` in
+    ``_system_maps._ONE_POINT_PROPERTIES`` (the public class then claimed a property its implementation does not)."""
+    import dataclasses
+
+    from jetgaudin.gaudin._one_point import _ChainOnePoint
+
+    impl = {f.name: f for f in dataclasses.fields(_ChainOnePoint)}["properties"].default
+    chain = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 2)])
+    for system in (1.0, chain):
+        props = jg.OnePointBacklund(system, 0.5 + 0.3j).properties
+        assert props == impl, (system, props, impl)
+        assert props.interpolates_flow is False and props.real is False and props.preserves_integrals

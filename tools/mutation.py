@@ -75,7 +75,7 @@ GROUPS: dict[str, tuple[str, ...]] = {
     # added since the seed-33 sample (issue 33, item 5: the seed-35 round): one model (the route table of the maps,
     # the registry, jet constants as a site option), the dressing split from gaudin/maps.py, the chain Hamiltonian,
     # solve's route table and the exact chain's Python-side constants
-    "_system_maps.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
+    "_system_maps.py": ("tests/test_bite_gaudin.py", "tests/test_top_as_model.py", "tests/test_one_class.py"),
     "gaudin/_model_map.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
     "gaudin/_site_constants.py": ("tests/test_bite_gaudin.py", "tests/test_site_constants.py",
                                   "tests/test_top_as_model.py"),
