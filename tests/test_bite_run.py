@@ -173,3 +173,29 @@ def test_a_checkpoint_before_the_first_durable_row_must_be_the_start():
     for pos in (Position(5, X3.copy(), None), Position(0, X3 + 1e-9, None)):
         with pytest.raises(jg.RecordingError, match="does not match"):
             replay(store, spec, pos, None, "run.json")
+
+
+def test_an_ensembles_calls_fill_the_chunk_memory_cap_and_no_more(tmp_path):
+    """An ensemble of 4 orbits (compiled route): the driver's calls grow until their saved rows reach
+    ``max_chunk_bytes`` (7 rows of 4 orbits of 9 doubles), never past it, and the run equals the one-call orbit bit
+    for bit.  ``tests/test_reliability_runlayer.py`` checks one orbit, where a row is ``8 n`` bytes either way.
+    Written for the mutant ``row_bytes = 8 * B * n`` → ``8 ** B * n`` (a batch's rows overcounted 128-fold: every
+    call one row)."""
+    from jetgaudin import run as rl
+
+    X0 = np.stack([X3 * s for s in (1.0, 0.9, 1.1, 0.8)])
+    sizes: list[int] = []
+
+    class Spy(type(jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="compiled"))):
+        def advance(self, X, carry, steps, save_every=1):
+            adv = super().advance(X, carry, steps, save_every)
+            sizes.append(int(np.asarray(adv.rows).nbytes))
+            return adv
+
+    spy = Spy(1.0, 5 + 0.1j, backend="compiled")
+    cap = 7 * 4 * 72  # seven rows of 4 orbits of 9 doubles
+    rl.start(rl.RunSpec(spy, X0, 600, 2, checkpoint_seconds=0.0), tmp_path / "r", max_chunk_bytes=cap)
+    assert max(sizes) == cap
+    d = rl.load(tmp_path / "r")
+    ref = jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="compiled").iterate(X0, 600)
+    assert d.X.shape == (301, 4, 9) and np.array_equal(d.X, ref[d.n])
