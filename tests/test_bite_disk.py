@@ -126,3 +126,71 @@ def test_without_fallocate_the_free_space_is_checked_to_the_byte(tmp_path, monke
     with pytest.raises(RunIOError, match="disk full") as e:
         _space.reserve_space(tmp_path, "f", 40961)
     assert "\n" not in str(e.value)
+
+
+# --- the seed-35 sample (issue 33, item 5) --------------------------------------------------------------------------
+
+def test_a_resume_without_a_lock_file_takes_the_lock_when_it_claims(tmp_path):
+    """``RunDirLock(create=False, claim=False)`` (a resume checking its run) on a directory without a lock file takes
+    nothing on entry and leaves the directory as it was; ``claim()`` then creates the lock file, takes the lock (a
+    second writer is refused naming this process) and writes this PID.  Written for the mutant
+    ``self._create, self._claim = True, True`` → ``False, True`` in ``claim`` (the lock was then never taken)."""
+    from jetgaudin._errors import RunLockedError
+
+    lock = fs.RunDirLock(tmp_path, claim=False, create=False)
+    with lock:
+        assert not lock.held and not (tmp_path / fs.LOCK_NAME).exists()
+        lock.claim()
+        assert lock.held and (tmp_path / fs.LOCK_NAME).read_text() == f"{os.getpid()}\n"
+        with pytest.raises(RunLockedError, match=f"process {os.getpid()}"):
+            fs.RunDirLock(tmp_path).acquire()
+
+
+def test_a_resume_with_a_lock_file_claims_it_with_its_pid(tmp_path):
+    """A lock file left by an earlier writer (its PID, which has exited): ``RunDirLock(create=False, claim=False)``
+    takes the lock on entry without writing; ``claim()`` replaces the old PID by this one.  Written for the mutant
+    ``O_CREAT if self._create else 0`` → ``else 1`` (``O_RDWR | O_WRONLY``: a descriptor that can neither read nor
+    write, so the PID was never written)."""
+    (tmp_path / fs.LOCK_NAME).write_text("999999999\n")
+    lock = fs.RunDirLock(tmp_path, claim=False, create=False)
+    with lock:
+        assert lock.held and (tmp_path / fs.LOCK_NAME).read_text() == "999999999\n"
+        lock.claim()
+        assert (tmp_path / fs.LOCK_NAME).read_text() == f"{os.getpid()}\n"
+
+
+def test_files_are_created_rw_r__r__and_rewritten_from_empty(tmp_path):
+    """``open_write`` creates a run file with mode ``0o644`` (under umask 0o022: readable by everyone, executable by
+    none) and truncates an existing one: rewritten with nothing it is empty.  Written for the mutants
+    ``mode=0o644`` → ``419`` (``0o643``) in ``open_nofollow`` and ``os.ftruncate(fd, 0)`` → ``(fd, 1)`` (a byte of
+    the old content was left)."""
+    old = os.umask(0o022)
+    try:
+        with fs.open_write(tmp_path, "a.txt") as f:
+            f.write(b"hello")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+    with fs.open_write(tmp_path, "a.txt"):
+        pass
+    assert (tmp_path / "a.txt").read_bytes() == b""
+
+
+def test_a_reserve_that_cannot_be_created_is_one_io_error_naming_it(tmp_path, monkeypatch):
+    """``make_reserve`` where creating the reserve file fails (ENOSPC, planted in ``os.open``): a ``RunIOError``
+    saying ``disk full`` and naming the reserve's path, no other exception.  Written for the mutant
+    ``dirpath / RESERVE_NAME`` → ``dirpath * RESERVE_NAME`` in that message (a TypeError instead)."""
+    from jetgaudin import _space
+    from jetgaudin._errors import RunIOError
+
+    real_open = os.open
+
+    def full(name, *args, **kwargs):
+        if name == _space.RESERVE_NAME:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return real_open(name, *args, **kwargs)
+
+    monkeypatch.setattr(os, "open", full)
+    with pytest.raises(RunIOError, match="disk full") as e:
+        _space.make_reserve(tmp_path, 4096)
+    assert str(tmp_path / _space.RESERVE_NAME) in str(e.value)

@@ -109,3 +109,93 @@ def test_the_numpy_loop_of_maps_without_a_compiled_route(monkeypatch):
     assert compiled.rows.shape == numpy_loop.rows.shape == (3, 9)
     assert np.max(np.abs(numpy_loop.rows - compiled.rows)) < 1e-12
     assert np.max(np.abs(numpy_loop.X - compiled.X)) < 1e-12
+
+
+# --- the seed-35 sample (issue 33, item 5): exact.py's compiled top route -----------------------------------------
+
+_X3 = np.array([0.3, -0.2, 0.9, 0.1, 0.4, -0.3, 0.2, 0.1, 0.5])  # a top of order 3 of size ~1
+
+
+def test_the_top_flow_saves_rows_up_to_16_steps_apart_in_one_compiled_loop(monkeypatch):
+    """``ExactFlow._run`` (module doc of :meth:`_run`): compiled, rows at most ``_FUSED_ROWS = 16`` (sub)steps apart
+    run in the fused loop (``_run_fused``), farther apart ``k s`` steps per kernel call (``_maps_compiled``); the two
+    routes give the same rows to round-off (1e-13: measured 5e-16 to 9e-16 over 51 steps of a state of size ~1).
+    Batches of two orbits, so that ``advance`` takes ``_run`` (one orbit takes the fused solve-and-run call).
+    Written for the mutant ``save_every * s <= _FUSED_ROWS`` → ``!=`` (the sparse saving took the fused loop)."""
+    import jetgaudin.exact as ex
+
+    H = jg.physical_hamiltonian(3, 1.0)
+    XB = np.stack([_X3, 0.9 * _X3])
+    seen: list[int] = []
+    real = ex._TopExactFlow._run_fused
+
+    def spy(self, Z, eta, theta, nu, steps, save_every, rows):
+        seen.append(save_every)
+        return real(self, Z, eta, theta, nu, steps, save_every, rows)
+
+    monkeypatch.setattr(ex._TopExactFlow, "_run_fused", spy)
+    for se, substeps, fused in ((16, 1, True), (17, 1, False), (8, 2, True), (9, 2, False)):
+        Es = jg.ExactFlow(H, 0.05, substeps, backend="compiled")
+        seen.clear()
+        adv = Es.advance(XB, None, 3 * se, se)
+        assert seen == ([se] if fused else []), (se, substeps, seen)
+        monkeypatch.setattr(ex, "_FUSED_ROWS", 0 if fused else 10 ** 6)  # the other route
+        other = Es.advance(XB, None, 3 * se, se)
+        monkeypatch.setattr(ex, "_FUSED_ROWS", 16)
+        assert np.max(np.abs(other.rows - adv.rows)) < 1e-13 and np.max(np.abs(other.X - adv.X)) < 1e-13
+        assert np.max(np.abs(adv.X - XB)) > 1e-2  # it moves
+
+
+def test_a_batch_whose_second_orbit_fails_in_the_compiled_loop_raises_naming_it(monkeypatch):
+    """A batch of the top's exact flow (compiled, fused loop) in which orbit 1 fails mid-run raises the typed error
+    naming orbit 1 (``SingularStepError``), never returns its rows with NaN.  The failure is planted: the solve's
+    parameters of orbit 1 made NaN (``_accepted`` wrapped), so that its first step is non-finite; orbit 0 is fine.
+    Written for the mutant ``Z.shape[0] > 1 and info[:, 0].any()`` → ``Z.shape[0] <= 1 and …`` (a batch's failures
+    after its first orbit were dropped)."""
+    import jetgaudin.exact as ex
+
+    real = ex._accepted
+
+    def planted(*args, **kwargs):
+        eta, theta, res, quad, nu = real(*args, **kwargs)
+        eta = eta.copy()
+        eta[1] = np.nan
+        return eta, theta, res, quad, nu
+
+    monkeypatch.setattr(ex, "_accepted", planted)
+    E = jg.ExactFlow(jg.physical_hamiltonian(3, 1.0), 0.05, backend="compiled")
+    with pytest.raises(jg.SingularStepError, match="of orbit 1"):
+        E.advance(np.stack([_X3, 0.9 * _X3]), None, 4, 1)
+
+
+def test_the_compiled_solve_refuses_what_the_numpy_solve_refuses_without_a_branch_rule():
+    """A trigonometric chain at ``b = 0`` with ``J = Σ y_0^3 = 0``: ``ν²`` vanishes as ``Im λ → −∞`` (``b + iγJ = 0``)
+    and the family's branch rule of ``ν`` is undefined.  The NumPy solve refuses the step (no parameters "at any step
+    size"); the compiled solve, a faster copy of it, must refuse the same state the same way, never step on a guessed
+    branch.  Written for the mutant ``abs(Q[0])`` → ``abs(Q[1])`` in the compiled route's test of the polynomial's
+    leading coefficient (the compiled solve then stepped)."""
+    m = jg.GaudinModel(0.0, ((0.0, 1), (0.4, 1), (0.9, 1)), family="trigonometric", gamma=0.5)
+    X = np.random.default_rng(3).standard_normal(m.n_state) * 0.5
+    X[2::3] -= X[2::3].mean()  # J = 0
+    w = np.zeros(m.n_integrals)
+    w[~m.casimir_mask()] = [0.5, 0.2, 0.3, 0.1][: int((~m.casimir_mask()).sum())]
+    H = m.hamiltonian(w)
+    for backend in ("numpy", "compiled"):
+        with pytest.raises(jg.StepTooLargeError, match="at any step size"):
+            ChainExactFlow(H, 0.02, backend=backend)(X)
+
+
+def test_the_real_parts_of_a_periodic_family_are_the_farthest_points_of_the_whole_grid():
+    """``_periodic_real_parts(λ_c, P, k, points)``: greedily the points of the 256-point grid ``λ_c + jP/256``,
+    ``j = 0..255``, farthest from every point and its images at ``± P``.  One point at ``P/2 − 3P/1024`` (period 1):
+    the farthest grid point is the last one, ``255/256`` (distance ``(1/2 − 1/1024)``, against ``1/2 − 3/1024`` for
+    ``j = 0``); for ``k = 2`` the second is at least ``P/8`` from it.  Exact (grid points).  Written for the mutant
+    ``np.arange(256)`` → ``np.arange(255)`` (the grid's last point dropped)."""
+    from jetgaudin._exact_chain_prep import _periodic_real_parts
+
+    pts = np.array([0.5 - 3 / 1024], dtype=complex)
+    assert _periodic_real_parts(0.0, 1.0, 1, pts).tolist() == [255 / 256]
+    two = _periodic_real_parts(0.0, 1.0, 2, pts)
+    assert 255 / 256 in two.tolist() and len(two) == 2
+    d = abs(two[0] - two[1])
+    assert min(d, 1 - d) >= 1 / 8

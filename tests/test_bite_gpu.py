@@ -180,3 +180,74 @@ def test_unwrap_gives_the_numpy_array_behind_a_simulator_array():
     a[0] = 7.0
     assert d.copy_to_host()[0] == 7.0
     assert _kernels._unwrap(x) is x and _kernels._unwrap(3) == 3
+
+
+# --- the seed-35 sample (issue 33, item 5) --------------------------------------------------------------------------
+
+def test_the_refusal_of_an_su3_call_too_large_for_the_gpu_names_its_size(monkeypatch):
+    """``run_sun_batch`` (the su(3) chains' GPU driver): the size its refusal names covers at least the saved rows and
+    the final states it allocates (``8 B (S + 1) n`` bytes), at most 10 % more (per-orbit scalars); printed to 3
+    digits, so compared to 0.5 %.  200 orbits of 2 sites (n = 16), 100 saved rows, 1 MiB free (faked).  Written for
+    the mutants ``8 B (n (S + 1) + 4)`` → ``8 B (n S^1 + 4)`` (1 % short: the final states forgotten), → ``7 B …``."""
+    import re
+
+    import jetgaudin.gpu._drivers as drv
+
+    monkeypatch.setattr(drv, "_free_bytes", lambda c: float(2**20))
+    ms = jg.GaudinModel([0.3, -0.1, 0.5, 0.2, 0.0, -0.2, 0.1, 0.4], [(0.0, 1), (1.0, 1)], algebra="su3")
+    Xs = 0.5 * np.random.default_rng(1).normal(size=(200, ms.n_state))
+    with pytest.raises(jg.InvalidParameterError) as e:
+        ms.two_point_backlund(0.4 + 0.1j, backend="gpu").advance(Xs, None, 100)
+    need, free = map(float, re.search(r"needs (\S+) GiB on the GPU, which has (\S+) GiB free", str(e.value)).groups())
+    arrays = 8 * 200 * 101 * ms.n_state / 2**30
+    assert ms.n_state == 16 and 0.995 * arrays <= need <= 1.1 * arrays, (need, arrays)
+    assert free == pytest.approx(2**20 / 2**30, rel=1e-3)
+
+
+def test_prepare_compiles_once_per_process_and_says_so_once(monkeypatch):
+    """``gpu.prepare`` (module doc of :func:`jetgaudin.gpu._drivers.prepare`): the first call for a kernel compiles
+    it (state ``"cold"``, two messages: before and when done, naming the kernel); a second call for the same kernel
+    says nothing and reports ``"loaded"`` in 0 s; another kernel is compiled on its own.  Written for the mutant
+    ``if name in _prepared`` → ``if not name in _prepared`` (nothing compiled, every later call compiled again)."""
+    import jetgaudin.gpu._drivers as drv
+
+    monkeypatch.setattr(drv, "_prepared", set())
+    said: list[str] = []
+    first = drv.prepare(9, notify=said.append)
+    assert (first.kernels, first.state) == (("gpu.top3",), "cold") and first.seconds > 0
+    assert len(said) == 2 and all("gpu.top3" in m for m in said)
+    again = drv.prepare(9, notify=said.append)
+    assert (again.kernels, again.state, again.seconds) == (("gpu.top3",), "loaded", 0.0) and len(said) == 2
+    other = drv.prepare(12, notify=said.append)
+    assert (other.kernels, other.state) == (("gpu.top_generic",), "cold") and len(said) == 4
+
+
+def test_the_refusal_of_a_resident_call_too_large_for_the_gpu_names_its_size(monkeypatch):
+    """The device-resident route (``gpu._resident.ResidentMap.advance``, a GPU ensemble of the run layer) refuses a
+    call whose device arrays do not fit before it launches anything, naming at least the saved rows and final states
+    (``8 B (S + 1) n`` bytes) and at most 10 % more (printed to 3 digits: compared to 0.5 %).  20 orbits, N = 3,
+    1000 saved rows, 1 MiB free (faked); the kernels are replaced by a trap, so that a call that passes the check
+    fails at once instead of stepping on the simulator.  Written for the mutants ``8 * B * (…)`` → ``8 * B + (…)``
+    (nothing refused) and → ``8 * B ** (…)``."""
+    import re
+
+    import jetgaudin.gpu._drivers as drv
+    import jetgaudin.gpu._kernels as kern
+    from jetgaudin.ensemble import BatchBacklund
+    from jetgaudin.gpu._resident import ResidentMap
+
+    def trap():
+        raise AssertionError("launched: the call was not refused")
+
+    monkeypatch.setattr(drv, "_free_bytes", lambda c: float(2**20))
+    monkeypatch.setattr(kern, "top_kernels", trap)
+    B = 20
+    X = sample_on_leaf(3, [0.5, 0.2, 1.0], B, seed=3)
+    m = BatchBacklund(np.linspace(0.9, 1.2, B), (5 + 0.1j) + 0.03 * np.arange(B), backend="gpu")
+    health = types.SimpleNamespace(I0=np.zeros((B, 6)), scale=np.ones((B, 6)), r0=np.ones(B), drift=np.zeros((B, 6)),
+                                   limits=types.SimpleNamespace(max_drift=1e-6))
+    with pytest.raises(jg.InvalidParameterError) as e:
+        ResidentMap(m, health).advance(X, None, 1000, 1)
+    need = float(re.search(r"needs (\S+) GiB on the GPU", str(e.value)).group(1))
+    arrays = 8 * B * 1001 * 9 / 2**30
+    assert 0.995 * arrays <= need <= 1.1 * arrays, (need, arrays)

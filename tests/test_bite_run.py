@@ -9,6 +9,7 @@ import re
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import jetgaudin as jg
 from jetgaudin.run.health import Health
@@ -121,3 +122,80 @@ def test_a_failed_flush_is_one_line_naming_the_file(tmp_path, monkeypatch):
     assert res.state is rl.RunStatus.FAILED_IO
     assert "while flushing" in res.status and str(tmp_path / "r" / "orbit.h5") in res.status
     assert "\n" not in res.status and "I/O error" in res.status
+
+
+# --- the seed-35 sample (issue 33, item 5) --------------------------------------------------------------------------
+
+def test_a_checkpoint_file_beyond_its_bound_is_refused_before_it_is_read(tmp_path):
+    """``read_checkpoint_npz`` reads a checkpoint of ``B`` orbits of ``n`` components only up to its bound (its
+    arrays: ``X``, ``ν1`` and the anchor's, the drift, and 64 KiB for the zip's own bytes): a checkpoint at its
+    largest (every array, 4 orbits of 9) is read; one that matches its digest but carries 1 MiB more (a planted
+    extra array) is refused naming its size, never read into memory.  Exact (byte counts).  Written for the mutant
+    ``8 B n + (1 << 16)`` → ``8 B n ** (1 << 16)`` (no bound)."""
+    import hashlib
+    import io
+
+    from jetgaudin.run.store import read_checkpoint_npz
+
+    B, n = 4, 9
+    rng = np.random.default_rng(0)
+    arrays = {"step": np.int64(10), "X": rng.normal(size=(B, n)), "nu1": rng.normal(size=B) + 1j,
+              "drift": rng.normal(size=(B, 6)), "anchor_step": np.int64(8), "anchor_X": rng.normal(size=(B, n)),
+              "anchor_nu1": rng.normal(size=B) + 1j}
+
+    def write(name: str, **extra) -> dict:
+        buf = io.BytesIO()
+        np.savez(buf, **arrays, **extra)
+        data = buf.getvalue()
+        (tmp_path / name).write_bytes(data)
+        return {"file": name, "sha256": hashlib.sha256(data).hexdigest()}
+
+    got = read_checkpoint_npz(tmp_path, write("ck0.npz"), (B, n))
+    assert np.array_equal(got["X"], arrays["X"]) and np.array_equal(got["anchor_nu1"], arrays["anchor_nu1"])
+    with pytest.raises(jg.RunDirectoryError, match="more than the"):
+        read_checkpoint_npz(tmp_path, write("ck1.npz", pad=np.zeros(1 << 17)), (B, n))
+
+
+def test_a_checkpoint_before_the_first_durable_row_must_be_the_start():
+    """``replay`` of a run with no durable row yet (``store.rows == 0``: the run starts again from ``X0``): only the
+    start itself is accepted -- step 0 at ``X0``, bit for bit; a checkpoint at step 5 still at ``X0``, or at step 0
+    with another state (edited), is refused (``RecordingError``, "does not match").  Written for the mutant
+    ``pos.n != 0 or not array_equal(pos.X, X0)`` → ``and`` (either edit alone passed)."""
+    import types
+
+    from jetgaudin import run as rl
+    from jetgaudin.run.driver import Position
+    from jetgaudin.run.replay import replay
+
+    spec = rl.RunSpec(MAP, X3, 100, 10)
+    store = types.SimpleNamespace(rows=0, dn=np.zeros(0, dtype=np.int64), dS=np.zeros((0, 9)))
+    assert replay(store, spec, Position(0, X3.copy(), None), None, "run.json") is spec
+    for pos in (Position(5, X3.copy(), None), Position(0, X3 + 1e-9, None)):
+        with pytest.raises(jg.RecordingError, match="does not match"):
+            replay(store, spec, pos, None, "run.json")
+
+
+def test_an_ensembles_calls_fill_the_chunk_memory_cap_and_no_more(tmp_path):
+    """An ensemble of 4 orbits (compiled route): the driver's calls grow until their saved rows reach
+    ``max_chunk_bytes`` (7 rows of 4 orbits of 9 doubles), never past it, and the run equals the one-call orbit bit
+    for bit.  ``tests/test_reliability_runlayer.py`` checks one orbit, where a row is ``8 n`` bytes either way.
+    Written for the mutant ``row_bytes = 8 * B * n`` → ``8 ** B * n`` (a batch's rows overcounted 128-fold: every
+    call one row)."""
+    from jetgaudin import run as rl
+
+    X0 = np.stack([X3 * s for s in (1.0, 0.9, 1.1, 0.8)])
+    sizes: list[int] = []
+
+    class Spy(type(jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="compiled"))):
+        def advance(self, X, carry, steps, save_every=1):
+            adv = super().advance(X, carry, steps, save_every)
+            sizes.append(int(np.asarray(adv.rows).nbytes))
+            return adv
+
+    spy = Spy(1.0, 5 + 0.1j, backend="compiled")
+    cap = 7 * 4 * 72  # seven rows of 4 orbits of 9 doubles
+    rl.start(rl.RunSpec(spy, X0, 600, 2, checkpoint_seconds=0.0), tmp_path / "r", max_chunk_bytes=cap)
+    assert max(sizes) == cap
+    d = rl.load(tmp_path / "r")
+    ref = jg.TwoPointBacklund(1.0, 5 + 0.1j, backend="compiled").iterate(X0, 600)
+    assert d.X.shape == (301, 4, 9) and np.array_equal(d.X, ref[d.n])

@@ -109,3 +109,72 @@ def test_a_negative_dt_is_its_size():
     back = jg.solve(H3, X3, (1.0, 0.0), dt=-0.1)
     assert np.allclose(back.t, np.linspace(1.0, 0.0, 11), rtol=0, atol=1e-15)
     assert np.max(np.abs(back.X[-1] - _dop(H3, X3, -1.0))) < 1e-11
+
+
+# --- the seed-35 sample (issue 33, item 5) --------------------------------------------------------------------------
+
+def test_t_eval_is_absolute_for_every_method_with_dense_output():
+    """``t_eval`` holds absolute times: on ``t_span = (2, 4)`` DOP853 (rtol = atol = 1e-13) and the exact flow's dense
+    output give the same states at ``2.5, 3, 4`` (1e-10: DOP853's error over a span of 2 is ~1e-13, the exact flow's
+    round-off ~1e-15 a step), and ``t`` is ``t_eval`` itself; a fixed-step map without dense output (midpoint) is
+    refused, naming why.  Written for the mutants ``t_eval − t0`` → ``t_eval · t0`` (DOP853 sampled at 5, 6, 8) and
+    ``if tr.dense is None`` → ``if not tr.dense is None`` (the exact flow's ``t_eval`` refused)."""
+    te = [2.5, 3.0, 4.0]
+    dop = jg.solve(H3, X3, (2.0, 4.0), method="dop853", rtol=1e-13, atol=1e-13, t_eval=te)
+    ex = jg.solve(H3, X3, (2.0, 4.0), dt=0.1, t_eval=te)
+    assert dop.t.tolist() == te and ex.t.tolist() == te
+    assert np.max(np.abs(dop.X - ex.X)) < 1e-10 and np.max(np.abs(ex.X[0] - X3)) > 1e-2
+    with pytest.raises(jg.InvalidParameterError, match="t_eval needs dense output"):
+        jg.solve(H3, X3, (2.0, 4.0), dt=0.1, method="midpoint", t_eval=te)
+
+
+def test_the_dense_output_of_a_backward_solve():
+    """A solve backwards in time, ``(1, −1)`` at ``dt = 0.25``: its dense output gives the saved states at the saved
+    times (bit for bit: no step is taken there) and, between them, the state one exact step from the nearest saved one
+    -- the same as a direct solve from ``X3`` to that time (1e-11: two exact flows, ~1e-15 a step).  Written for the
+    mutant ``t_grid[::-1]`` → ``t_grid[::-2]`` (the reversed grid's times no longer matched its states)."""
+    tr = jg.solve(H3, X3, (1.0, -1.0), dt=0.25)
+    assert np.array_equal(tr.at(tr.t), tr.X)
+    for t in (0.1, -0.6, -0.95):
+        direct = jg.solve(H3, X3, (1.0, t), dt=0.05).X[-1]
+        assert np.max(np.abs(tr.at(t) - direct)) < 1e-11, t
+
+
+def test_dense_output_refuses_times_beyond_the_span_by_more_than_its_slack():
+    """The span is ``[0, 1]``; times beyond it by up to ``1e-12 · max(1, span)`` (round-off of the caller's times) are
+    taken, farther ones refused: ``1 + 0.5e-12`` and ``−0.5e-12`` are taken, ``1 + 1.5e-12`` and ``−1.5e-12`` not.
+    Written for the mutant ``max(1.0, span)`` → ``max(2.0, span)`` (twice the slack)."""
+    tr = jg.solve(H3, X3, (0.0, 1.0), dt=0.25)
+    for t in (1 + 0.5e-12, -0.5e-12):
+        assert np.all(np.isfinite(tr.at(t)))
+    for t in (1 + 1.5e-12, -1.5e-12):
+        with pytest.raises(jg.InvalidParameterError, match="span"):
+            tr.at(t)
+
+
+def test_save_every_zero_is_refused():
+    """``save_every = 0`` is refused naming it (at least 1; it was a ZeroDivisionError).  Written for the mutant
+    ``check_count(save_every, "save_every", 1)`` → ``…, 0)``."""
+    with pytest.raises(jg.InvalidParameterError, match="save_every"):
+        jg.solve(H3, X3, (0.0, 1.0), dt=0.25, save_every=0)
+
+
+def test_the_output_cap_is_reached_to_the_byte(monkeypatch):
+    """A top of order 3 over 100 steps: ``100 // 1 + 2`` rows (the saved rows and a spare for the end state) of
+    ``8 · (9 + 1 + 6)`` = 128 bytes (the state, the time, the 2N = 6 integrals): a cap of exactly that runs, one byte
+    less is refused.  Written for the mutant ``X0.shape[-1] // 3`` → ``// 4`` (two integrals a row not counted)."""
+    need = (100 + 2) * 8 * (9 + 1 + 6)
+    monkeypatch.setattr(maps, "MAX_OUTPUT_BYTES", need)
+    assert jg.solve(H3, X3, (0.0, 10.0), dt=0.1).X.shape == (101, 9)
+    monkeypatch.setattr(maps, "MAX_OUTPUT_BYTES", need - 1)
+    with pytest.raises(jg.OutputTooLargeError, match=f"{need:,} bytes"):
+        jg.solve(H3, X3, (0.0, 10.0), dt=0.1)
+
+
+def test_method_map_takes_one_substep_by_default():
+    """``jetgaudin.methods.method_map(H, "exact", dt)`` is the exact flow of one sub-step: bit for bit
+    ``ExactFlow(H, dt)``.  Written for the mutant ``substeps: int = 1`` → ``= 0`` (then refused)."""
+    from jetgaudin.methods import method_map
+
+    m = method_map(H3, "exact", 0.1)
+    assert m.substeps == 1 and np.array_equal(m(X3), jg.ExactFlow(H3, 0.1)(X3))

@@ -42,19 +42,24 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "backlund/kernels/_generic.py": ("tests/test_routes.py", "tests/test_kernels.py"),
     "backlund/kernels/_branch.py": ("tests/test_branch_rule.py", "tests/test_kernels.py"),
     # added since the last sample (issue 33): families, gaudin, exact steps, events, solve, the run layer, disk
-    "families/trigonometric.py": ("tests/test_trigonometric.py", "tests/test_trig_one_point.py"),
+    "families/trigonometric.py": ("tests/test_bite_families.py", "tests/test_trigonometric.py",
+                                  "tests/test_trig_one_point.py"),
     "families/elliptic.py": ("tests/test_elliptic.py",),
     "families/_jacobi.py": ("tests/test_jacobi.py",),
     "gaudin/model.py": ("tests/test_bite_gaudin.py", "tests/test_gaudin.py"),
     "gaudin/maps.py": ("tests/test_gaudin_maps.py", "tests/test_chain_drift.py", "tests/test_chain_refusals.py",
                        "tests/test_chain_compiled_start.py"),
-    "gaudin/_backend.py": ("tests/test_auto_route.py",),
+    "gaudin/_backend.py": ("tests/test_bite_gaudin.py", "tests/test_auto_route.py"),
     "gaudin/_curve.py": ("tests/test_gaudin.py", "tests/test_branch_rule.py", "tests/test_bite_exact.py"),
-    "exact.py": ("tests/test_exact.py", "tests/test_exact_first_class.py"),
-    "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain.py", "tests/test_exact_first_class.py"),
+    "exact.py": ("tests/test_bite_exact.py", "tests/test_exact.py", "tests/test_exact_first_class.py"),
+    # test_exact_chain_compiled.py compares the NumPy route of the solve with the compiled one (seed 35: the NumPy
+    # Newton method and its continuation of ν ran in no test of the selection before)
+    "exact_chain.py": ("tests/test_bite_exact.py", "tests/test_exact_chain_compiled.py", "tests/test_exact_chain.py",
+                       "tests/test_exact_first_class.py"),
     "events.py": ("tests/test_bite_events.py", "tests/test_solve.py"),
     "solve.py": ("tests/test_bite_solve.py", "tests/test_solve.py", "tests/test_exact_first_class.py"),
-    "run/driver.py": ("tests/test_run.py", "tests/test_reliability_runlayer.py"),
+    "run/driver.py": ("tests/test_bite_run.py", "tests/test_run.py", "tests/test_run_compile.py",
+                      "tests/test_reliability_runlayer.py"),
     "run/health.py": ("tests/test_bite_run.py", "tests/test_run.py", "tests/test_reliability_runlayer.py"),
     "run/store.py": ("tests/test_bite_run.py", "tests/test_run.py", "tests/test_data_safety_io.py",
                      "tests/test_reliability_runlayer.py"),
@@ -67,7 +72,31 @@ GROUPS: dict[str, tuple[str, ...]] = {
     "gpu/_device.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     "gpu/_drivers.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
     "gpu/_kernels.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py", "tests/test_gpu_sun.py"),
-    "gpu/_resident.py": ("tests/test_gpu.py",),
+    "gpu/_resident.py": ("tests/test_bite_gpu.py", "tests/test_gpu.py"),
+    # added since the seed-33 sample (issue 33, item 5: the seed-35 round): one model (the route table of the maps,
+    # the registry, jet constants as a site option), the dressing split from gaudin/maps.py, the chain Hamiltonian,
+    # solve's route table and the exact chain's Python-side constants
+    "_system_maps.py": ("tests/test_bite_gaudin.py", "tests/test_top_as_model.py", "tests/test_one_class.py"),
+    "gaudin/_model_map.py": ("tests/test_top_as_model.py", "tests/test_one_class.py"),
+    "gaudin/_site_constants.py": ("tests/test_bite_gaudin.py", "tests/test_site_constants.py",
+                                  "tests/test_top_as_model.py"),
+    "gaudin/_dressing.py": ("tests/test_gaudin_maps.py", "tests/test_trigonometric_maps.py",
+                            "tests/test_chain_drift.py"),
+    "gaudin/hamiltonian.py": ("tests/test_gaudin.py", "tests/test_solve_models.py"),
+    "_exact_chain_prep.py": ("tests/test_bite_exact.py", "tests/test_exact_chain_compiled.py",
+                             "tests/test_exact_chain.py"),
+    "methods.py": ("tests/test_bite_solve.py", "tests/test_solve_models.py", "tests/test_top_as_model.py"),
+    # modules older than the seed-33 sample that hold logic and were in no area: the families' contract and series,
+    # the chain's one-point maps, integrals as forms and compensated arithmetic, the run's spec and replay
+    "families/_base.py": ("tests/test_bite_families.py", "tests/test_trigonometric.py", "tests/test_elliptic.py"),
+    "families/_series.py": ("tests/test_trigonometric_maps.py", "tests/test_elliptic.py"),
+    "gaudin/_one_point.py": ("tests/test_trig_one_point.py", "tests/test_gaudin_maps.py"),
+    # test_elliptic.py: the elliptic family at b = 0 has the constant c_0 of ν² as an integral (constant_form)
+    "gaudin/_forms.py": ("tests/test_gaudin.py", "tests/test_elliptic.py", "tests/test_gaudin_maps.py",
+                         "tests/test_trigonometric_maps.py"),
+    "gaudin/_compensated.py": ("tests/test_chain_drift.py",),
+    "run/spec.py": ("tests/test_bite_run.py", "tests/test_run.py"),
+    "run/replay.py": ("tests/test_bite_run.py", "tests/test_data_safety.py", "tests/test_reliability_refusals.py"),
 }
 
 #: the default sample size per module (the kernels recompile for every mutant: fewer there)
@@ -78,7 +107,12 @@ PER_MODULE = {"backlund/kernels/_scalar.py": 5, "backlund/kernels/_n3.py": 5, "b
               "gaudin/model.py": 4, "gaudin/maps.py": 3, "gaudin/_backend.py": 4, "gaudin/_curve.py": 2,
               "exact.py": 6, "exact_chain.py": 6, "events.py": 12, "solve.py": 12,
               "run/driver.py": 5, "run/health.py": 3, "run/store.py": 5, "_fs.py": 12, "_space.py": 10,
-              "gpu/_device.py": 2, "gpu/_drivers.py": 4, "gpu/_kernels.py": 4, "gpu/_resident.py": 4}
+              "gpu/_device.py": 2, "gpu/_drivers.py": 4, "gpu/_kernels.py": 4, "gpu/_resident.py": 4,
+              # the seed-35 round's additions
+              "_system_maps.py": 4, "gaudin/_model_map.py": 2, "gaudin/_site_constants.py": 4,
+              "gaudin/_dressing.py": 4, "gaudin/hamiltonian.py": 3, "_exact_chain_prep.py": 4, "methods.py": 4,
+              "families/_base.py": 3, "families/_series.py": 3, "gaudin/_one_point.py": 3, "gaudin/_forms.py": 3,
+              "gaudin/_compensated.py": 3, "run/spec.py": 3, "run/replay.py": 3}
 DEFAULT_PER_MODULE = 6
 
 #: the areas whose kill rate docs/mutation.md reports (issue 33: at least 90 % each), and their modules
@@ -86,12 +120,15 @@ AREAS: dict[str, tuple[str, ...]] = {
     "core": ("algebra.py", "lax.py", "spectral.py", "hamiltonians.py", "backlund/_dressing.py", "backlund/maps.py",
              "backlund/closed_form.py", "backlund/generating.py", "backlund/kernels/_scalar.py",
              "backlund/kernels/_n3.py", "backlund/kernels/_generic.py", "backlund/kernels/_branch.py"),
-    "families": ("families/trigonometric.py", "families/elliptic.py", "families/_jacobi.py"),
-    "gaudin": ("gaudin/model.py", "gaudin/maps.py", "gaudin/_backend.py", "gaudin/_curve.py"),
-    "exact": ("exact.py", "exact_chain.py"),
+    "families": ("families/trigonometric.py", "families/elliptic.py", "families/_jacobi.py", "families/_base.py",
+                 "families/_series.py"),
+    "gaudin": ("gaudin/model.py", "gaudin/maps.py", "gaudin/_backend.py", "gaudin/_curve.py", "_system_maps.py",
+               "gaudin/_model_map.py", "gaudin/_site_constants.py", "gaudin/_dressing.py", "gaudin/hamiltonian.py",
+               "gaudin/_one_point.py", "gaudin/_forms.py", "gaudin/_compensated.py"),
+    "exact": ("exact.py", "exact_chain.py", "_exact_chain_prep.py"),
     "events": ("events.py",),
-    "solve": ("solve.py",),
-    "run": ("run/driver.py", "run/health.py", "run/store.py"),
+    "solve": ("solve.py", "methods.py"),
+    "run": ("run/driver.py", "run/health.py", "run/store.py", "run/spec.py", "run/replay.py"),
     "disk": ("_fs.py", "_space.py"),
     "gpu": ("gpu/_device.py", "gpu/_drivers.py", "gpu/_kernels.py", "gpu/_resident.py"),
 }
@@ -190,6 +227,8 @@ def main(argv: list[str] | None = None) -> int:
         # some tests read the documentation (docs/chains.md's examples run in tests/test_gaudin.py)
         shutil.copytree(ROOT / "docs", work / "docs",
                         ignore=shutil.ignore_patterns("_build", "*.png", "*.gif", "*.mp4"))
+        # tests/test_chain_drift.py loads benchmarks/chain_drift.py (its persistence score)
+        shutil.copytree(ROOT / "benchmarks", work / "benchmarks", ignore=ignore)
         shutil.copy(ROOT / "pyproject.toml", work / "pyproject.toml")
         for module in modules:
             k = args.per_module if args.per_module is not None else PER_MODULE.get(module, DEFAULT_PER_MODULE)
