@@ -335,25 +335,33 @@ def test_quarter_changes_add_up_to_the_whole_change():
     assert np.array_equal(q[0], cumulative[0])
 
 
-def test_products_with_a_decimal_constant_are_unbiased_when_split():
-    """``_split`` (gaudin/_kernels.py): ``fl(0.2·x)`` over 2·10⁶ uniformly random mantissas of ``x`` is low by
+@pytest.mark.parametrize("route", ["compiled", "numpy"])
+def test_products_with_a_decimal_constant_are_unbiased_when_split(route):
+    """``_split`` (gaudin/_kernels.py) and its NumPy twin ``split_constant`` / ``times_split``
+    (gaudin/_compensated.py): ``fl(0.2·x)`` over 2·10⁶ uniformly random mantissas of ``x`` is low by
     0.006 ulp on average (measured −0.00617; the standard error is 0.0002 ulp: a bias of 30 standard errors, because
     ``0.2`` is the double nearest 1/5 and the dropped bits are those of ``x·4/5 mod 1``); ``_tw(x, *_split(0.2))``
-    is unbiased.  Bounds: the plain product below −0.004 ulp (10 se from its value), the split one within ±0.0015 ulp
-    (7 se).  The errors exact from Dekker's product (``c·x = p + e``; ``r − p`` is exact, ``r`` within an ulp of
-    ``p``).  Planted: ``_split`` returning ``(c, 0)`` (the plain product) fails."""
-    from numba import njit
+    is unbiased, and so is ``times_split(x, *split_constant(0.2))`` (the same bits: ``fma`` emulated with Dekker's
+    product and TwoSum).  Bounds: the plain product below −0.004 ulp (10 se from its value), the split one within
+    ±0.0015 ulp (7 se).  The errors exact from Dekker's product (``c·x = p + e``; ``r − p`` is exact, ``r`` within an
+    ulp of ``p``).  Planted: ``_split`` or ``split_constant`` returning ``(c, 0)`` (the plain product) fails."""
+    from jetgaudin.gaudin._compensated import split_constant, times_split, two_prod
 
-    from jetgaudin.gaudin import _kernels as K
-    from jetgaudin.gaudin._compensated import two_prod
+    if route == "compiled":
+        from numba import njit
 
-    @njit(cache=False)
-    def split_products(x, c):
-        out = np.empty_like(x)
-        a, b = K._split(c)
-        for i in range(x.shape[0]):
-            out[i] = K._tw(x[i], a, b)
-        return out
+        from jetgaudin.gaudin import _kernels as K
+
+        @njit(cache=False)
+        def split_products(x, c):
+            out = np.empty_like(x)
+            a, b = K._split(c)
+            for i in range(x.shape[0]):
+                out[i] = K._tw(x[i], a, b)
+            return out
+    else:
+        def split_products(x, c):
+            return times_split(x, *split_constant(c))
 
     rng = np.random.default_rng(5)
     x = np.ldexp((2**52 + rng.integers(0, 2**52, 2_000_000, dtype=np.int64)).astype(float), -53)  # [1/2, 1)
@@ -364,6 +372,46 @@ def test_products_with_a_decimal_constant_are_unbiased_when_split():
     split = (((split_products(x, 0.2) - p) - e) / ulp).mean()
     assert plain < -0.004, plain
     assert abs(split) < 0.0015, split
+
+
+def test_the_numpy_routes_products_with_eta_and_the_sites_are_unbiased(rng):
+    """The NumPy rational route rounds each product with ``Im η``, ``2 Im η`` and a site as the compiled kernel does
+    (``times_split``; ``docs/reliability.md``, "The rational chain's bias per orbit"): read off the route's own
+    functions at inputs where an entry is exactly one such product — ``Im K0_00 = −Im η·n2`` at ``k2 = 0``,
+    ``Im K0_01 / p2 = −2 Im η·k1`` at ``k1`` real and ``k2 = 1`` (scaled by the power of two ``p2``, exact), and
+    ``K(λ_i) = s λ_i`` of ``monic_series(scaled=True)`` at ``M0 = 0`` — with ``η = 1.5 + 0.2i`` and the site 0.4
+    (decimals) over 2·10⁶ draws each, the mean signed error (towards zero negative) is within ±0.003 ulp.  Measured
+    (four seeds): 0.0002–0.0004, 0.0011–0.0014, −0.0007–−0.0010 ulp in the order above — the dither of ``fl(x·b)``
+    spans less than an ulp, so a small bias remains on these non-uniform mantissas, 5–7 standard errors of 0.0002 —
+    against −0.0135, −0.025, −0.006 for the plain products; the bound 0.003 lies between the two with ≥ 8 standard
+    errors to spare on either side.  The plain product of the same inputs is checked to be below −0.004 ulp (the test
+    can fail).  Planted: ``scaled_two_point_K0`` with ``-eta * n2`` and ``t * k1``
+    (the plain products, as before the fix), ``monic_series`` with ``s * lam_i`` — each fails its case."""
+    from jetgaudin.gaudin._compensated import scaled_two_point_K0, two_prod
+
+    n = 2_000_000
+    eta, site = 1.5 + 0.2j, 0.4
+    k1 = rng.normal(size=n) + 1j * rng.normal(size=n)
+    K0, n2 = scaled_two_point_K0(eta, k1, np.zeros(n))
+    cases = {"Im η n2": (n2, 0.2, -K0[:, 0, 0].imag)}
+    x = rng.uniform(-3, 3, n)
+    K0, n2 = scaled_two_point_K0(eta, x.astype(complex), np.ones(n, dtype=complex))
+    p2 = np.ldexp(1.0, -((np.frexp(x * x + 1)[1] + 1) // 2))  # the route's scaling of k (a power of two)
+    assert np.array_equal(n2, (x * p2) ** 2 + p2 * p2)
+    cases["2 Im η k1"] = (x * p2, 0.4, -K0[:, 0, 1].imag / p2)
+    s = rng.uniform(0.25, 1.0, n)
+    model = GaudinModel(1.0, [(site, 1)])
+    z = np.zeros((n, 2, 2), dtype=complex)
+    K = monic_series(model, z, z, s, scaled=True)[0][0][0]
+    cases["site n2"] = (s, site, K[:, 0, 0].real)
+    for name, (xs, c, got) in cases.items():
+        p, e = two_prod(np.full_like(xs, c), xs)
+        ulp = np.spacing(np.abs(p)) * np.sign(p)  # errors towards zero negative (the bias's sign at either sign of x)
+        ok = p != 0
+        plain = (-e[ok] / ulp[ok]).mean()
+        bias = (((got[ok] - p[ok]) - e[ok]) / ulp[ok]).mean()
+        assert plain < -0.004, (name, plain)
+        assert abs(bias) < 0.003, (name, bias)
 
 
 @pytest.mark.slow
