@@ -15,7 +15,9 @@ quarters are independent: ~0 ± 0.13 with 64 orbits; an orbit-wise linear drift:
 ``--jsonl PATH`` appends one JSON line per point ``n`` as it is reached (map, route, orbits, n, drift, the fit so far,
 ``z``, machine) and keeps the ensemble's state after every ``--chunk`` steps in ``PATH.<map>.<route>.npz``: a run
 killed and started again with the same arguments resumes from that state (a split run equals the unsplit one bit
-for bit, both routes), so that a long NumPy run (~1–3 ms per step of 64 orbits) loses nothing.
+for bit, both routes), so that a long NumPy run (~1–3 ms per step of 64 orbits) loses nothing.  Every drift run
+also stops at the quarters of its last ``n`` and prints (and writes to ``PATH``) their persistence score, on its own
+route: the NumPy routes' bias per orbit without a second run.
 
 For each map and route, the ensemble of ``--orbits`` orbits (states drawn with a fixed seed, scale 0.5) is advanced
 to ``n = 10^3, 10^3.5, ...`` steps; at each ``n`` the largest relative drift ``max_k |I_k(X_n) − I_k(X_0)| /

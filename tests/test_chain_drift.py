@@ -467,3 +467,50 @@ def test_the_vectorised_compensated_sums_are_the_term_by_term_sums_bit_for_bit(f
                     if T[0, i, n, p, e] != 0:
                         sr, si, er, ei = cacc(sr, si, er, ei, c[:, p], T[0, i, n, p, e], T[1, i, n, p, e])
                 assert np.array_equal(series[i][0][n][:, e // 2, e % 2], (sr + er) + 1j * (si + ei)), (i, n, e)
+
+
+def test_the_drift_runs_persistence_is_that_of_its_quarters_and_survives_a_restart(tmp_path):
+    """``drift_curve`` (benchmarks/chain_drift.py, the long NumPy runs) stops at the quarters of its last ``n`` and
+    returns their persistence score: the score of the quarters' changes of the same orbits computed here, a quarter
+    per call (to 1e-12: the same integrals of the same states, the correlations' roundings aside; the integrals of
+    the same states stored otherwise, as the rows of one call, round differently by ~1e-16, a tenth of the changes).
+    A run killed after some chunks and started again with its checkpoint gives the same drift curve, ``z`` and score
+    as an unkilled run, bit for bit (the quarters' changes are kept in the checkpoint).  Planted: the quarters'
+    changes left out of the checkpoint (the restarted run has no score), the score taken from the cumulative changes
+    instead of each quarter's — each fails."""
+    cd = _chain_drift_module()
+    B = MODEL.two_point_backlund(ETA, kernel="numpy")
+    X0 = cd.states(B, 16)
+    ns = [200, 400]
+    d, z, pers = cd.drift_curve(B, X0, ns)
+    I0 = B.integrals(X0)
+    X, carry, cum = X0, None, []
+    for _ in range(4):
+        adv = B.advance(X, carry, 100, 100)
+        X, carry = adv.X, adv.carry
+        cum.append((B.integrals(X) - I0) / np.maximum(1.0, np.abs(I0)))
+    ref = cd.persistence(np.diff(np.stack([0 * cum[0]] + cum), axis=0))
+    assert pers is not None and np.allclose(pers, ref, rtol=0, atol=1e-12), (pers, ref)
+    assert np.max(np.abs(pers)) > 0.01  # scores to compare (not all zero)
+
+    class Killed(Exception):
+        pass
+
+    calls = [0]
+
+    class Dying:  # the map, killed at its 5th chunk (after the first quarter's mark at 100 steps)
+        def integrals(self, X):
+            return B.integrals(X)
+
+        def advance(self, X, carry, k, se):
+            calls[0] += 1
+            if calls[0] == 5:
+                raise Killed
+            return B.advance(X, carry, k, se)
+
+    ck = str(tmp_path / "ck.npz")
+    with pytest.raises(Killed):
+        cd.drift_curve(Dying(), X0, ns, None, 30, ck)
+    assert calls[0] == 5
+    d2, z2, pers2 = cd.drift_curve(B, X0, ns, None, 30, ck)
+    assert d2 == d and z2 == z and pers2 is not None and np.array_equal(pers2, pers)
