@@ -52,7 +52,8 @@ def test_scaled_two_point_K0_is_n2_times_the_normalised_M0(rng):
 
 def test_the_numpy_rational_chain_has_no_mean_drift():
     """Fast form of the next test: after 3000 steps of the NumPy rational chain, the mean over 64 orbits of each
-    integral's relative change is below 2e-14 in size.  Measured: at most 7.4e-15 (the standard error of the mean is
+    integral's relative change is below 2e-14 in size.  Measured: at most 7.4e-15, 3.6e-15 since the products with
+    the decimal ``η`` and site are split (``times_split``; the standard error of the mean is
     ~2e-15: a random walk of ~1e-16 per step, sd ~1.7e-14 over the orbits); with the normalised ``M0`` (next test)
     −3.9e-14 on ``h2,1`` and −3.4e-14 on ``h2,2``, of one sign: the bound lies between the two."""
     B = MODEL.two_point_backlund(ETA, kernel="numpy")
@@ -66,7 +67,8 @@ def test_the_numpy_rational_chain_has_no_mean_drift():
 def test_the_numpy_rational_chain_has_no_bias_per_step():
     """The NumPy rational chain (``kernel="numpy"``): after 10^4 steps, the mean over 64 orbits of each integral's
     relative change, in units of its standard error (sd over the orbits / 8), is below 5 in size: a random walk
-    gives |z| ~ 1 (measured: at most 2.3 over the six integrals), a rounding error of one sign at every step
+    gives |z| ~ 1 (measured: at most 2.3 over the six integrals; 1.4 since the products with the decimal ``η`` and
+    site are split), a rounding error of one sign at every step
     grows the mean like ``n`` and the standard error like ``√n``.  With the normalised ``M0`` (``K = |k|²(λ_i +
     M0)``, whose real diagonal part is ``|k|²`` times ``λ_i − Re η`` rounded once, the same error at every step) it
     was z = −11.5 on ``h2,1`` and −7.4 on ``h2,2`` (mean −1.3e-13 and −1.0e-13); with the second site moved to
