@@ -78,7 +78,8 @@ def _ctw(a, h, lo):
 
 
 #: the generic factor of :func:`_split` (the fixed point of cos: a mantissa with no short period), shared with the
-#: NumPy route's :func:`jetgaudin.gaudin._compensated.split_constant` (the two routes split alike)
+#: NumPy route's :func:`jetgaudin.gaudin._compensated.split_constant` (the two routes split alike; Numba freezes it
+#: into this module's cached kernels, whose cache is keyed on this file: a change of ``KAPPA`` needs a fresh cache)
 _KAPPA = KAPPA
 
 
