@@ -15,7 +15,9 @@ quarters are independent: ~0 ± 0.13 with 64 orbits; an orbit-wise linear drift:
 ``--jsonl PATH`` appends one JSON line per point ``n`` as it is reached (map, route, orbits, n, drift, the fit so far,
 ``z``, machine) and keeps the ensemble's state after every ``--chunk`` steps in ``PATH.<map>.<route>.npz``: a run
 killed and started again with the same arguments resumes from that state (a split run equals the unsplit one bit
-for bit, both routes), so that a long NumPy run (~1–3 ms per step of 64 orbits) loses nothing.
+for bit, both routes), so that a long NumPy run (~1–3 ms per step of 64 orbits) loses nothing.  Every drift run
+also stops at the quarters of its last ``n`` and prints (and writes to ``PATH``) their persistence score, on its own
+route: the NumPy routes' bias per orbit without a second run.
 
 For each map and route, the ensemble of ``--orbits`` orbits (states drawn with a fixed seed, scale 0.5) is advanced
 to ``n = 10^3, 10^3.5, ...`` steps; at each ``n`` the largest relative drift ``max_k |I_k(X_n) − I_k(X_0)| /
@@ -79,42 +81,57 @@ def states(m, orbits: int) -> np.ndarray:
 
 
 def drift_curve(m, X0: np.ndarray, ns: list[int], record=None, chunk: int = 0,
-                checkpoint: str = "") -> tuple[list[float], float]:
-    """The largest relative drift over the orbits and integrals at each ``n`` in ``ns``, and the bias score ``z`` at
-    the last ``n`` (module docstring).  ``record(n, drift_so_far, z)`` is called at each ``n``; with ``checkpoint``
-    the state is saved there every ``chunk`` steps and a run resumes from it (same orbits bit for bit)."""
+                checkpoint: str = "") -> tuple[list[float], float, np.ndarray | None]:
+    """The largest relative drift over the orbits and integrals at each ``n`` in ``ns``, the bias score ``z`` at the
+    last ``n``, and the persistence score (:func:`persistence`) of the quarters of the last ``n`` (module docstring;
+    the same run stops at the quarters and keeps each orbit's changes there).  ``record(n, drift_so_far, z)`` is
+    called at each ``n``; with ``checkpoint`` the state is saved there every ``chunk`` steps and a run resumes from it
+    (same orbits bit for bit)."""
     I0 = m.integrals(X0)
     scale = np.maximum(1.0, np.abs(I0))
-    X, carry, done, out, worst = X0, None, 0, [], 0.0
+    marks = [ns[-1] * q // 4 for q in range(1, 5)]  # the quarters of the last n
+    X, carry, done, out, worst, cum = X0, None, 0, [], 0.0, {}
     if checkpoint and os.path.exists(checkpoint):
         with np.load(checkpoint) as c:
             X, carry, done = c["X"], c["carry"], int(c["done"])
             out, worst = [float(v) for v in c["out"]], float(c["worst"])
+            if "marks" in c:
+                cum = {int(q): v for q, v in zip(c["marks"], c["cum"], strict=True)}
     for n in ns[len(out):]:
         while done < n:
             k = n - done if not chunk else min(chunk, n - done)
+            k = min([k] + [q - done for q in marks if q > done])
             adv = m.advance(X, carry, k, k)
             X, carry, done = adv.X, adv.carry, done + k
+            if done in marks:
+                cum[done] = (m.integrals(X) - I0) / scale
             if checkpoint and done < n:
-                _save(checkpoint, X, carry, done, out, worst)
+                _save(checkpoint, X, carry, done, out, worst, cum)
         change = (m.integrals(X) - I0) / scale
         worst = max(worst, float(np.max(np.abs(change))))  # the running largest drift
         out.append(worst)
         sd = change.std(axis=0) / np.sqrt(len(X0))
         z = float(np.max(np.abs(change.mean(axis=0)) / np.where(sd > 0, sd, np.inf)))
         if checkpoint:
-            _save(checkpoint, X, carry, done, out, worst)
+            _save(checkpoint, X, carry, done, out, worst, cum)
         if record is not None:
             record(n, out, z)
     change = (m.integrals(X) - I0) / scale  # at the last n (resumed or not)
     sd = change.std(axis=0) / np.sqrt(len(X0))
     z = np.abs(change.mean(axis=0)) / np.where(sd > 0, sd, np.inf)
-    return out, float(np.max(z))
+    pers = None
+    if all(q in cum for q in marks) and marks[0] > 0:
+        c = np.stack([np.zeros_like(cum[marks[0]])] + [cum[q] for q in marks])
+        pers = persistence(np.diff(c, axis=0))
+    return out, float(np.max(z)), pers
 
 
-def _save(path: str, X, carry, done: int, out: list[float], worst: float) -> None:
+def _save(path: str, X, carry, done: int, out: list[float], worst: float, cum: dict | None = None) -> None:
     tmp = path + ".tmp.npz"
-    np.savez(tmp, X=X, carry=np.asarray(carry), done=done, out=np.asarray(out), worst=worst)
+    marks = sorted(cum or {})
+    np.savez(tmp, X=X, carry=np.asarray(carry), done=done, out=np.asarray(out), worst=worst,
+             marks=np.asarray(marks, dtype=np.int64), cum=np.asarray([cum[q] for q in marks]) if marks else
+             np.zeros((0,) + np.shape(X)[:-1] + (0,)))
     os.replace(tmp, path)
 
 
@@ -166,9 +183,19 @@ def main(argv=None) -> None:
                             "machine": machine, "utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
                     with open(args.jsonl, "a") as fh:
                         fh.write(json.dumps(line) + "\n")
-            d, z = drift_curve(m.with_backend(route), X0, ns, record, args.chunk if args.jsonl else 0, checkpoint)
+            mr = m.with_backend(route)
+            d, z, pers = drift_curve(mr, X0, ns, record, args.chunk if args.jsonl else 0, checkpoint)
             cells = "  ".join(f"{n:.0e}: {v:.2e}" for n, v in zip(ns, d, strict=True))
             print(f"{name:20s} {route:9s} exponent {exponent(ns, d):5.2f}  bias |z| {z:5.1f}   {cells}", flush=True)
+            if pers is not None:
+                names = mr.integral_names() if hasattr(mr, "integral_names") else [f"I{k}" for k in range(len(pers))]
+                pcells = "  ".join(f"{k}: {v:+.2f}" for k, v in zip(names, pers, strict=True))
+                print(f"{name:20s} {route:9s} persistence over {ns[-1]} steps   {pcells}", flush=True)
+                if args.jsonl:
+                    with open(args.jsonl, "a") as fh:
+                        fh.write(json.dumps({"map": name, "route": route, "orbits": args.orbits, "n": ns[-1],
+                                             "persistence": dict(zip(names, map(float, pers), strict=True)),
+                                             "machine": _machine()}) + "\n")
 
 
 def _machine() -> str:

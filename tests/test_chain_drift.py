@@ -52,7 +52,8 @@ def test_scaled_two_point_K0_is_n2_times_the_normalised_M0(rng):
 
 def test_the_numpy_rational_chain_has_no_mean_drift():
     """Fast form of the next test: after 3000 steps of the NumPy rational chain, the mean over 64 orbits of each
-    integral's relative change is below 2e-14 in size.  Measured: at most 7.4e-15 (the standard error of the mean is
+    integral's relative change is below 2e-14 in size.  Measured: at most 7.4e-15, 3.6e-15 since the products with
+    the decimal ``η`` and site are split (``times_split``; the standard error of the mean is
     ~2e-15: a random walk of ~1e-16 per step, sd ~1.7e-14 over the orbits); with the normalised ``M0`` (next test)
     −3.9e-14 on ``h2,1`` and −3.4e-14 on ``h2,2``, of one sign: the bound lies between the two."""
     B = MODEL.two_point_backlund(ETA, kernel="numpy")
@@ -66,7 +67,8 @@ def test_the_numpy_rational_chain_has_no_mean_drift():
 def test_the_numpy_rational_chain_has_no_bias_per_step():
     """The NumPy rational chain (``kernel="numpy"``): after 10^4 steps, the mean over 64 orbits of each integral's
     relative change, in units of its standard error (sd over the orbits / 8), is below 5 in size: a random walk
-    gives |z| ~ 1 (measured: at most 2.3 over the six integrals), a rounding error of one sign at every step
+    gives |z| ~ 1 (measured: at most 2.3 over the six integrals; 1.4 since the products with the decimal ``η`` and
+    site are split), a rounding error of one sign at every step
     grows the mean like ``n`` and the standard error like ``√n``.  With the normalised ``M0`` (``K = |k|²(λ_i +
     M0)``, whose real diagonal part is ``|k|²`` times ``λ_i − Re η`` rounded once, the same error at every step) it
     was z = −11.5 on ``h2,1`` and −7.4 on ``h2,2`` (mean −1.3e-13 and −1.0e-13); with the second site moved to
@@ -335,25 +337,33 @@ def test_quarter_changes_add_up_to_the_whole_change():
     assert np.array_equal(q[0], cumulative[0])
 
 
-def test_products_with_a_decimal_constant_are_unbiased_when_split():
-    """``_split`` (gaudin/_kernels.py): ``fl(0.2·x)`` over 2·10⁶ uniformly random mantissas of ``x`` is low by
+@pytest.mark.parametrize("route", ["compiled", "numpy"])
+def test_products_with_a_decimal_constant_are_unbiased_when_split(route):
+    """``_split`` (gaudin/_kernels.py) and its NumPy twin ``split_constant`` / ``times_split``
+    (gaudin/_compensated.py): ``fl(0.2·x)`` over 2·10⁶ uniformly random mantissas of ``x`` is low by
     0.006 ulp on average (measured −0.00617; the standard error is 0.0002 ulp: a bias of 30 standard errors, because
     ``0.2`` is the double nearest 1/5 and the dropped bits are those of ``x·4/5 mod 1``); ``_tw(x, *_split(0.2))``
-    is unbiased.  Bounds: the plain product below −0.004 ulp (10 se from its value), the split one within ±0.0015 ulp
-    (7 se).  The errors exact from Dekker's product (``c·x = p + e``; ``r − p`` is exact, ``r`` within an ulp of
-    ``p``).  Planted: ``_split`` returning ``(c, 0)`` (the plain product) fails."""
-    from numba import njit
+    is unbiased, and so is ``times_split(x, *split_constant(0.2))`` (the same bits: ``fma`` emulated with Dekker's
+    product and TwoSum).  Bounds: the plain product below −0.004 ulp (10 se from its value), the split one within
+    ±0.0015 ulp (7 se).  The errors exact from Dekker's product (``c·x = p + e``; ``r − p`` is exact, ``r`` within an
+    ulp of ``p``).  Planted: ``_split`` or ``split_constant`` returning ``(c, 0)`` (the plain product) fails."""
+    from jetgaudin.gaudin._compensated import split_constant, times_split, two_prod
 
-    from jetgaudin.gaudin import _kernels as K
-    from jetgaudin.gaudin._compensated import two_prod
+    if route == "compiled":
+        from numba import njit
 
-    @njit(cache=False)
-    def split_products(x, c):
-        out = np.empty_like(x)
-        a, b = K._split(c)
-        for i in range(x.shape[0]):
-            out[i] = K._tw(x[i], a, b)
-        return out
+        from jetgaudin.gaudin import _kernels as K
+
+        @njit(cache=False)
+        def split_products(x, c):
+            out = np.empty_like(x)
+            a, b = K._split(c)
+            for i in range(x.shape[0]):
+                out[i] = K._tw(x[i], a, b)
+            return out
+    else:
+        def split_products(x, c):
+            return times_split(x, *split_constant(c))
 
     rng = np.random.default_rng(5)
     x = np.ldexp((2**52 + rng.integers(0, 2**52, 2_000_000, dtype=np.int64)).astype(float), -53)  # [1/2, 1)
@@ -364,6 +374,72 @@ def test_products_with_a_decimal_constant_are_unbiased_when_split():
     split = (((split_products(x, 0.2) - p) - e) / ulp).mean()
     assert plain < -0.004, plain
     assert abs(split) < 0.0015, split
+
+
+def test_the_numpy_split_product_is_the_kernels_bit_for_bit(rng):
+    """``times_split(x, *split_constant(c))`` (NumPy: Dekker's product and TwoSum) is the compiled
+    ``_tw(x, *_split(c))`` (a fused multiply-add) bit for bit: ``fma`` emulated, correctly rounded but where the low
+    part's own rounding falls on a tie (none among these draws), and the same split (one ``KAPPA``).  2·10⁵ draws of
+    ``x`` of both signs over 40 binades, five constants (decimals, an exact binary one, a negative one).  Exact
+    comparison: the claim is the same bits.  Planted: ``times_split`` without the TwoSum error (``fl(p + y) + e``)
+    differs on some draws."""
+    from numba import njit
+
+    from jetgaudin.gaudin import _kernels as K
+    from jetgaudin.gaudin._compensated import split_constant, times_split
+
+    @njit(cache=False)
+    def compiled(x, c):
+        out = np.empty_like(x)
+        a, b = K._split(c)
+        for i in range(x.shape[0]):
+            out[i] = K._tw(x[i], a, b)
+        return out
+
+    x = rng.choice([-1.0, 1.0], 200_000) * np.ldexp(rng.uniform(0.5, 1.0, 200_000), rng.integers(-20, 20, 200_000))
+    for c in (0.2, 0.4, 1.7, 1.5, -0.5):
+        assert split_constant(c) == K._split(c)
+        assert np.array_equal(times_split(x, *split_constant(c)), compiled(x, c)), c
+
+
+def test_the_numpy_routes_products_with_eta_and_the_sites_are_unbiased(rng):
+    """The NumPy rational route rounds each product with ``Im η``, ``2 Im η`` and a site as the compiled kernel does
+    (``times_split``; ``docs/reliability.md``, "The rational chain's bias per orbit"): read off the route's own
+    functions at inputs where an entry is exactly one such product — ``Im K0_00 = −Im η·n2`` at ``k2 = 0``,
+    ``Im K0_01 / p2 = −2 Im η·k1`` at ``k1`` real and ``k2 = 1`` (scaled by the power of two ``p2``, exact), and
+    ``K(λ_i) = s λ_i`` of ``monic_series(scaled=True)`` at ``M0 = 0`` — with ``η = 1.5 + 0.2i`` and the site 0.4
+    (decimals) over 2·10⁶ draws each, the mean signed error (towards zero negative) is within ±0.003 ulp.  Measured
+    (four seeds): 0.0002–0.0004, 0.0011–0.0014, −0.0007–−0.0010 ulp in the order above — the dither of ``fl(x·b)``
+    spans less than an ulp, so a small bias remains on these non-uniform mantissas, 5–7 standard errors of 0.0002 —
+    against −0.0135, −0.025, −0.006 for the plain products; the bound 0.003 lies between the two with ≥ 8 standard
+    errors to spare on either side.  The plain product of the same inputs is checked to be below −0.004 ulp (the test
+    can fail).  Planted: ``scaled_two_point_K0`` with ``-eta * n2`` and ``t * k1``
+    (the plain products, as before the fix), ``monic_series`` with ``s * lam_i`` — each fails its case."""
+    from jetgaudin.gaudin._compensated import scaled_two_point_K0, two_prod
+
+    n = 2_000_000
+    eta, site = 1.5 + 0.2j, 0.4
+    k1 = rng.normal(size=n) + 1j * rng.normal(size=n)
+    K0, n2 = scaled_two_point_K0(eta, k1, np.zeros(n))
+    cases = {"Im η n2": (n2, 0.2, -K0[:, 0, 0].imag)}
+    x = rng.uniform(-3, 3, n)
+    K0, n2 = scaled_two_point_K0(eta, x.astype(complex), np.ones(n, dtype=complex))
+    p2 = np.ldexp(1.0, -((np.frexp(x * x + 1)[1] + 1) // 2))  # the route's scaling of k (a power of two)
+    assert np.array_equal(n2, (x * p2) ** 2 + p2 * p2)
+    cases["2 Im η k1"] = (x * p2, 0.4, -K0[:, 0, 1].imag / p2)
+    s = rng.uniform(0.25, 1.0, n)
+    model = GaudinModel(1.0, [(site, 1)])
+    z = np.zeros((n, 2, 2), dtype=complex)
+    K = monic_series(model, z, z, s, scaled=True)[0][0][0]
+    cases["site n2"] = (s, site, K[:, 0, 0].real)
+    for name, (xs, c, got) in cases.items():
+        p, e = two_prod(np.full_like(xs, c), xs)
+        ulp = np.spacing(np.abs(p)) * np.sign(p)  # errors towards zero negative (the bias's sign at either sign of x)
+        ok = p != 0
+        plain = (-e[ok] / ulp[ok]).mean()
+        bias = (((got[ok] - p[ok]) - e[ok]) / ulp[ok]).mean()
+        assert plain < -0.004, (name, plain)
+        assert abs(bias) < 0.003, (name, bias)
 
 
 @pytest.mark.slow
@@ -419,3 +495,50 @@ def test_the_vectorised_compensated_sums_are_the_term_by_term_sums_bit_for_bit(f
                     if T[0, i, n, p, e] != 0:
                         sr, si, er, ei = cacc(sr, si, er, ei, c[:, p], T[0, i, n, p, e], T[1, i, n, p, e])
                 assert np.array_equal(series[i][0][n][:, e // 2, e % 2], (sr + er) + 1j * (si + ei)), (i, n, e)
+
+
+def test_the_drift_runs_persistence_is_that_of_its_quarters_and_survives_a_restart(tmp_path):
+    """``drift_curve`` (benchmarks/chain_drift.py, the long NumPy runs) stops at the quarters of its last ``n`` and
+    returns their persistence score: the score of the quarters' changes of the same orbits computed here, a quarter
+    per call (to 1e-12: the same integrals of the same states, the correlations' roundings aside; the integrals of
+    the same states stored otherwise, as the rows of one call, round differently by ~1e-16, a tenth of the changes).
+    A run killed after some chunks and started again with its checkpoint gives the same drift curve, ``z`` and score
+    as an unkilled run, bit for bit (the quarters' changes are kept in the checkpoint).  Planted: the quarters'
+    changes left out of the checkpoint (the restarted run has no score), the score taken from the cumulative changes
+    instead of each quarter's — each fails."""
+    cd = _chain_drift_module()
+    B = MODEL.two_point_backlund(ETA, kernel="numpy")
+    X0 = cd.states(B, 16)
+    ns = [200, 400]
+    d, z, pers = cd.drift_curve(B, X0, ns)
+    I0 = B.integrals(X0)
+    X, carry, cum = X0, None, []
+    for _ in range(4):
+        adv = B.advance(X, carry, 100, 100)
+        X, carry = adv.X, adv.carry
+        cum.append((B.integrals(X) - I0) / np.maximum(1.0, np.abs(I0)))
+    ref = cd.persistence(np.diff(np.stack([0 * cum[0]] + cum), axis=0))
+    assert pers is not None and np.allclose(pers, ref, rtol=0, atol=1e-12), (pers, ref)
+    assert np.max(np.abs(pers)) > 0.01  # scores to compare (not all zero)
+
+    class Killed(Exception):
+        pass
+
+    calls = [0]
+
+    class Dying:  # the map, killed at its 5th chunk (after the first quarter's mark at 100 steps)
+        def integrals(self, X):
+            return B.integrals(X)
+
+        def advance(self, X, carry, k, se):
+            calls[0] += 1
+            if calls[0] == 5:
+                raise Killed
+            return B.advance(X, carry, k, se)
+
+    ck = str(tmp_path / "ck.npz")
+    with pytest.raises(Killed):
+        cd.drift_curve(Dying(), X0, ns, None, 30, ck)
+    assert calls[0] == 5
+    d2, z2, pers2 = cd.drift_curve(B, X0, ns, None, 30, ck)
+    assert d2 == d and z2 == z and pers2 is not None and np.array_equal(pers2, pers)

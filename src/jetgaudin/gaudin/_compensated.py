@@ -13,7 +13,8 @@ from functools import lru_cache
 
 import numpy as np
 
-__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc", "scaled_two_point_K0"]
+__all__ = ["two_prod", "acc", "split", "exact_tables", "cacc", "scaled_two_point_K0", "KAPPA", "split_constant",
+           "times_split"]
 
 
 def two_prod(a, b):
@@ -23,6 +24,38 @@ def two_prod(a, b):
     ah, bh = ta - (ta - a), tb - (tb - b)
     al, bl = a - ah, b - bh
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+#: the generic factor of :func:`split_constant` (the fixed point of cos: a mantissa with no short period); the
+#: compiled kernels' ``_split`` (:mod:`jetgaudin.gaudin._kernels`) uses the same one
+KAPPA = 0.7390851332151607
+
+
+def split_constant(c: float) -> tuple[float, float]:
+    """``c = a + b`` exactly, ``a = fl(κ c)`` (``κ`` = :data:`KAPPA`; ``b = c − a`` is exact: ``a`` is within a factor
+    2 of ``c``): the NumPy twin of :func:`jetgaudin.gaudin._kernels._split`, for :func:`times_split`.
+
+    Why (issue 33; ``docs/reliability.md``, "Drift like round-off"): ``fl(c·x)`` is biased when ``c``'s binary
+    mantissa has a short period, as constants typed as decimals do (``0.2``, ``0.4``: over uniformly random mantissas
+    of ``x``, ``fl(0.2 x)`` is low by 0.006 ulp on average), which made each orbit of the rational chain drift
+    linearly, the sign depending on the orbit."""
+    a = c * KAPPA
+    return a, c - a
+
+
+def times_split(x, a, b):
+    """``c·x`` with ``c = a + b`` (:func:`split_constant`) as the compiled ``_tw(x, a, b) = fma(x, a, fl(x·b))``: the
+    exact ``x·a`` (Dekker's product, :func:`two_prod`: NumPy has no fused multiply-add) plus ``fl(x·b)``, rounded
+    once (TwoSum of the two high parts, then the two error terms added to its low part: the correctly rounded
+    ``x·a + fl(x·b)`` but where the low part's own rounding falls on a tie; the same bits as ``_tw``).  The final
+    rounding is of ``c·x`` plus the generic product ``x·b``'s own rounding error: dithered, unbiased on uniformly
+    random mantissas (within ±0.0015 ulp where ``fl(0.2·x)`` is −0.006), within ~0.001 ulp on the step's own
+    (``tests/test_chain_drift.py``; real arrays, ``a``, ``b`` of one sign)."""
+    p, e = two_prod(x, a)
+    y = x * b
+    s = p + y
+    z = s - p
+    return s + (((p - (s - z)) + (y - z)) + e)
 
 
 def acc(s, e, a, bh, bl):
@@ -182,16 +215,29 @@ def scaled_two_point_K0(eta: complex, k1, k2) -> tuple:
     exactly (the added term is imaginary), so ``Re(λ_i + M0_00)`` is the constant ``λ_i − Re η`` rounded once, with
     the same error at every step (a linear drift: ``n^0.93`` over ``10^3 … 10^5``, and none at a site where
     ``λ_i − Re η`` is exact); ``n2 M0 + n2 λ_i`` rounds the products ``n2 Re η`` and ``n2 λ_i``, which vary with
-    the step."""
+    the step.  Each product with ``Re η``, ``Im η`` or ``2 Im η`` is :func:`times_split` of the constant split by
+    :func:`split_constant`, as the compiled kernel's ``_tw(x, *_split(c))`` (the same bits; ``monic_series`` forms
+    ``n2 λ_i`` alike): a decimal ``Im η = 0.2`` rounds its plain products with a bias of its own, which made each
+    orbit drift linearly (``n^0.68`` over ``10^3 … 10^6``; ``docs/reliability.md``, "The rational chain's bias per
+    orbit")."""
     n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
     p2 = np.ldexp(1.0, -((np.frexp(n2)[1] + 1) // 2))
     k1, k2 = k1 * p2, k2 * p2
     n2 = np.abs(k1) ** 2 + np.abs(k2) ** 2
-    t = 2j * complex(eta).imag
     ak2 = np.abs(k2) ** 2
+    # every product with η's parts as the compiled kernel's _tw(x, *_split(c)) (times_split: a decimal Im η = 0.2
+    # rounds its plain products with a bias of its own, a linear drift per orbit; issue 33), the five in one call
+    ra, rb = split_constant(complex(eta).real)
+    ia, ib = split_constant(complex(eta).imag)
+    x = np.stack(np.broadcast_arrays(n2, n2, ak2, k1.imag, k1.real))
+    a = np.array([ra, ia, 2.0 * ia, 2.0 * ia, 2.0 * ia]).reshape((5,) + (1,) * n2.ndim)
+    b = np.array([rb, ib, 2.0 * ib, 2.0 * ib, 2.0 * ib]).reshape(a.shape)
+    er, ein, eik, t_k1i, t_k1r = times_split(x, a, b)  # Re η n2, Im η n2, 2 Im η times |k2|², k1i, k1r
+    ei = ein - eik  # Im η (n2 − 2|k2|²)
+    tk1 = t_k1i - 1j * t_k1r  # −t k1, t = 2i Im η
     K0 = np.empty(np.shape(k1) + (2, 2), dtype=complex)
-    K0[..., 0, 0] = -eta * n2 + t * ak2
-    K0[..., 0, 1] = -t * k1 * np.conj(k2)
-    K0[..., 1, 0] = -t * np.conj(k1) * k2
-    K0[..., 1, 1] = -np.conj(eta) * n2 - t * ak2
+    K0[..., 0, 0] = -er - 1j * ei  # −η n2 + t |k2|²
+    K0[..., 0, 1] = tk1 * np.conj(k2)
+    K0[..., 1, 0] = (-tk1.real + 1j * tk1.imag) * k2  # −t k̄1 = −conj(−t k1)
+    K0[..., 1, 1] = -er + 1j * ei  # −η̄ n2 − t |k2|²
     return K0, n2

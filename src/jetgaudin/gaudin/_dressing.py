@@ -15,6 +15,7 @@ import numpy as np
 
 from ..backlund._dressing import adj, eigenvector, mm
 from ..families import _series
+from ._compensated import split_constant, times_split
 
 __all__ = ["real_coefficients", "site_series", "dressing_at", "dress_parts", "dress_sites", "monic_series"]
 
@@ -111,14 +112,18 @@ def monic_series(model, M0, A0, scale=None, *, scaled=False):
     above, every rounded quantity varies from step to step: the rounding errors add up as a random walk.
 
     ``scaled=True``: ``M0``, ``A0`` are already ``s M0``, ``s A0`` (``K(λ_i) = M0 + (s λ_i)``, the compiled kernel's
-    form, :func:`jetgaudin.gaudin._compensated.scaled_two_point_K0`: no normalised ``M0`` is ever rounded)."""
+    form, :func:`jetgaudin.gaudin._compensated.scaled_two_point_K0`: no normalised ``M0`` is ever rounded; ``s λ_i``
+    rounded once after a split of ``λ_i``, :func:`jetgaudin.gaudin._compensated.times_split`, as the compiled
+    kernel: a decimal site's plain product is biased)."""
     s = np.ones(M0.shape[:-2]) if scale is None else np.asarray(scale, dtype=float)
     sI = s[..., None, None] * _ID
     series = []
     for lam_i, N in model.sites:
-        if scaled:
-            K = M0 + (s * lam_i)[..., None, None] * _ID
-            A = A0 + (s * lam_i)[..., None, None] * _ID
+        if scaled:  # s λ_i as the compiled kernel's _tw(s, *_split(λ_i)): a decimal site (0.4) would round it with a
+            # bias of its own (gaudin._compensated.times_split; issue 33)
+            sl = times_split(s, *split_constant(lam_i))[..., None, None] * _ID
+            K = M0 + sl
+            A = A0 + sl
         else:
             K = s[..., None, None] * (M0 + lam_i * _ID)
             A = s[..., None, None] * (A0 + lam_i * _ID)

@@ -33,6 +33,7 @@ from ..backlund.kernels._target import configure
 configure()
 
 from ..backlund.kernels._scalar import _fma  # noqa: E402  (after configure: the Bäcklund kernels' target)
+from ._compensated import KAPPA  # noqa: E402
 
 
 @njit(cache=True, inline="always")
@@ -76,8 +77,10 @@ def _ctw(a, h, lo):
     return complex(re, im)
 
 
-#: the generic factor of :func:`_split` (the fixed point of cos: a mantissa with no short period)
-_KAPPA = 0.7390851332151607
+#: the generic factor of :func:`_split` (the fixed point of cos: a mantissa with no short period), shared with the
+#: NumPy route's :func:`jetgaudin.gaudin._compensated.split_constant` (the two routes split alike; Numba freezes it
+#: into this module's cached kernels, whose cache is keyed on this file: a change of ``KAPPA`` needs a fresh cache)
+_KAPPA = KAPPA
 
 
 @njit(cache=True, inline="always")
@@ -90,7 +93,8 @@ def _split(c):
     the doubles nearest ``1/5``, ``2/5``: over uniformly random mantissas of ``x``, ``fl(0.2 x)`` is low by 0.006 ulp
     on average, 30 standard errors, because the bits it drops are those of ``x·4/5 mod 1``, five clusters rather than a
     uniform spread).  ``_tw(x, a, b) = fma(x, a, fl(x·b))`` is ``c·x`` rounded once after the generic product
-    ``x·b``'s own rounding error: the final rounding is dithered and unbiased."""
+    ``x·b``'s own rounding error: the final rounding is dithered and unbiased.  The NumPy route's twins:
+    :func:`jetgaudin.gaudin._compensated.split_constant`, ``times_split``."""
     a = c * _KAPPA
     return a, c - a
 
