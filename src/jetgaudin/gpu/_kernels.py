@@ -2,7 +2,7 @@ r"""The CUDA kernels of the GPU route: one thread per orbit, calling the CPU ker
 
 Nothing of the mathematics is written here.  Each kernel is a few lines that pick the thread's orbit and call the
 allocation-free loop the CPU route runs for one orbit -- :func:`jetgaudin.backlund.kernels._n3.orbit3` (the real
-N = 3 form, 351 flops a step), :func:`jetgaudin.backlund.kernels._generic.orbit_generic` (any N) and
+N = 3 form, 345 flops a step), :func:`jetgaudin.backlund.kernels._generic.orbit_generic` (any N) and
 :func:`jetgaudin.gaudin._family_kernel.orbit_loop` (chains of every family) and
 :func:`jetgaudin.gaudin._sun_kernel.orbit_loop` (su(3) chains) -- which Numba's CUDA target compiles
 as device functions, with the blocks they inline (complex arithmetic written out, explicit fused multiply-adds:
