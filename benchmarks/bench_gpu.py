@@ -19,8 +19,6 @@ import time
 
 import numpy as np
 
-#: flops of one real N = 3 step (``kernels.flops_per_step(3)["total"]``; docs/performance.md, issue 36)
-FLOPS_N3 = 351
 #: FP64 peak (FLOP/s, vector units without the tensor cores) of the GPUs this is run on: NVIDIA's data sheets
 FP64_PEAK = {"H100": 34e12, "H200": 34e12, "A100": 9.7e12}
 
@@ -170,7 +168,9 @@ def main() -> None:
         print(json.dumps(row), flush=True)
     name = next((k for k in FP64_PEAK if k in what), None)
     best = max(r["rate_kernel"] for r in out["gpu"])
-    out["fp64_fraction"] = None if name is None else best * FLOPS_N3 / FP64_PEAK[name]
+    from jetgaudin.backlund.kernels import flops_per_step  # the hand count of one real N = 3 step (issue 36)
+
+    out["fp64_fraction"] = None if name is None else best * flops_per_step(3)["total"] / FP64_PEAK[name]
     out["speedup_vs_cpu_all_cores"] = {str(r["orbits"]): r["rate_total"] / out["cpu"][0]["rate"] for r in out["gpu"]}
     out["chain"] = chain_rates(*((4, 3) if a.smoke else (1_000_000, 100)))
     print(json.dumps(out["chain"]), flush=True)
