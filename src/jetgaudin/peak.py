@@ -1,7 +1,7 @@
 r"""The FP64 peak of the device a run stepped on, and a run's rate as a fraction of it (issue 36).
 
 ``fraction = rate × flops_per_step / peak``: ``rate`` in orbit-steps per second, ``flops_per_step`` the hand count
-of the route's step (:func:`jetgaudin.backlund.kernels.flops_per_step`: 349 for the real N = 3 form, the generic
+of the route's step (:func:`jetgaudin.backlund.kernels.flops_per_step`: 345 for the real N = 3 form, the generic
 route's count for other N; chains have no count, so no fraction), ``peak`` in FLOP/s:
 
 * **CPU:** ``cores × clock × flops per cycle and core`` — the cores Numba runs on (its thread count, at most the
