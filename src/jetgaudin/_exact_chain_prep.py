@@ -108,7 +108,7 @@ def _integrals_row(flow, x: np.ndarray) -> np.ndarray:
 
 def _trig_roots(model, hI: np.ndarray, const: float, pos: np.ndarray, orders: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
-    """``exact_chain._orbit_roots`` for the trigonometric family with the polynomial compiled
+    """``_orbit_roots`` for the trigonometric family with the polynomial compiled
     (:func:`jetgaudin._exact_chain_kernels.trig_polynomial`, ``ν²`` from the expansion: the roots equal
     ``gaudin._curve.branch_points``' to round-off), the roots by the same companion matrix."""
     from .spectral import _roots
@@ -161,3 +161,58 @@ def _identities(model, keep: np.ndarray) -> np.ndarray:
     _, sv, vt = np.linalg.svd(V - V.mean(axis=0))
     sv = np.concatenate([sv, np.zeros(vt.shape[0] - len(sv))])
     return vt[sv <= 1e-10 * sv[0]]
+
+
+def _orbit_roots(model, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(raw, bp)``: the orbit's branch points as the branch rule takes them (``gaudin._curve.branch_points``: in the
+    uniformizer ``z`` for a family that has one, e.g. ``z = e^{2iγλ}``) and in ``λ`` (``model.branch_points``)."""
+    from .gaudin._curve import branch_points
+
+    raw = branch_points(model, x)
+    fam = model.family
+    return raw, (raw if fam.uniform or fam.uniformizer(0.0) is None else fam.uniformizer_inverse(raw))
+
+
+def _branch_ok(model, x: np.ndarray, eta: np.ndarray, nu_end: np.ndarray, raw: np.ndarray) -> bool:
+    """Whether the continued end values ``nu_end`` are ``model.nu``'s default branch at ``η_j`` (to 1e-8 relative:
+    the maps take that branch); ``raw`` the orbit's branch points as the rule takes them (:func:`_orbit_roots`)."""
+    from .gaudin._curve import nu_with_roots
+
+    ref = np.asarray(nu_with_roots(model, np.broadcast_to(x, eta.shape + x.shape), eta, raw))
+    return bool(np.all(np.abs(ref - nu_end) <= 1e-8 * np.abs(ref)))
+
+
+_MODULES: dict[str, Any] = {}
+
+
+def _kernel_module(name: str) -> Any:
+    """The compiled module ``name`` (Numba imported on first use; then a dictionary look-up, ~1 µs less a call than
+    ``importlib.import_module``)."""
+    mod = _MODULES.get(name)
+    if mod is None:
+        mod = _MODULES[name] = importlib.import_module(name)
+    return mod
+
+
+#: per flow and per model (the flows of one model share one dictionary), the stacked kernel constants of its last
+#: maps (:func:`_stacked_constants`)
+_STACKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_STACKED_MODEL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _stacked_constants(flow, etas: tuple) -> tuple:
+    """The stepping loop's kernel constants of the maps ``etas`` of the flow's model (``gaudin.maps._orbit_constants``
+    per map, stacked by ``_exact_chain_loop.stack_constants``), cached per model and ``(η…)`` (up to 64), looked up
+    through the flow (hashing the model costs ~3 µs a call); the loop only reads them."""
+    per_flow = _STACKED.get(flow)
+    if per_flow is None:  # a new flow: its model's (jg.solve builds a flow at every call)
+        per_flow = _STACKED[flow] = _STACKED_MODEL.setdefault(flow.model, {})
+    out = per_flow.get(etas)
+    if out is None:
+        from .gaudin.maps import _orbit_constants
+
+        if len(per_flow) >= 64:
+            per_flow.clear()
+        out = per_flow[etas] = _kernel_module("jetgaudin._exact_chain_loop").stack_constants(
+            [_orbit_constants(flow.model, e) for e in etas])
+    return out
