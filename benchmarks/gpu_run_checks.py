@@ -34,7 +34,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "src"))  # the checks import the tree's jetgaudin (the device has no install of it)
 CLI = [sys.executable, "-m", "jetgaudin"]
+KSCALE = 1  # the kernel-rate sizes' divisor: 10^4 under --smoke; --scale leaves them whole (a full GPU)
 SITES = ["--sites", "0:1,0.5:1,1:1,1.5:1", "--family", "trigonometric", "--gamma", "1", "--eta", "0.4+0.05i"]
 
 
@@ -97,7 +99,7 @@ def kernel_rate(B: int, steps: int, chain: bool = False) -> float:
 
 def check_end_to_end(tmp: Path, scale: int) -> dict:
     B, steps = 10**7 // scale, 10**4 // max(1, scale // 100)
-    k = kernel_rate(max(1000, 10**6 // scale), max(20, 2000 // scale))
+    k = kernel_rate(max(1000, 10**6 // KSCALE), max(20, 2000 // KSCALE))
     wall, out, rc = ensemble(["--orbits", str(B), "--steps", str(steps), "--save-every", str(max(1, steps // 10)),
                               "--backend", "gpu"], tmp / "e2e", 3000)
     printed = rate_of(out)
@@ -132,7 +134,7 @@ def check_sigint_resume(tmp: Path, scale: int) -> dict:
 
 def check_chain(tmp: Path, scale: int) -> dict:
     B, steps = 10**6 // scale, 2000 // max(1, scale // 100)
-    k = kernel_rate(max(1000, 10**6 // scale), max(10, 100 // scale), chain=True)
+    k = kernel_rate(max(1000, 10**6 // KSCALE), max(10, 100 // KSCALE), chain=True)
     wall, out, rc = ensemble(SITES + ["--orbits", str(B), "--steps", str(steps), "--save-every", str(steps),
                                       "--backend", "gpu"], tmp / "chain", 3000)
     printed = rate_of(out)
@@ -141,12 +143,12 @@ def check_chain(tmp: Path, scale: int) -> dict:
             "whole_command_over_kernel": B * steps / wall / k, "target": ">= 0.3", "tail": out[-600:]}
 
 
-def check_tests() -> dict:
+def check_tests(files: list[str]) -> dict:
     t0 = time.perf_counter()
-    p = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests/test_gpu.py"],
+    p = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *files],
                        env=dict(env(), JETGAUDIN_TEST_REAL_GPU="1"), cwd=ROOT, capture_output=True, text=True,
                        timeout=1200)
-    return {"check": "pytest tests/test_gpu.py on the GPU", "rc": p.returncode, "wall_s": time.perf_counter() - t0,
+    return {"check": f"pytest {' '.join(files)} on the GPU", "rc": p.returncode, "wall_s": time.perf_counter() - t0,
             "tail": (p.stdout + p.stderr)[-1500:]}
 
 
@@ -154,25 +156,33 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--json", type=Path, help="write the results here")
     ap.add_argument("--smoke", action="store_true", help="sizes / 10^4 (the script's logic; under the simulator)")
-    ap.add_argument("--only", default="1234", help="which checks (digits 1-4; default all)")
+    ap.add_argument("--only", default="1234", help="which checks, in this order (digits 1-4; default all)")
+    ap.add_argument("--scale", type=int, default=1, help="divide the sizes by this (a short lease; default 1)")
+    ap.add_argument("--tests", default="tests/test_gpu.py tests/test_gpu_sun.py tests/test_bite_gpu.py",
+                    help="the test files of check 4")
     a = ap.parse_args(argv)
-    scale = 10**4 if a.smoke else 1
+    if a.scale < 1:
+        ap.error(f"--scale must be a positive integer, got {a.scale}")
+    scale = 10**4 if a.smoke else a.scale
+    global KSCALE
+    KSCALE = 10**4 if a.smoke else 1
     results = [dict(device(), check="device")]
     print(json.dumps(results[0]), flush=True)
     with tempfile.TemporaryDirectory(prefix="jetgaudin-gpu-checks-") as d:
         tmp = Path(d)
-        for digit, fn in (("1", lambda: check_end_to_end(tmp, scale)), ("2", lambda: check_sigint_resume(tmp, scale)),
-                          ("3", lambda: check_chain(tmp, scale)), ("4", check_tests)):
-            if digit not in a.only or (digit == "4" and a.smoke):
+        checks = {"1": lambda: check_end_to_end(tmp, scale), "2": lambda: check_sigint_resume(tmp, scale),
+                  "3": lambda: check_chain(tmp, scale), "4": lambda: check_tests(a.tests.split())}
+        for digit in dict.fromkeys(a.only):
+            if digit not in checks or (digit == "4" and a.smoke):
                 continue
             try:
-                r = fn()
+                r = checks[digit]()
             except Exception as exc:  # one check's failure is reported, the others still run
                 r = {"check": digit, "error": f"{type(exc).__name__}: {exc}"}
             results.append(r)
             print(json.dumps(r, default=str), flush=True)
-    if a.json:
-        a.json.write_text(json.dumps(results, indent=1, default=str) + "\n")
+            if a.json:  # after every check: a lease that ends early keeps what was measured
+                a.json.write_text(json.dumps(results, indent=1, default=str) + "\n")
     return 0
 
 
