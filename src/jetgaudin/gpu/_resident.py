@@ -39,6 +39,7 @@ Ensembles of the top (``BatchBacklund``, N ≤ :data:`._kernels.MAX_N`) only; ch
 from __future__ import annotations
 
 import functools
+import math
 import sys
 from typing import Any
 
@@ -162,7 +163,7 @@ def _health_kernels() -> tuple[Any, Any, Any]:
             for j in range(j0, j1):
                 for t in range(2 * N):
                     rel = abs(kappa(rows, j, o, b[o], N, t) - I0[o, t]) / scale[o, t]
-                    if not (rel < np.inf) or rel > max_drift:
+                    if not (rel < math.inf) or rel > max_drift:
                         cuda.atomic.min(first, 0, j)
                         return
 
@@ -174,10 +175,10 @@ def _health_kernels() -> tuple[Any, Any, Any]:
             for j in range(j0, j1):
                 for t in range(2 * N):
                     d = abs(kappa(rows, j, o, b[o], N, t) - I0[o, t])
-                    if d < np.inf and d > drift[o, t]:
+                    if d < math.inf and d > drift[o, t]:
                         drift[o, t] = d
                 y1, y2, y3 = rows[j, o, 3 * N - 3], rows[j, o, 3 * N - 2], rows[j, o, 3 * N - 1]
-                e = abs(np.sqrt(y1 * y1 + y2 * y2 + y3 * y3) - r0[o])
+                e = abs(math.sqrt(y1 * y1 + y2 * y2 + y3 * y3) - r0[o])  # math's: NumPy ufuncs do not compile for CUDA
                 if e != e:
                     e = 0.0
                 elif e > big:
