@@ -109,15 +109,28 @@ def check_end_to_end(tmp: Path, scale: int) -> dict:
             "whole_command_over_kernel": B * steps / wall / k, "target": ">= 0.5", "tail": out[-600:]}
 
 
+def launch(args: list[str], out: Path) -> tuple[subprocess.Popen, float, float]:
+    """Start ``ensemble`` and wait until its run directory holds a checkpoint (the stepping has begun): the process, its
+    start time and the seconds until then (start-up, sampling, compiles)."""
+    t0 = time.perf_counter()
+    p = subprocess.Popen(CLI + ["ensemble", *args, "--out", str(out), "--no-progress"], env=env(),
+                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    while p.poll() is None and not any(out.glob("checkpoint*")) and time.perf_counter() - t0 < 600:
+        time.sleep(0.02)
+    return p, t0, time.perf_counter() - t0
+
+
 def check_sigint_resume(tmp: Path, scale: int) -> dict:
     from jetgaudin import run as rl
 
     B, steps = 10**6 // scale, 2 * 10**5 // max(1, scale // 100)
     args = ["--orbits", str(B), "--steps", str(steps), "--save-every", str(max(1, steps // 10)), "--backend", "gpu"]
-    t_full, out_full, rc_full = ensemble(args, tmp / "full", 3000)
-    p = subprocess.Popen(CLI + ["ensemble", *args, "--out", str(tmp / "int"), "--no-progress"], env=env(),
-                         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    time.sleep(max(1.0, t_full / 3))
+    p, t0, t_up_full = launch(args, tmp / "full")
+    out_full = p.communicate(timeout=3000)[0]
+    t_full, rc_full = time.perf_counter() - t0, p.returncode
+    # SIGINT halfway through the stepping (the full run's time after its first checkpoint), not during the start-up
+    p, t0, t_up = launch(args, tmp / "int")
+    time.sleep(max(0.05, (t_full - t_up_full) / 2))
     p.send_signal(signal.SIGINT)
     out_int = p.communicate(timeout=600)[0]
     t0 = time.perf_counter()
@@ -127,8 +140,9 @@ def check_sigint_resume(tmp: Path, scale: int) -> dict:
     a, b = rl.load(tmp / "full"), rl.load(tmp / "int")
     equal = bool(np.array_equal(a.X, b.X) and np.array_equal(getattr(a, "n", 0), getattr(b, "n", 0)))
     return {"check": "SIGINT and resume", "orbits": B, "steps": steps, "rc_full": rc_full,
-            "rc_interrupted": p.returncode, "rc_resumed": rc_res, "wall_full_s": t_full, "wall_resume_s": t_res,
-            "bit_for_bit": equal,
+            "rc_interrupted": p.returncode, "rc_resumed": rc_res, "wall_full_s": t_full,
+            "startup_full_s": t_up_full, "startup_interrupted_s": t_up, "wall_resume_s": t_res,
+            "bit_for_bit": equal, "interrupted_while_stepping": rc_res == 0 and p.returncode == 130,
             "interrupted_tail": out_int[-300:], "resumed_tail": out_res[-300:], "full_tail": out_full[-300:]}
 
 

@@ -338,10 +338,13 @@ def test_resident_health_and_drift_equal_the_cpu_route(tmp_path, monkeypatch):
     c = rl.start(_ens_spec("compiled"), tmp_path / "c")
     assert g.status == c.status == "completed"
     scale = np.maximum(1.0, np.abs(c.integrals0))
-    assert np.all(np.abs(g.drift_abs - c.drift_abs) <= 4 * np.spacing(scale))
+    # on a real GPU the states themselves differ by round-off per step (module docstring), and so do their integrals
+    ulps = 4 if not REAL else 40 * 45  # 40 steps at 1e-14 ≈ 45 ulp each
+    assert np.all(np.abs(g.drift_abs - c.drift_abs) <= ulps * np.spacing(scale))
     assert c.drift_abs.max() > 0  # round-off drift, not zeros: the comparison compares something
-    assert abs(g.sphere_max_deviation - c.sphere_max_deviation) <= 4 * np.spacing(1.0 + np.abs(c.sphere_radius0).max())
-    np.testing.assert_array_equal(rl.load(tmp_path / "g").X, rl.load(tmp_path / "c").X)
+    r = 1.0 + np.abs(c.sphere_radius0).max()
+    assert abs(g.sphere_max_deviation - c.sphere_max_deviation) <= ulps * np.spacing(r)
+    same(rl.load(tmp_path / "g").X, rl.load(tmp_path / "c").X, 40)
 
 
 def test_resident_orbit_failing_off_the_save_grid(tmp_path, monkeypatch):
