@@ -128,9 +128,12 @@ def check_sigint_resume(tmp: Path, scale: int) -> dict:
     p, t0, t_up_full = launch(args, tmp / "full")
     out_full = p.communicate(timeout=3000)[0]
     t_full, rc_full = time.perf_counter() - t0, p.returncode
-    # SIGINT halfway through the stepping (the full run's time after its first checkpoint), not during the start-up
+    # SIGINT halfway through the stepping (the full run's printed stepping time, counted from the first checkpoint),
+    # not during the start-up or the summary after it
+    m = re.search(r"([0-9.]+) s stepping", out_full)
+    stepping = float(m.group(1)) if m else (t_full - t_up_full) / 4
     p, t0, t_up = launch(args, tmp / "int")
-    time.sleep(max(0.05, (t_full - t_up_full) / 2))
+    time.sleep(max(0.02, stepping / 2))
     p.send_signal(signal.SIGINT)
     out_int = p.communicate(timeout=600)[0]
     t0 = time.perf_counter()
