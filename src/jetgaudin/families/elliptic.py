@@ -221,17 +221,36 @@ def _two_word_w(family: EllipticFamily, xi: complex) -> tuple:
     return tuple(np.array(w) for w in zip(*words, strict=True))
 
 
+def _det3(r0, r1, r2, c0, c1, c2):
+    """The 3 × 3 determinant of the columns ``c0, c1, c2`` of the rows ``r0, r1, r2`` (arrays ``(B, 4)``), expanded
+    along ``r0`` as the compiled kernel's ``_det3`` (no LAPACK: its rounding is what the docstring below avoids)."""
+    return (r0[..., c0] * (r1[..., c1] * r2[..., c2] - r1[..., c2] * r2[..., c1])
+            - r0[..., c1] * (r1[..., c0] * r2[..., c2] - r1[..., c2] * r2[..., c0])
+            + r0[..., c2] * (r1[..., c0] * r2[..., c1] - r1[..., c1] * r2[..., c0]))
+
+
 def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
-    r"""``S = (S_0, S_1, S_2, S_3)`` ``(B, 4)`` with ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` (module docstring): the right
-    singular vector of the smallest singular value of the ``4 × 4`` system (rank 3), normalised to ``|S| = 1`` with
-    its largest component real (if it is ``S_0``) or imaginary (an ``S_a``), so that ``(S_0, iS_a)`` is real for a
-    real state."""
+    r"""``S = (S_0, S_1, S_2, S_3)`` ``(B, 4)`` with ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` (module docstring): the null
+    vector of the ``4 × 4`` system ``A`` (rank 3) as the cofactor vector of three of its rows (the generalised cross
+    product: ``A·n = 0`` exactly in exact arithmetic for the fourth row by rank 3, for the three by construction) —
+    rows ``0, 1, 2`` unless their cofactors are small against the rows' norms (``|n|² ≤ 1e-4 Π|A_r|²``), then the
+    choice of three with the largest cofactors, as the compiled kernel
+    (:func:`jetgaudin.gaudin._family_kernel._elliptic_coefficients`); normalised to ``|S| = 1`` with its largest
+    component real (if it is ``S_0``) or imaginary (an ``S_a``), so that ``(S_0, iS_a)`` is real for a real state.
+
+    Not the SVD's singular vector: LAPACK's rounding of it leaves an error of one sign in the map's integrals at
+    every step (the NumPy elliptic route's drift grew like a bias, ``z`` 5 at 4000 steps of 2048 orbits; with the
+    cofactors ≤ 2, as the compiled route: ``docs/reliability.md``, issue 33 item 3)."""
     from ..gaudin._compensated import cacc
 
     xi = complex(xi)
     hi, lo = _two_word_w(family, xi)  # w_a(ξ − λ_0), then w_a(ξ̄ − λ_0), a = 1, 2, 3, as two words
     cols = []
     for j, k in enumerate((k1, k2)):
+        # k scaled by a power of two (exact) to |k|² in [1/4, 1): the rows, hence the cofactors (cubes of them), are
+        # of size 1 for states of any size; the null vector does not depend on the rows' scale
+        e = np.frexp(np.sum(np.abs(k) ** 2, axis=-1))[1]
+        k = k * np.ldexp(1.0, -((e + 1) // 2))[..., None]
         z = np.zeros(k.shape[:-1])
 
         def w_times(a, v, j=j, z=z):  # w_a(·) v, compensated and rounded once (docs/reliability.md, issue 33)
@@ -242,8 +261,20 @@ def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
         cols.append(np.stack([np.stack([a1, w_times(1, a2), w_times(2, -1j * a2), w_times(3, a1)], -1),
                               np.stack([a2, w_times(1, a1), w_times(2, 1j * a1), w_times(3, -a2)], -1)], -2))
     A = np.concatenate(cols, axis=-2)  # (B, 4, 4)
-    _, _, vh = np.linalg.svd(A)
-    S = np.conj(vh[..., -1, :])
+    rn = np.sum(np.abs(A) ** 2, axis=-1)  # (B, 4): the rows' squared norms
+    S = np.zeros(A.shape[:-2] + (4,), dtype=complex)
+    best = np.full(A.shape[:-2], -1.0)
+    done = np.zeros(A.shape[:-2], dtype=bool)
+    for i in range(4):  # leave out row 3, 2, 1, 0 in turn (the compiled kernel's order)
+        rows = [(3 - i + d) % 4 for d in (1, 2, 3)]
+        r0, r1, r2 = (A[..., r, :] for r in rows)
+        n = np.stack([_det3(r0, r1, r2, 1, 2, 3), -_det3(r0, r1, r2, 0, 2, 3), _det3(r0, r1, r2, 0, 1, 3),
+                      -_det3(r0, r1, r2, 0, 1, 2)], axis=-1)
+        size = np.sum(np.abs(n) ** 2, axis=-1)
+        take = ~done & (size > best)
+        S[take], best[take] = n[take], size[take]
+        done |= best > 1e-4 * rn[..., rows[0]] * rn[..., rows[1]] * rn[..., rows[2]]
+    S = S / np.sqrt(best)[..., None]
     big = np.argmax(np.abs(S), axis=-1)
     top = np.take_along_axis(S, big[..., None], axis=-1)[..., 0]
     phase = np.abs(top) / top * np.where(big == 0, 1.0, 1j)
