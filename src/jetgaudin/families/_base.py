@@ -85,6 +85,25 @@ class Family(abc.ABC):
         """:meth:`kernel_constants` in :mod:`mpmath` arithmetic (``xi`` an ``mpc``); see :meth:`mp_w`."""
         raise NotImplementedError(f"the {self.name} family has no mpmath kernel constants")
 
+    def mp_w_taylor(self, x, n: int) -> list:
+        """``w_a(x + t) = Σ_k W[a − 1][k] t^k`` (``k < n``, ``a = 1, 2, 3``): three lists of ``n`` Taylor coefficients
+        in :mod:`mpmath` arithmetic at the working precision (``x`` an ``mpc``).  Default: :func:`mpmath.taylor` of
+        :meth:`mp_w` (numerical derivatives at raised precision; a family with the series in closed form overrides
+        it: the elliptic one, 10× faster)."""
+        import mpmath
+
+        return [mpmath.taylor(lambda z, a=a: self.mp_w(a, z), x, n - 1) for a in (1, 2, 3)]
+
+    def mp_dressing_taylor(self, lam, xi, n: int) -> list:
+        """The dressing basis' Taylor coefficients at ``λ`` (``k < n``): ``P`` lists of the 4 entries ``00, 01, 10,
+        11``, each a list of ``n`` coefficients (an entry that vanishes identically: zeros).  Default:
+        :func:`mpmath.taylor` of :meth:`mp_dressing_basis`, entry by entry."""
+        import mpmath
+
+        P = len(self.mp_dressing_basis(lam, xi))
+        return [[mpmath.taylor(lambda z, q=q, e=e: self.mp_dressing_basis(z, xi)[q][e], lam, n - 1) for e in range(4)]
+                for q in range(P)]
+
     # ---- parameters -------------------------------------------------------------------------------------
 
     @property

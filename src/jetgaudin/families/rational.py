@@ -69,6 +69,15 @@ class RationalFamily(Family):
     def mp_dressing_basis(self, lam, xi=None):
         return [[lam, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, lam], [0, 0, 0, 1]]
 
+    def mp_dressing_taylor(self, lam, xi, n: int) -> list:
+        """:meth:`mp_dressing_basis`'s Taylor coefficients at ``λ``: ``λ + t`` and ``1``."""
+        import mpmath
+
+        z = [mpmath.mpf(0)] * n
+        one = [mpmath.mpf(1)] + z[1:]
+        lin = [mpmath.mpmathify(lam)] + ([mpmath.mpf(1)] if n > 1 else []) + z[2:]
+        return [[lin, z, z, z], [one, z, z, z], [z, one, z, z], [z, z, one, z], [z, z, z, lin], [z, z, z, one]]
+
     def mp_kernel_constants(self, xi):
         return [xi]
 

@@ -164,6 +164,17 @@ class TrigonometricFamily(Family):
         ep, em = mpmath.expj(self.gamma * lam), mpmath.expj(-self.gamma * lam)
         return [[ep, 0, 0, 0], [em, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, ep], [0, 0, 0, em]]
 
+    def mp_dressing_taylor(self, lam, xi, n: int) -> list:
+        """:meth:`mp_dressing_basis`'s Taylor coefficients at ``λ``: ``e^{±iγ(λ + t)} = e^{±iγλ} Σ (±iγt)^k/k!``."""
+        import mpmath
+
+        g = mpmath.mpf(self.gamma)
+        ep = [mpmath.expj(g * lam) * (1j * g) ** k / mpmath.factorial(k) for k in range(n)]
+        em = [mpmath.expj(-g * lam) * (-1j * g) ** k / mpmath.factorial(k) for k in range(n)]
+        z = [mpmath.mpf(0)] * n
+        one = [mpmath.mpf(1)] + z[1:]
+        return [[ep, z, z, z], [em, z, z, z], [z, one, z, z], [z, z, one, z], [z, z, z, ep], [z, z, z, em]]
+
     def mp_kernel_constants(self, xi):
         import mpmath
 

@@ -91,8 +91,9 @@ def split(z) -> tuple[complex, complex]:
 def exact_tables(model, xi: complex) -> tuple | None:
     """``(f, T, gk)`` of :func:`jetgaudin.gaudin._family_kernel.orbit_constants` as ``(hi, lo)`` pairs (read-only)
     from the family's :mod:`mpmath` functions at 40 digits (:meth:`jetgaudin.families.Family.mp_w`), or ``None``
-    for a family without them.  Taylor coefficients by :func:`mpmath.taylor` (its numerical derivatives work at
-    raised precision: ~1e-40 relative here)."""
+    for a family without them.  Taylor coefficients by :meth:`~jetgaudin.families.Family.mp_w_taylor` and
+    :meth:`~jetgaudin.families.Family.mp_dressing_taylor` (closed-form series for the elliptic family;
+    :func:`mpmath.taylor`, whose numerical derivatives work at raised precision, ~1e-40 relative, for the others)."""
     import mpmath
 
     fam = model.family
@@ -104,19 +105,19 @@ def exact_tables(model, xi: complex) -> tuple | None:
             x = mpmath.mpc(complex(xi).real, complex(xi).imag)
             for i, (p, N) in enumerate(model.sites):
                 o = model.offsets[i]
+                W = fam.mp_w_taylor(x - mpmath.mpf(p), N)
                 for a in range(3):
-                    t = mpmath.taylor(lambda z, a=a: fam.mp_w(a + 1, z), x - mpmath.mpf(p), N - 1)
                     for k in range(N):
-                        f[:, a, o + k] = split((-1) ** k * t[k])  # φ_{a,k} = (−1)^k [x^k] w_a
-                basis = fam.mp_dressing_basis(mpmath.mpf(p), x)
+                        f[:, a, o + k] = split((-1) ** k * W[a][k])  # φ_{a,k} = (−1)^k [x^k] w_a
+                D = fam.mp_dressing_taylor(mpmath.mpf(p), x, N)
                 for q in range(fam.n_dressing):
                     for e in range(4):
-                        if basis[q][e] == 0:
+                        # every coefficient, not only those of entries nonzero at λ_i: the rational basis entry λ
+                        # vanishes at a site λ_i = 0 but its derivative does not (a site of order ≥ 2 at 0 lost it)
+                        if all(t == 0 for t in D[q][e]):
                             continue
-                        t = mpmath.taylor(lambda z, q=q, e=e: fam.mp_dressing_basis(z, x)[q][e], mpmath.mpf(p),
-                                          N - 1)
                         for n in range(N):
-                            T[:, i, n, q, e] = split(mpmath.mpmathify(t[n]))
+                            T[:, i, n, q, e] = split(mpmath.mpmathify(D[q][e][n]))
             gk = np.array([split(z) for z in fam.mp_kernel_constants(x)], dtype=complex).T
     except NotImplementedError:
         return None
