@@ -26,14 +26,30 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 from __future__ import annotations
 
 import cmath
-import math
 from functools import lru_cache
 
 import numpy as np
 from numba import njit, prange
 
+from ..backlund.kernels._scalar import _bits, _from_bits
 from ._compensated import exact_tables
 from ._kernels import _abs2, _ctw, _put_site, _split, _tw  # first: it applies the Bäcklund kernels' Numba target
+
+
+@njit(cache=True, inline="always")
+def _half_scale(x):
+    """``math.ldexp(1.0, −⌊(e + 1)/2⌋)`` with ``e = math.frexp(x)[1]`` (``x = m 2^e``, ``|m| in [1/2, 1)``; ``e = 0``
+    for ``x`` zero, infinite or NaN, as C's ``frexp``): the power of two that scales ``x`` into ``[1/4, 1)`` when
+    applied twice, from the bits of ``x`` (no library calls; equal to the ``frexp``/``ldexp`` form for every double,
+    ``tests/test_family_step.py``).  ``e`` lies in ``[−1073, 1024]``, so the result is always a normal double."""
+    be = (_bits(x) >> 52) & 0x7FF
+    if be == 0x7FF or x == 0:
+        e = 0
+    elif be == 0:  # subnormal: the exponent of x 2^54 (exact), less 54
+        e = ((_bits(x * 18014398509481984.0) >> 52) & 0x7FF) - 1022 - 54
+    else:
+        e = be - 1022
+    return _from_bits((1023 - (e + 1) // 2) << 52)
 
 
 @njit(cache=True, inline="always")
@@ -85,15 +101,12 @@ def _candidate(R0, R1, R2, best, c):
 
 
 @njit(cache=True, inline="always")
-def _elliptic_coefficients(gk, a1, a2, c):
-    """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
-    ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
-    whose cofactors are largest.  Tuples, no arrays: the GPU kernel (:mod:`jetgaudin.gpu`) compiles it too."""
-    G = gk.shape[0] // 2
-    A0, A1 = _elliptic_rows(a1, a2, gk, 0, G)
-    A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk, 3, G)
-    # rows 0, 1, 2 first; the others only when their cofactors are small (Hadamard-relative): the three rows left
-    # after skipping row 3, 2, 1, 0 in turn (any order of the three: the null vector is defined up to a factor)
+def _null_vector(A0, A1, A2, A3, c):
+    """The null vector of the rank-3 system with rows ``A0 … A3`` (4-tuples) into ``c[:4]``: the cofactor vector of
+    rows ``0, 1, 2`` unless its ``|n|²`` is below ``1e-4`` times the product of the three rows' ``|·|²`` (Hadamard-
+    relative), then of rows ``3, 0, 1``, ``2, 3, 0``, ``1, 2, 3`` in turn (skipping row 3, 2, 1, 0; any order of the
+    three rows: the null vector is defined up to a factor) until one is large enough, the largest kept; returns its
+    ``|n|²`` (``−1``, ``c`` untouched, where every ``|n|²`` is NaN).  Unrolled: no tuple indexing at run time."""
     rn0 = _norm2(A0)
     rn1 = _norm2(A1)
     rn2 = _norm2(A2)
@@ -105,9 +118,21 @@ def _elliptic_coefficients(gk, a1, a2, c):
             best = _candidate(A2, A3, A0, best, c)
             if not best > 1e-4 * rn2 * rn3 * rn0:
                 best = _candidate(A1, A2, A3, best, c)
+    return best
+
+
+@njit(cache=True, inline="always")
+def _elliptic_coefficients(gk, a1, a2, c):
+    """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
+    ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
+    whose cofactors are largest.  Tuples, no arrays: the GPU kernel (:mod:`jetgaudin.gpu`) compiles it too."""
+    G = gk.shape[0] // 2
+    A0, A1 = _elliptic_rows(a1, a2, gk, 0, G)
+    A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk, 3, G)
+    best = _null_vector(A0, A1, A2, A3, c)
     # scaled by a power of two (exact) to |c|² in [1/4, 1): unnormalised (the mantissas, hence the rounding of det D,
     # vary from step to step) but of size 1 for states of any size
-    scale = math.ldexp(1.0, -((math.frexp(best)[1] + 1) // 2))
+    scale = _half_scale(best)
     for r in range(4):
         c[r] *= scale
 
@@ -130,7 +155,7 @@ def _coefficients(rule, gk, a1, a2, c):
     n = p + q
     # the eigenvector scaled by a power of two (exact: the rounding is kept) to n in [1/4, 1): D unnormalised but of
     # the size of its normalised form for states of any size
-    sc = math.ldexp(1.0, -((math.frexp(n)[1] + 1) // 2))
+    sc = _half_scale(n)
     a1 = a1 * sc
     a2 = a2 * sc
     p = _abs2(a1)
@@ -356,11 +381,15 @@ def orbit_loop(x, y, rows, final, b, nu, f, rule, gk, T, pidx, site_off, site_n,
     n = x.shape[0]
     for i in range(n):
         rows[0, i] = x[i]
-    for s in range(steps):
+    left = save_every  # a countdown to the next saved row (no integer division per step)
+    j = 0
+    for _ in range(steps):
         nu = _step(x, y, b, nu, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P)
         x, y = y, x
-        if (s + 1) % save_every == 0:
-            j = (s + 1) // save_every
+        left -= 1
+        if left == 0:
+            left = save_every
+            j += 1
             for i in range(n):
                 rows[j, i] = x[i]
     for i in range(n):
