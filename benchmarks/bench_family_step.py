@@ -1,7 +1,8 @@
 """The family kernel's map step (``gaudin/_family_kernel._step``) against the step of another source tree, same run.
 
-Each case is one orbit of ``steps`` map steps of :func:`jetgaudin.gaudin._family_kernel.run_orbit` (end state
-only), thread CPU time per map step, the best and the median of ``repeat`` calls after a warm-up call.  The two
+Each case is one orbit of ``steps`` map steps of :func:`jetgaudin.gaudin._family_kernel.run_orbit` (the rational
+family's own kernel :func:`jetgaudin.gaudin._kernels.run_orbit` in the last case; end state only), thread CPU time
+per map step, the best and the median of ``repeat`` calls after a warm-up call.  The two
 trees run in separate processes, alternated ``rounds`` times (``PYTHONPATH`` on each tree's ``src``); the ratio
 "before / after" is per round, and the end states of the two trees are compared bit for bit (a SHA-1 of the bytes).
 
@@ -35,27 +36,35 @@ def cases():
     rat3 = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="rational")
     x3 = np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6])
     return {
-        "Clebsch top (elliptic, 1 site of order 1)": (jg.clebsch_top(0.6), np.array([0.3, -0.5, 0.4, 0.8, 0.2, -0.3]),
+        "Clebsch top (elliptic, 1 site of order 2)": (jg.clebsch_top(0.6), np.array([0.3, -0.5, 0.4, 0.8, 0.2, -0.3]),
                                                       0.31 + 0.27j),
         "elliptic chain, 2 sites of order 1": (ell2, x3[:6], 0.31 + 0.27j),
         "trigonometric chain, 3 sites of order 1": (trig3, x3, 0.4 + 0.3j),
         "trigonometric chain, 4 sites of order 1": (trig4, np.concatenate([x3, [0.2, 0.3, -0.1]]), 0.4 + 0.3j),
         "rational chain, 3 sites of order 1 (GPU route's kernel)": (rat3, x3, 0.4 + 0.3j),
         "trigonometric chain, orders (1, 2)": (trig12, x3, 0.4 + 0.3j),
+        "rational chain, 3 sites of order 1 (the rational kernel, gaudin/_kernels)": (rat3, x3, 0.4 + 0.3j),
     }
 
 
 def worker(repeat: int) -> None:
     from jetgaudin.gaudin import _family_kernel as F
+    from jetgaudin.gaudin import _kernels as R
 
     out = {}
     for name, (model, x0, eta) in cases().items():
-        c = F.orbit_constants(model, eta)
         b = float(model.b)
         nu0 = 1.0 + 0.0j
+        if "gaudin/_kernels" in name:  # the rational family's own kernel (its CPU route)
+            c = R.orbit_constants(model, eta)
 
-        def run(c=c, b=b, x0=x0, nu0=nu0):
-            return F.run_orbit(x0, b, nu0, *c, STEPS, STEPS)
+            def run(c=c, b=b, x0=x0, nu0=nu0, eta=eta):
+                return R.run_orbit(x0, b, eta, nu0, *c, STEPS, STEPS)
+        else:
+            c = F.orbit_constants(model, eta)
+
+            def run(c=c, b=b, x0=x0, nu0=nu0):
+                return F.run_orbit(x0, b, nu0, *c, STEPS, STEPS)
 
         rows, final, nu = run()  # compile / load, warm up
         ts = []
