@@ -21,6 +21,13 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 :func:`jetgaudin.gaudin.maps.dress_sites`.  No residual check, no imaginary residue (as the rational kernel of
 :mod:`jetgaudin.gaudin._kernels`); the orbits agree with the NumPy route to round-off
 (``tests/test_trigonometric_kernels.py``).
+
+Sites of order 1 and 2 (the Clebsch top is one elliptic site of order 2) take unrolled forms of the same arithmetic
+(:func:`_site1`, :func:`_site2`), the elliptic rule its null vector with shared minors (:func:`_null_vector`), the
+rule and the step are inlined (no calls, no reference counting per step): the same floating-point operations in the
+same order as the general forms, so the same bits (``tests/test_family_step.py``; ``docs/performance.md``, "The
+family kernel's map step").  Numba caches by file: a module that inlines the step (``jetgaudin._exact_chain_loop``)
+needs its cache cleared after an edit here.
 """
 
 from __future__ import annotations
