@@ -53,7 +53,7 @@ def rows_family(x0, b, nu, F, rule, GK, T, PIDX, n_basis, site_off, site_n, thet
                 final):
     """:func:`rows_rational` for the family kernel (trigonometric, elliptic): the constants ``F, GK, T, PIDX``
     stacked over the ``k`` maps; each map step :func:`jetgaudin.gaudin._family_kernel._step` (the arithmetic of
-    its ``run_orbit``) on scratch allocated once per call."""
+    its ``run_orbit``; inlined here, with its unrolled sites of order 1 and 2) on scratch allocated once per call."""
     n = x0.shape[0]
     x = x0.copy()
     y = np.empty(n)

@@ -21,26 +21,42 @@ coefficients ``c_p`` by the rule, then per site ``D``'s Taylor coefficients ``D_
 :func:`jetgaudin.gaudin.maps.dress_sites`.  No residual check, no imaginary residue (as the rational kernel of
 :mod:`jetgaudin.gaudin._kernels`); the orbits agree with the NumPy route to round-off
 (``tests/test_trigonometric_kernels.py``).
+
+Sites of order 1 and 2 (the Clebsch top is one elliptic site of order 2) take unrolled forms of the same arithmetic
+(:func:`_site1`, :func:`_site2`), the elliptic rule its null vector with shared minors (:func:`_null_vector`), the
+rule and the step are inlined (no calls, no reference counting per step): the same floating-point operations in the
+same order as the general forms, so the same bits (``tests/test_family_step.py``; ``docs/performance.md``, "The
+family kernel's map step").  Numba caches by file: a module that inlines the step (``jetgaudin._exact_chain_loop``)
+needs its cache cleared after an edit here.
 """
 
 from __future__ import annotations
 
 import cmath
-import math
 from functools import lru_cache
 
 import numpy as np
 from numba import njit, prange
 
+from ..backlund.kernels._scalar import _bits, _from_bits
 from ._compensated import exact_tables
 from ._kernels import _abs2, _ctw, _put_site, _split, _tw  # first: it applies the Bäcklund kernels' Numba target
 
 
-@njit(cache=True)
-def _det3(A, r0, r1, r2, c0, c1, c2):
-    return (A[r0][c0] * (A[r1][c1] * A[r2][c2] - A[r1][c2] * A[r2][c1])
-            - A[r0][c1] * (A[r1][c0] * A[r2][c2] - A[r1][c2] * A[r2][c0])
-            + A[r0][c2] * (A[r1][c0] * A[r2][c1] - A[r1][c1] * A[r2][c0]))
+@njit(cache=True, inline="always")
+def _half_scale(x):
+    """``math.ldexp(1.0, −⌊(e + 1)/2⌋)`` with ``e = math.frexp(x)[1]`` (``x = m 2^e``, ``|m| in [1/2, 1)``; ``e = 0``
+    for ``x`` zero, infinite or NaN, as C's ``frexp``): the power of two that scales ``x`` into ``[1/4, 1)`` when
+    applied twice, from the bits of ``x`` (no library calls; equal to the ``frexp``/``ldexp`` form for every double,
+    ``tests/test_family_step.py``).  ``e`` lies in ``[−1073, 1024]``, so the result is always a normal double."""
+    be = (_bits(x) >> 52) & 0x7FF
+    if be == 0x7FF or x == 0:
+        e = 0
+    elif be == 0:  # subnormal: the exponent of x 2^54 (exact), less 54
+        e = ((_bits(x * 18014398509481984.0) >> 52) & 0x7FF) - 1022 - 54
+    else:
+        e = be - 1022
+    return _from_bits((1023 - (e + 1) // 2) << 52)
 
 
 @njit(cache=True, inline="always")
@@ -49,7 +65,7 @@ def _wk(gk, j, G, k):
     return _ctw(k, gk[j], gk[G + j])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _elliptic_rows(k1, k2, gk, o, G):
     """The two rows of the spectrality system for one point: ``B_0 k = k``, ``B_1 k = w1 (k2, k1)``,
     ``B_2 k = w2 (−i k2, i k1)``, ``B_3 k = w3 (k1, −k2)``, with ``w_a = gk[o + a − 1]`` plus its low word
@@ -60,7 +76,59 @@ def _elliptic_rows(k1, k2, gk, o, G):
     return (k1, _wk(gk, o, G, k2), -1j * w2k2, _wk(gk, o + 2, G, k1)), (k2, _wk(gk, o, G, k1), 1j * w2k1, -w3k2)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _norm2(R):
+    return _abs2(R[0]) + _abs2(R[1]) + _abs2(R[2]) + _abs2(R[3])
+
+
+@njit(cache=True, inline="always")
+def _candidate(R0, R1, R2, best, c):
+    """The cofactor vector ``n`` of the rows ``R0, R1, R2`` (4-tuples) into ``c[:4]`` where ``|n|² > best``; returns
+    the larger.  ``n_0 = det(cols 1, 2, 3)``, ``n_1 = −det(0, 2, 3)``, ``n_2 = det(0, 1, 3)``, ``n_3 = −det(0, 1, 2)``,
+    each a 3 × 3 determinant expanded along ``R0`` (``Σ ± R0[c] · minor``) with the 2 × 2 minors of ``R1, R2``
+    computed once (each is shared by two cofactors; the same operations as four separate expansions, bit for bit)."""
+    m23 = R1[2] * R2[3] - R1[3] * R2[2]
+    m13 = R1[1] * R2[3] - R1[3] * R2[1]
+    m12 = R1[1] * R2[2] - R1[2] * R2[1]
+    m03 = R1[0] * R2[3] - R1[3] * R2[0]
+    m02 = R1[0] * R2[2] - R1[2] * R2[0]
+    m01 = R1[0] * R2[1] - R1[1] * R2[0]
+    n0 = R0[1] * m23 - R0[2] * m13 + R0[3] * m12
+    n1 = -(R0[0] * m23 - R0[2] * m03 + R0[3] * m02)
+    n2 = R0[0] * m13 - R0[1] * m03 + R0[3] * m01
+    n3 = -(R0[0] * m12 - R0[1] * m02 + R0[2] * m01)
+    s = _abs2(n0) + _abs2(n1) + _abs2(n2) + _abs2(n3)
+    if s > best:
+        c[0] = n0
+        c[1] = n1
+        c[2] = n2
+        c[3] = n3
+        return s
+    return best
+
+
+@njit(cache=True, inline="always")
+def _null_vector(A0, A1, A2, A3, c):
+    """The null vector of the rank-3 system with rows ``A0 … A3`` (4-tuples) into ``c[:4]``: the cofactor vector of
+    rows ``0, 1, 2`` unless its ``|n|²`` is below ``1e-4`` times the product of the three rows' ``|·|²`` (Hadamard-
+    relative), then of rows ``3, 0, 1``, ``2, 3, 0``, ``1, 2, 3`` in turn (skipping row 3, 2, 1, 0; any order of the
+    three rows: the null vector is defined up to a factor) until one is large enough, the largest kept; returns its
+    ``|n|²`` (``−1``, ``c`` untouched, where every ``|n|²`` is NaN).  Unrolled: no tuple indexing at run time."""
+    rn0 = _norm2(A0)
+    rn1 = _norm2(A1)
+    rn2 = _norm2(A2)
+    best = _candidate(A0, A1, A2, -1.0, c)
+    if not best > 1e-4 * rn0 * rn1 * rn2:
+        rn3 = _norm2(A3)
+        best = _candidate(A3, A0, A1, best, c)
+        if not best > 1e-4 * rn3 * rn0 * rn1:
+            best = _candidate(A2, A3, A0, best, c)
+            if not best > 1e-4 * rn2 * rn3 * rn0:
+                best = _candidate(A1, A2, A3, best, c)
+    return best
+
+
+@njit(cache=True, inline="always")
 def _elliptic_coefficients(gk, a1, a2, c):
     """``(S_0, S_1, S_2, S_3)`` into ``c[:4]``: ``D(ξ) k_1 = 0``, ``D(ξ̄) k_2 = 0`` with ``D = S_0 + Σ S_a W_a σ_a``,
     ``k_2 = (−ā_2, ā_1)``; the null vector of the rank-3 system ``A`` (4 × 4) as the cofactor vector of the three rows
@@ -68,33 +136,10 @@ def _elliptic_coefficients(gk, a1, a2, c):
     G = gk.shape[0] // 2
     A0, A1 = _elliptic_rows(a1, a2, gk, 0, G)
     A2, A3 = _elliptic_rows(-a2.conjugate(), a1.conjugate(), gk, 3, G)
-    A = (A0, A1, A2, A3)
-    rn = (_abs2(A0[0]) + _abs2(A0[1]) + _abs2(A0[2]) + _abs2(A0[3]),
-          _abs2(A1[0]) + _abs2(A1[1]) + _abs2(A1[2]) + _abs2(A1[3]),
-          _abs2(A2[0]) + _abs2(A2[1]) + _abs2(A2[2]) + _abs2(A2[3]),
-          _abs2(A3[0]) + _abs2(A3[1]) + _abs2(A3[2]) + _abs2(A3[3]))
-    best = -1.0
-    for i in range(4):
-        skip = 3 - i  # rows 0, 1, 2 first; the others only when their cofactors are small (Hadamard-relative)
-        r0 = (skip + 1) % 4  # any order of the three rows: the null vector is defined up to a factor
-        r1 = (skip + 2) % 4
-        r2 = (skip + 3) % 4
-        n0 = _det3(A, r0, r1, r2, 1, 2, 3)
-        n1 = -_det3(A, r0, r1, r2, 0, 2, 3)
-        n2 = _det3(A, r0, r1, r2, 0, 1, 3)
-        n3 = -_det3(A, r0, r1, r2, 0, 1, 2)
-        s = _abs2(n0) + _abs2(n1) + _abs2(n2) + _abs2(n3)
-        if s > best:
-            best = s
-            c[0] = n0
-            c[1] = n1
-            c[2] = n2
-            c[3] = n3
-        if best > 1e-4 * rn[r0] * rn[r1] * rn[r2]:
-            break
+    best = _null_vector(A0, A1, A2, A3, c)
     # scaled by a power of two (exact) to |c|² in [1/4, 1): unnormalised (the mantissas, hence the rounding of det D,
     # vary from step to step) but of size 1 for states of any size
-    scale = math.ldexp(1.0, -((math.frexp(best)[1] + 1) // 2))
+    scale = _half_scale(best)
     for r in range(4):
         c[r] *= scale
 
@@ -108,7 +153,7 @@ def _pq(p, q, gk, i, j):
                    _tw(p, hi.imag, li.imag) + _tw(q, hj.imag, lj.imag))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _coefficients(rule, gk, a1, a2, c):
     """The dressing coefficients ``c`` (P,) of the gauge rule ``rule`` from the eigenvector ``(a1, a2)`` (rules 0
     and 1: P = 6; a new family adds its rule here)."""
@@ -117,7 +162,7 @@ def _coefficients(rule, gk, a1, a2, c):
     n = p + q
     # the eigenvector scaled by a power of two (exact: the rounding is kept) to n in [1/4, 1): D unnormalised but of
     # the size of its normalised form for states of any size
-    sc = math.ldexp(1.0, -((math.frexp(n)[1] + 1) // 2))
+    sc = _half_scale(n)
     a1 = a1 * sc
     a2 = a2 * sc
     p = _abs2(a1)
@@ -155,7 +200,142 @@ def _coefficients(rule, gk, a1, a2, c):
         c[5] = -_pq(q, p, gk, 2, 3) * d
 
 
+@njit(cache=True, inline="always")
+def _entry(c, T, pidx, i, m, e):
+    """Entry ``e`` of ``D_m`` at site ``i``: ``Σ_t c_p (T_hi + T_lo)``, interleaved two words, each product's low
+    word counted (:func:`._kernels._ctw`); the zero padding (a term of another entry) adds nothing."""
+    s = 0j
+    for t in range(0, pidx.shape[1], 2):
+        h = T[i, m, e, t]
+        if h != 0:
+            s += _ctw(c[pidx[e, t]], h, T[i, m, e, t + 1])
+    return s
+
+
+@njit(cache=True, inline="always")
+def _dl(d0, d1, d2, d3, p0, p1, p2, p3):
+    """``K = D_a ℓ_j`` (2 × 2, row-major)."""
+    return d0 * p0 + d1 * p2, d0 * p1 + d1 * p3, d2 * p0 + d3 * p2, d2 * p1 + d3 * p3
+
+
+@njit(cache=True, inline="always")
+def _add(s, ge, k, a0, a1, a2, a3):
+    """``s += g_e K (adj D)_c`` for the entries ``00, 01, 10`` (``(ℓ̃)_11 = −(ℓ̃)_00``, not computed), ``adj D_c =
+    (a0, a1, a2, a3)``."""
+    k00, k01, k10, k11 = k
+    return (s[0] + ge * (k00 * a0 + k01 * a2), s[1] + ge * (k00 * a1 + k01 * a3),
+            s[2] + ge * (k10 * a0 + k11 * a2))
+
+
+@njit(cache=True, inline="always")
+def _ell(x, cj):
+    """``ℓ_j`` of coordinate ``cj`` as ``(P_00, P_01, P_10, P_11)``."""
+    return (complex(x[3 * cj + 2]), complex(x[3 * cj], -x[3 * cj + 1]), complex(x[3 * cj], x[3 * cj + 1]),
+            -complex(x[3 * cj + 2]))
+
+
+@njit(cache=True, inline="always")
+def _site1(x, out, c, T, pidx, i, o):
+    """Site ``i`` (at coordinate ``o``) of order 1: :func:`_site` at ``N = 1`` unrolled, the same operations in the
+    same order (bit for bit, ``tests/test_family_step.py``): ``ℓ̃_0 = D_0 ℓ_0 adj D_0 / det D_0``."""
+    d0 = _entry(c, T, pidx, i, 0, 0)
+    d1 = _entry(c, T, pidx, i, 0, 1)
+    d2 = _entry(c, T, pidx, i, 0, 2)
+    d3 = _entry(c, T, pidx, i, 0, 3)
+    det0 = 0j
+    det0 += d0 * d3 - d1 * d2
+    g0 = 1.0 / det0
+    p = _ell(x, o)
+    s = _add((0j, 0j, 0j), g0, _dl(d0, d1, d2, d3, p[0], p[1], p[2], p[3]), d3, -d1, -d2, d0)
+    _put_site(out, o, s[0], s[1], s[2])
+
+
+@njit(cache=True, inline="always")
+def _site2(x, out, c, T, pidx, i, o):
+    """Site ``i`` of order 2 (the Clebsch top): :func:`_site` at ``N = 2`` unrolled, the same operations in the same
+    order (bit for bit, ``tests/test_family_step.py``)."""
+    d0 = _entry(c, T, pidx, i, 0, 0)
+    d1 = _entry(c, T, pidx, i, 0, 1)
+    d2 = _entry(c, T, pidx, i, 0, 2)
+    d3 = _entry(c, T, pidx, i, 0, 3)
+    e0 = _entry(c, T, pidx, i, 1, 0)
+    e1 = _entry(c, T, pidx, i, 1, 1)
+    e2 = _entry(c, T, pidx, i, 1, 2)
+    e3 = _entry(c, T, pidx, i, 1, 3)
+    det0 = 0j
+    det0 += d0 * d3 - d1 * d2
+    det1 = 0j
+    det1 += d0 * e3 - d1 * e2
+    det1 += e0 * d3 - e1 * d2
+    g0 = 1.0 / det0
+    t = 0j
+    t += det1 * g0
+    g1 = -t * g0
+    p = _ell(x, o)
+    q = _ell(x, o + 1)
+    k0 = _dl(d0, d1, d2, d3, p[0], p[1], p[2], p[3])  # D_0 ℓ_0
+    k1 = _dl(d0, d1, d2, d3, q[0], q[1], q[2], q[3])  # D_0 ℓ_1
+    k2 = _dl(e0, e1, e2, e3, q[0], q[1], q[2], q[3])  # D_1 ℓ_1
+    s = _add((0j, 0j, 0j), g0, k0, d3, -d1, -d2, d0)  # k = 0: j = 0
+    s = _add(s, g1, k1, d3, -d1, -d2, d0)  # j = 1, a = 0, c = 0, e = 1
+    s = _add(s, g0, k1, e3, -e1, -e2, e0)  # j = 1, a = 0, c = 1, e = 0
+    s = _add(s, g0, k2, d3, -d1, -d2, d0)  # j = 1, a = 1, c = 0, e = 0
+    _put_site(out, o, s[0], s[1], s[2])
+    s = _add((0j, 0j, 0j), g0, k1, d3, -d1, -d2, d0)  # k = 1: j = 1, a = 0
+    _put_site(out, o + 1, s[0], s[1], s[2])
+
+
 @njit(cache=True)
+def _site(x, out, c, T, pidx, i, o, N, Dt, At, det, g, P):
+    """Site ``i`` (coordinates ``o … o + N − 1``) of any order ``N``: ``D``'s Taylor coefficients, ``adj D``, ``1/det
+    D`` as a series and the new principal parts (module docstring) into ``out``."""
+    for m in range(N):
+        for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, each product's low word counted (_ctw)
+            s = 0j
+            for t in range(0, pidx.shape[1], 2):
+                if T[i, m, e, t] != 0:  # zero padding (a term of another entry) adds nothing
+                    s += _ctw(c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
+            Dt[m, e] = s
+        At[m, 0] = Dt[m, 3]
+        At[m, 1] = -Dt[m, 1]
+        At[m, 2] = -Dt[m, 2]
+        At[m, 3] = Dt[m, 0]
+        s = 0j
+        for a in range(m + 1):
+            s += Dt[a, 0] * Dt[m - a, 3] - Dt[a, 1] * Dt[m - a, 2]
+        det[m] = s
+    g[0] = 1.0 / det[0]
+    for m in range(1, N):
+        s = 0j
+        for a in range(1, m + 1):
+            s += det[a] * g[m - a]
+        g[m] = -s * g[0]
+    for j in range(N):
+        cj = o + j
+        P[j, 0] = complex(x[3 * cj + 2])
+        P[j, 1] = complex(x[3 * cj], -x[3 * cj + 1])
+        P[j, 2] = complex(x[3 * cj], x[3 * cj + 1])
+        P[j, 3] = -complex(x[3 * cj + 2])
+    for k in range(N):
+        s00 = 0j  # (ℓ̃_k)_11 is −(ℓ̃_k)_00 (traceless): not computed
+        s01 = 0j
+        s10 = 0j
+        for j in range(k, N):
+            for a in range(j - k + 1):
+                # K = D_a ℓ_j
+                k00 = Dt[a, 0] * P[j, 0] + Dt[a, 1] * P[j, 2]
+                k01 = Dt[a, 0] * P[j, 1] + Dt[a, 1] * P[j, 3]
+                k10 = Dt[a, 2] * P[j, 0] + Dt[a, 3] * P[j, 2]
+                k11 = Dt[a, 2] * P[j, 1] + Dt[a, 3] * P[j, 3]
+                for cc in range(j - k - a + 1):
+                    ge = g[j - k - a - cc]
+                    s00 += ge * (k00 * At[cc, 0] + k01 * At[cc, 2])
+                    s01 += ge * (k00 * At[cc, 1] + k01 * At[cc, 3])
+                    s10 += ge * (k10 * At[cc, 0] + k11 * At[cc, 2])
+        _put_site(out, o + k, s00, s01, s10)
+
+
+@njit(cache=True, inline="always")
 def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P):
     """One step from ``x`` (3M,) into ``out`` (3M,); returns the ``ν1`` used."""
     M = x.shape[0] // 3
@@ -187,52 +367,13 @@ def _step(x, out, b, nu_prev, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At,
         a2 = w
     _coefficients(rule, gk, a1, a2, c)
     for i in range(site_off.shape[0]):
-        o = site_off[i]
         N = site_n[i]
-        for m in range(N):
-            for e in range(4):  # Σ c_p (T_hi + T_lo): interleaved two words, each product's low word counted (_ctw)
-                s = 0j
-                for t in range(0, pidx.shape[1], 2):
-                    if T[i, m, e, t] != 0:  # zero padding (a term of another entry) adds nothing
-                        s += _ctw(c[pidx[e, t]], T[i, m, e, t], T[i, m, e, t + 1])
-                Dt[m, e] = s
-            At[m, 0] = Dt[m, 3]
-            At[m, 1] = -Dt[m, 1]
-            At[m, 2] = -Dt[m, 2]
-            At[m, 3] = Dt[m, 0]
-            s = 0j
-            for a in range(m + 1):
-                s += Dt[a, 0] * Dt[m - a, 3] - Dt[a, 1] * Dt[m - a, 2]
-            det[m] = s
-        g[0] = 1.0 / det[0]
-        for m in range(1, N):
-            s = 0j
-            for a in range(1, m + 1):
-                s += det[a] * g[m - a]
-            g[m] = -s * g[0]
-        for j in range(N):
-            cj = o + j
-            P[j, 0] = complex(x[3 * cj + 2])
-            P[j, 1] = complex(x[3 * cj], -x[3 * cj + 1])
-            P[j, 2] = complex(x[3 * cj], x[3 * cj + 1])
-            P[j, 3] = -complex(x[3 * cj + 2])
-        for k in range(N):
-            s00 = 0j  # (ℓ̃_k)_11 is −(ℓ̃_k)_00 (traceless): not computed
-            s01 = 0j
-            s10 = 0j
-            for j in range(k, N):
-                for a in range(j - k + 1):
-                    # K = D_a ℓ_j
-                    k00 = Dt[a, 0] * P[j, 0] + Dt[a, 1] * P[j, 2]
-                    k01 = Dt[a, 0] * P[j, 1] + Dt[a, 1] * P[j, 3]
-                    k10 = Dt[a, 2] * P[j, 0] + Dt[a, 3] * P[j, 2]
-                    k11 = Dt[a, 2] * P[j, 1] + Dt[a, 3] * P[j, 3]
-                    for cc in range(j - k - a + 1):
-                        ge = g[j - k - a - cc]
-                        s00 += ge * (k00 * At[cc, 0] + k01 * At[cc, 2])
-                        s01 += ge * (k00 * At[cc, 1] + k01 * At[cc, 3])
-                        s10 += ge * (k10 * At[cc, 0] + k11 * At[cc, 2])
-            _put_site(out, o + k, s00, s01, s10)
+        if N == 1:
+            _site1(x, out, c, T, pidx, i, site_off[i])
+        elif N == 2:
+            _site2(x, out, c, T, pidx, i, site_off[i])
+        else:
+            _site(x, out, c, T, pidx, i, site_off[i], N, Dt, At, det, g, P)
     return r
 
 
@@ -247,11 +388,15 @@ def orbit_loop(x, y, rows, final, b, nu, f, rule, gk, T, pidx, site_off, site_n,
     n = x.shape[0]
     for i in range(n):
         rows[0, i] = x[i]
-    for s in range(steps):
+    left = save_every  # a countdown to the next saved row (no integer division per step)
+    j = 0
+    for _ in range(steps):
         nu = _step(x, y, b, nu, f, rule, gk, T, pidx, site_off, site_n, c, Dt, At, det, g, P)
         x, y = y, x
-        if (s + 1) % save_every == 0:
-            j = (s + 1) // save_every
+        left -= 1
+        if left == 0:
+            left = save_every
+            j += 1
             for i in range(n):
                 rows[j, i] = x[i]
     for i in range(n):
