@@ -148,19 +148,17 @@ def _psi_many(fid, fp, lam, site_pos, site_n):
 
 
 @njit(cache=True, error_model="numpy")
-def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache, slot):
+def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm, f, psi, s, c, r, d, xcache, slot,
+             root_a):
     """``f[q, i] = Re[∂ν²/∂I_{kidx[i]}(λ_q)/ν(λ_q)]`` at ``λ_q = a + i h xs[q]``, ``ν`` continued from ``+√ν²(a)``
     along ``perm`` (the nodes by increasing ``xs``); returns ``(ok, ν at the end point xs = 1)`` (``ok`` false: a step
-    moved ``ν`` by more than a quarter of its size, or ``ν = 0``)."""
+    moved ``ν`` by more than a quarter of its size, or ``ν = 0``; the rest of the segment is then not evaluated: the
+    callers discard it).  ``root_a = cmath.sqrt(ν²(a))``, ``ν²(a)`` summed as here (:func:`newton` evaluates it once
+    per segment and solve, not once per pass: the same bits)."""
     n2 = hI.shape[0]
-    _psi_point(fid, fp, complex(a, 0.0), site_pos, site_n, psi, s, c, r, d, xcache, slot)
-    acc = complex(const, 0.0)
-    for cI in range(n2):
-        acc += hI[cI] * psi[cI]
-    v = cmath.sqrt(acc)
+    v = root_a
     if v.real < 0:
         v = -v
-    ok = True
     nu_last = v
     for t in range(perm.shape[0]):
         q = perm[t]
@@ -178,7 +176,7 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
         di = rq.imag - v.imag
         a2 = rq.real * rq.real + rq.imag * rq.imag
         if not (dr * dr + di * di <= 0.0625 * max(a2, v.real * v.real + v.imag * v.imag) and a2 > 0.0):
-            ok = False
+            return False, nu_last
         v = rq
         ia2 = 1.0 / a2  # Re(F/ν) = Re(F ν̄)/|ν|²: one real division, no complex one
         for i in range(kidx.shape[0]):
@@ -187,27 +185,28 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
             f[q, i] = (F.real * rq.real + F.imag * rq.imag) * ia2
         if xs[q] == 1.0:
             nu_last = rq
-    return ok, nu_last
+    return True, nu_last
 
 
 @njit(cache=True, error_model="numpy")
 def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, perm, w1, w2, n1, xsf, permf, wf, om,
-             dom, om2, nu_end, f, psi, s, c, r, d, xcache):
+             dom, om2, nu_end, f, psi, s, c, r, d, xcache, roots_a):
     """For every segment ``j``: ``om[j] = ω`` by the rule ``w1`` (nodes ``xs[:n1]``, end node ``xs[n1] = 1``),
     ``dom[j] = ∂ω/∂h``, and, when ``w2`` is not empty, ``om2[j]`` by the rule ``w2`` (nodes ``xs[n1 + 1:-1]``);
+    ``roots_a[j] = cmath.sqrt(ν²(ρ_j))`` (:func:`_segment`);
     ``nu_end[j]`` the continued ``ν`` at ``η_j``.  A segment where ``ν`` cannot be continued over ``xs`` takes the
     rule ``(xsf, permf, wf)`` when that is not empty (nodes ``xsf[:len(wf)]``, end node 1; no ``om2``).  Returns
     ``False`` where ``ν`` cannot be continued."""
     n2r = w2.shape[0]
     for j in range(rho.shape[0]):
         ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xs, perm, f, psi, s,
-                          c, r, d, xcache, j)
+                          c, r, d, xcache, j, roots_a[j])
         w = w1
         m = n1
         m2 = n2r
         if not ok and wf.shape[0]:  # this segment on the fallback rule (the others keep theirs)
             ok, nv = _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho[j], h[j], xsf, permf, f, psi,
-                              s, c, r, d, xcache, j)
+                              s, c, r, d, xcache, j, roots_a[j])
             w = wf
             m = wf.shape[0]
             m2 = 0
@@ -234,7 +233,7 @@ _FINE_FROM = 1e-9
 
 @njit(cache=True, error_model="numpy")
 def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs, perm, w, w2, xsf, permf,
-             wf, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res, JS, du):
+             wf, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res, JS, du, roots_a):
     """Newton's steps on the rule ``(xs, perm, w)`` from ``u`` until every ``|Δu| ≤ step_tol |u|``; returns 0
     (converged: ``om``, ``dom``, ``nu_end`` and, with a half rule ``w2`` (nodes ``xs[len(w) + 1:]``), ``om2`` are
     those of the last point evaluated, ``u`` + the last step), 1 (no solution: diverged, left the bound, ill
@@ -254,7 +253,7 @@ def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho,
         if not np.all(np.isfinite(u)):
             return 1
         if not _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, u[:k], xs, perm, w, w2, w.shape[0],
-                        xsf, permf, wf, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache):
+                        xsf, permf, wf, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, roots_a):
             return 1
         for i in range(nk):
             acc = -target[i]
@@ -310,13 +309,15 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     om2 = np.empty((k, nk))
     J = np.empty((nk, k + ne))
     res = np.empty(nk)
-    # the start: the linearisation at h = 0
+    # the start: the linearisation at h = 0 (and √ν²(ρ_j), where every pass's continuation starts)
+    roots_a = np.empty(k, dtype=np.complex128)
     for j in range(k):
         _psi_point(fid, fp, complex(rho[j], 0.0), site_pos, site_n, psi, s, c, r, d, xcache, j)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
-        nus = cmath.sqrt(acc).real
+        roots_a[j] = cmath.sqrt(acc)
+        nus = roots_a[j].real
         for i in range(nk):
             col = kidx[i]
             F = psi[col] if col < n2 else complex(dconst[col - n2], 0.0)
@@ -335,19 +336,19 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     if wc.shape[0]:
         status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc, wc,
                           none, xs1, perm1, w1, coarse_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d,
-                          xcache, J, res, JS, du)
+                          xcache, J, res, JS, du, roots_a)
     if status:  # the coarse phase failed (or none): from the linear start on the fine rule
         u[:] = u0
         status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1,
                           none, none, perm1[:0], none, _FINE_FROM, iterations, u, om, dom, om2, nu_end, f, psi, s, c,
-                          r, d, xcache, J, res, JS, du)
+                          r, d, xcache, J, res, JS, du, roots_a)
     if status:
         return 1, 0.0
     # the last steps on the fine rule with the half rule's estimate in the same pass (xs2): om, om2, nu_end at
     # the last point evaluated, u = that point + the last step (|Δu| ≤ step_tol |u|)
     if _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs2, perm2, w1, w2, none,
                 perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res, JS,
-                du):
+                du, roots_a):
         return 1, 0.0
     quad = 0.0
     scale = 0.0
