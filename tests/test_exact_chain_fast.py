@@ -158,3 +158,27 @@ def test_non_finite_steps_are_refused_on_the_fast_path():
 
     with pytest.raises(jg.SingularStepError, match="non-finite"):
         prep._orbit_fast(flow, _CLEBSCH_X, 3, 1, plan[:1] + (rows_with_nan,) + plan[2:])
+
+
+def test_the_model_s_plans_follow_the_weights_and_the_step():
+    """``jg.solve`` builds a new flow at every call; the plans are also kept per model, by weights, ``dt``,
+    ``substeps`` and ``rho_factor``: a Hamiltonian whose weights were changed in place, or another step, must get
+    its own plan (the result of a fresh Hamiltonian), not the previous call's."""
+    X = _CLEBSCH_X
+    H = _clebsch()
+    first = jg.solve(H, X, (0.0, 2.0), dt=0.5, method="exact", save_every=1)
+    H.weights[1] = 0.9  # in place
+    changed = jg.solve(H, X, (0.0, 2.0), dt=0.5, method="exact", save_every=1)
+    fresh = jg.solve(_clebsch(0.6, (0, 0.9, 0, 0, 1.0)), X, (0.0, 2.0), dt=0.5, method="exact", save_every=1)
+    assert np.array_equal(changed.X, fresh.X) and not np.array_equal(changed.X, first.X)
+    for dt, substeps in ((0.25, 1), (0.5, 2)):  # the same model and weights, another step
+        got = jg.ExactFlow(H, dt, substeps=substeps).advance(X, None, 4, 1)
+        _same(got, _general(jg.ExactFlow(H, dt, substeps=substeps), X, 4, 1))
+    # rho_factor: the real parts λ_c + c R/t_j of a chain whose period is long enough for that rule (the Clebsch
+    # top's, and the 3-site chain's at k = 0.5, are the period's rule, which does not read c)
+    Hc = jg.GaudinModel(0.0, [(0.0, 1), (0.4, 1), (0.9, 1)], family="elliptic", modulus=0.95).hamiltonian(
+        [0.5, 0.1, 0.2, 0.0, 0.3, 0.05, 0.4])
+    jg.ExactFlow(Hc, 0.05).advance(_CHAIN_X, None, 2, 1)
+    other = jg.ExactFlow(Hc, 0.05, rho_factor=1.7)
+    assert not np.array_equal(other._r()._fast()[3][12], jg.ExactFlow(Hc, 0.05)._r()._fast()[3][12])  # ρ differ
+    _same(other.advance(_CHAIN_X, None, 4, 1), _general(jg.ExactFlow(Hc, 0.05, rho_factor=1.7), _CHAIN_X, 4, 1))
