@@ -1,8 +1,10 @@
 """Python-side constants of :class:`jetgaudin.ChainExactFlow`'s compiled solve (private): the family constants of the
 compiled basis (per family parameter), the model-only constants of a flow (per flow, weak keys: nothing outlives its
 flow), the trigonometric branch points from the compiled polynomial, the real parts of a periodic family's
-parameters and the linear identities among the matched integrals.  Split from :mod:`jetgaudin.exact_chain`
-(its size); Numba is imported on first use only."""
+parameters and the linear identities among the matched integrals; and the elliptic family's fast path of
+``advance`` (:func:`_fast_plan`, :func:`_orbit_fast`: one orbit in two compiled calls, every constant of the calls
+cached per flow and per model, the same bits as the general path, which makes every refusal).  Split from
+:mod:`jetgaudin.exact_chain` (its size); Numba is imported on first use only."""
 
 from __future__ import annotations
 
@@ -294,7 +296,7 @@ def _make_fast_plan(flow, tols: tuple, accept: tuple, rules: tuple) -> tuple | N
            *rules, *tols)
     post = (*accept, float(P), 64, 2**16, 1e-8, _IM_FRACTION * fam.Kp)
     return (K.solve_orbit_numerical, L.rows_family, K.all_finite, pre, post, k, E.shape[0], float(model.b),
-            flow.substeps, {})
+            flow.substeps, {}, (model.n_state,))
 
 
 _F64, _INT64_MAX = np.dtype(float), 2**63 - 1
@@ -322,7 +324,7 @@ def _advance_fast(flow, plan: tuple | None, X, steps, save_every):
     """``ChainExactFlow.advance(X, None, steps, save_every)`` by :func:`_orbit_fast` for one orbit ``X`` given as a
     float64 array ``(3M,)`` and counts given as ints (its checks, ``maps.per_orbit_buffers``'s, made here without
     copies: ``X``'s finiteness in the kernel), or ``None`` (the general path)."""
-    if not (plan is not None and type(X) is np.ndarray and X.dtype is _F64 and X.shape == (flow.n_state,)
+    if not (plan is not None and type(X) is np.ndarray and X.dtype is _F64 and X.shape == plan[10]
             and type(steps) is int and type(save_every) is int and 0 < steps <= _INT64_MAX and save_every >= 1):
         return None
     fast = _orbit_fast(flow, X, steps, save_every, plan)
@@ -342,7 +344,7 @@ def _orbit_fast(flow, x: np.ndarray, steps: int, save_every: int, plan: tuple | 
     map not used or an ``η`` the maps refuse: that path raises the error or takes the fallback)."""
     if plan is None or not (x.flags.c_contiguous and x.flags.writeable):
         return None
-    solve, rows_family, finite, pre, post, k, ne, b, s, cache = plan
+    solve, rows_family, finite, pre, post, k, ne, b, s, cache = plan[:10]
     u = np.empty(ne)
     nu = np.empty(k, dtype=complex)
     eta = np.empty(k, dtype=complex)
