@@ -182,3 +182,18 @@ def test_the_model_s_plans_follow_the_weights_and_the_step():
     other = jg.ExactFlow(Hc, 0.05, rho_factor=1.7)
     assert not np.array_equal(other._r()._fast()[3][12], jg.ExactFlow(Hc, 0.05)._r()._fast()[3][12])  # ρ differ
     _same(other.advance(_CHAIN_X, None, 4, 1), _general(jg.ExactFlow(Hc, 0.05, rho_factor=1.7), _CHAIN_X, 4, 1))
+
+
+def test_other_inputs_take_the_general_path_with_the_same_result():
+    """A read-only or strided array, float32, a list: not the fast path's input (another compiled signature, or a
+    conversion the state check makes), so the general path, with the same result where the values are the same."""
+    flow = jg.ExactFlow(_clebsch(), 0.5)
+    ref = flow.advance(_CLEBSCH_X, None, 4, 2)
+    ro = _CLEBSCH_X.copy()
+    ro.setflags(write=False)
+    strided = np.repeat(_CLEBSCH_X, 2)[::2]
+    for X in (ro, strided, list(_CLEBSCH_X), _CLEBSCH_X.reshape(1, 6)[0]):
+        got = flow.advance(X, None, 4, 2)
+        _same(got, ref)
+    x32 = _CLEBSCH_X.astype(np.float32)
+    _same(flow.advance(x32, None, 4, 2), flow.advance(x32.astype(float), None, 4, 2))
