@@ -197,3 +197,23 @@ def test_other_inputs_take_the_general_path_with_the_same_result():
         _same(got, ref)
     x32 = _CLEBSCH_X.astype(np.float32)
     _same(flow.advance(x32, None, 4, 2), flow.advance(x32.astype(float), None, 4, 2))
+
+
+def test_non_finite_steps_are_refused_on_the_general_path(monkeypatch):
+    """The same check on the general path (a trigonometric chain: no fast path), its loop replaced by one that
+    returns a NaN in the last row, as an overflow inside the compiled map step would."""
+    import jetgaudin._exact_chain_loop as loop
+
+    trig = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="trigonometric", gamma=0.5)
+    flow = jg.ExactFlow(trig.hamiltonian([0.3, 0, -0.2, 0, 0.5, 0, 0.4]), 0.05)
+    assert flow._r()._fast() is None
+    flow.advance(_CHAIN_X, None, 3, 1)  # fine before
+
+    def rows_with_nan(*args):
+        args[-2][...] = 1.0
+        args[-1][...] = 1.0
+        args[-2][-1, 0] = np.nan
+
+    monkeypatch.setattr(loop, "rows_family", rows_with_nan)
+    with pytest.raises(jg.SingularStepError, match="non-finite"):
+        flow.advance(_CHAIN_X, None, 3, 1)

@@ -551,7 +551,7 @@ class _ChainExactFlow(StepByAdvance, Map):
             L.rows_rational(x, float(self.model.b), np.array(etas, dtype=complex), nu, *consts, *tail)
         else:
             L.rows_family(x, float(self.model.b), nu, *consts, *tail)
-        if not (np.all(np.isfinite(out)) and np.all(np.isfinite(final))):
+        if not _kernel_module("jetgaudin._exact_chain_kernels").all_finite(out, final):
             raise SingularStepError("the compiled exact chain step produced non-finite values; give a smaller dt")
         rows[...] = out
         return final
