@@ -217,3 +217,15 @@ def test_non_finite_steps_are_refused_on_the_general_path(monkeypatch):
     monkeypatch.setattr(loop, "rows_family", rows_with_nan)
     with pytest.raises(jg.SingularStepError, match="non-finite"):
         flow.advance(_CHAIN_X, None, 3, 1)
+
+
+def test_maps_at_round_off_are_left_out_as_on_the_general_path():
+    """``|Im η_j| ≤ 1e-13 max(|Re η_j|, 1)``: the map is the identity to round-off and ``_orbit`` leaves it out; the
+    kernel declines such an orbit (here every map: ``dt = 1e-30``, ``|Im η| ~ 1e-30``), and the general path returns
+    the state unchanged."""
+    flow = jg.ExactFlow(_clebsch(), 1e-30)._r()
+    eta, _ = flow.parameters(_CLEBSCH_X)
+    assert np.all(np.abs(eta.imag) < 1e-29) and np.all(eta.imag != 0)  # solved, at round-off
+    assert prep._orbit_fast(flow, _CLEBSCH_X, 2, 1, flow._fast()) is None
+    got = flow.advance(_CLEBSCH_X, None, 2, 1)
+    assert np.array_equal(got.X, _CLEBSCH_X) and np.array_equal(got.rows, [_CLEBSCH_X, _CLEBSCH_X])
