@@ -1,8 +1,10 @@
 """Python-side constants of :class:`jetgaudin.ChainExactFlow`'s compiled solve (private): the family constants of the
 compiled basis (per family parameter), the model-only constants of a flow (per flow, weak keys: nothing outlives its
 flow), the trigonometric branch points from the compiled polynomial, the real parts of a periodic family's
-parameters and the linear identities among the matched integrals.  Split from :mod:`jetgaudin.exact_chain`
-(its size); Numba is imported on first use only."""
+parameters and the linear identities among the matched integrals; and the elliptic family's fast path of
+``advance`` (:func:`_fast_plan`, :func:`_orbit_fast`: one orbit in two compiled calls, every constant of the calls
+cached per flow and per model, the same bits as the general path, which makes every refusal).  Split from
+:mod:`jetgaudin.exact_chain` (its size); Numba is imported on first use only."""
 
 from __future__ import annotations
 
@@ -75,13 +77,11 @@ def _static(flow) -> tuple:
 _FORMS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _integrals_row(flow, x: np.ndarray) -> np.ndarray:
-    """``model.integrals(x)`` of one orbit ``x`` (3M,) by the compiled pass of :mod:`jetgaudin.gaudin._record` (the
-    model's quadratic forms, cached per flow: ~1 µs against ~16 µs of NumPy for the Clebsch top; equal to
-    ``model.integrals`` to ``n ε Σ|terms|``, not bit for bit); ``model.integrals`` itself where the pass is not finite
-    (which refuses an overflow)."""
-    model = flow.model
+def _forms(flow) -> tuple | None:
+    """``(q, lin, b, forms, number of integrals)``: the quadratic forms of the flow's model for the compiled pass of
+    :mod:`jetgaudin.gaudin._record` (cached per flow), ``None`` for a field per site (not a scalar ``b``)."""
     f = _FORMS.get(flow)
+    model = flow.model
     if f is None and np.ndim(model.b) == 0:
         q, lin = model._forms
         lin = np.ascontiguousarray(lin, dtype=float)
@@ -90,6 +90,16 @@ def _integrals_row(flow, x: np.ndarray) -> np.ndarray:
         f = (np.ascontiguousarray(q, dtype=float), lin, float(model.b), forms,
              (q.shape[0] if q.ndim == 3 else q.shape[1]) + forms.shape[0])
         _FORMS[flow] = f
+    return f
+
+
+def _integrals_row(flow, x: np.ndarray) -> np.ndarray:
+    """``model.integrals(x)`` of one orbit ``x`` (3M,) by the compiled pass of :mod:`jetgaudin.gaudin._record` (the
+    model's quadratic forms, cached per flow: ~1 µs against ~16 µs of NumPy for the Clebsch top; equal to
+    ``model.integrals`` to ``n ε Σ|terms|``, not bit for bit); ``model.integrals`` itself where the pass is not finite
+    (which refuses an overflow)."""
+    model = flow.model
+    f = _forms(flow)
     if f is None:  # a field per site (not a scalar b): NumPy
         return np.asarray(model.integrals(x), dtype=float)
     q, lin, b, forms, n = f
@@ -216,3 +226,141 @@ def _stacked_constants(flow, etas: tuple) -> tuple:
         out = per_flow[etas] = _kernel_module("jetgaudin._exact_chain_loop").stack_constants(
             [_orbit_constants(flow.model, e) for e in etas])
     return out
+
+
+#: per flow (weak keys), the plan of the fast path (:func:`_fast_plan`; ``False``: none); a copy of a flow
+#: (``maps.with_resolved_backend``) is another key, so a plan never outlives the route it was made for
+_FAST: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: per model (weak keys), the plans by ``(weights, dt, substeps, rho_factor)`` (``jg.solve`` builds a new flow at
+#: every call: building the plan took ~40 µs of it), up to 16 per model
+_FAST_MODEL: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _fast_plan(flow, tols: tuple, accept: tuple, rules: tuple) -> tuple | None:
+    """The constants of :func:`_orbit_fast` for a flow (cached per flow), or ``None`` where it does not apply: every
+    argument of the compiled solve ``_exact_chain_kernels.solve_orbit_numerical`` but the orbit and its outputs, which
+    ``ChainExactFlow._newton`` rebuilt at every call (``tols``: Newton's step and coarse tolerances and iterations;
+    ``accept``: the quadrature and residual tolerances; ``rules``: ``exact_chain._rules()``).  It applies to the
+    elliptic family on the compiled route with a scalar field: there the real parts, the bounds and the target are
+    the same for every orbit of the flow (no computed branch points, no rotation), and the real parts are checked
+    once here as the maps' constructor checks ``η`` (``gaudin.maps._check_eta``: finite, off the sites modulo the
+    period); the rest of that check, ``|Im η| < 0.9 K'``, is the kernel's, per orbit."""
+    plan: tuple | bool | None = _FAST.get(flow)
+    if plan is None:
+        from .maps import Backend
+
+        if flow.backend is Backend.NUMPY or np.ndim(flow.H.weights) != 1:
+            plan = False
+        else:  # the model's plan of these weights and steps (every constant of the plan is the model's or these)
+            per_model = _FAST_MODEL.setdefault(flow.model, {})
+            key = (np.asarray(flow.H.weights, dtype=float).tobytes(), flow.dt, flow.substeps, flow.rho_factor)
+            plan = per_model.get(key)
+            if plan is None:
+                if len(per_model) >= 16:
+                    per_model.clear()
+                plan = per_model[key] = _make_fast_plan(flow, tols, accept, rules) or False
+        _FAST[flow] = plan
+    return plan if isinstance(plan, tuple) else None
+
+
+def _make_fast_plan(flow, tols: tuple, accept: tuple, rules: tuple) -> tuple | None:
+    from ._errors import InvalidParameterError
+    from .families.elliptic import _IM_FRACTION
+    from .gaudin.maps import _check_eta
+    from .maps import Backend
+
+    model = flow.model
+    fam = model.family
+    if (flow.backend is Backend.NUMPY or fam.name != "elliptic" or not float(fam.modulus) >= 1e-3
+            or model.algebra != "su(2)" or fam.kernel_rule is None or np.ndim(model.b) != 0):
+        return None
+    forms = _forms(flow)
+    keep, E, rate, k, wkeep, kidx, pos, orders, lc, P, Kp = _static(flow)
+    if forms is None or rate or forms[0].ndim != 4 or k < 1:
+        return None
+    q3, lin, b, fforms, n = forms
+    n2 = 2 * model.M
+    rho = flow._real_parts(np.zeros(model.n_state), k, np.zeros(0, dtype=complex))  # no branch points: no x used
+    if rho is None or n - n2 != 1:
+        return None
+    try:
+        for r in rho:
+            _check_eta(model, complex(r, 0.0))
+    except InvalidParameterError:
+        return None  # the general path raises it, naming the orbit
+    bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)  # as ChainExactFlow._newton
+    target = (flow.dt / flow.substeps) * wkeep  # as _parameters → _solve → _newton
+    K: Any = _kernel_module("jetgaudin._exact_chain_kernels")
+    L: Any = _kernel_module("jetgaudin._exact_chain_loop")
+    pre = (q3, lin, b, fforms, 2, _family_constants(fam), pos, orders, np.ones(n - n2), kidx, E, target, rho, bound,
+           *rules, *tols)
+    post = (*accept, float(P), 64, 2**16, 1e-8, _IM_FRACTION * fam.Kp)
+    return (K.solve_orbit_numerical, L.rows_family, K.all_finite, pre, post, k, E.shape[0], float(model.b),
+            flow.substeps, {}, (model.n_state,))
+
+
+_F64, _INT64_MAX = np.dtype(float), 2**63 - 1
+
+
+@lru_cache(maxsize=4)
+def _rules_of(nodes: int, coarse: int) -> tuple[np.ndarray, ...]:
+    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2, xsc, permc, wc)``, ``xs1`` the
+    ``nodes``-point rule's nodes and the end point 1, ``xs2`` those and the ``nodes/2``-point rule's with its end point
+    (the estimate pass), ``xsc`` the coarse rule's (``coarse`` points) with the end point, ``perm*`` the order of the
+    continuation (increasing ``|s|``, stable: the NumPy route's order)."""
+    from .exact import _gauss_legendre
+
+    x1, w1 = _gauss_legendre(nodes)
+    x2, w2 = _gauss_legendre(nodes // 2)
+    xc, wc = _gauss_legendre(coarse)
+    xs1 = np.concatenate([x1, [1.0]])
+    xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
+    xsc = np.concatenate([xc, [1.0]])
+    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2, xsc,
+            np.argsort(xsc, kind="stable"), wc)
+
+
+def _advance_fast(flow, plan: tuple | None, X, steps, save_every):
+    """``ChainExactFlow.advance(X, None, steps, save_every)`` by :func:`_orbit_fast` for one orbit ``X`` given as a
+    float64 array ``(3M,)`` and counts given as ints (its checks, ``maps.per_orbit_buffers``'s, made here without
+    copies: ``X``'s finiteness in the kernel), or ``None`` (the general path)."""
+    if not (plan is not None and type(X) is np.ndarray and X.dtype is _F64 and X.shape == plan[10]
+            and type(steps) is int and type(save_every) is int and 0 < steps <= _INT64_MAX and save_every >= 1):
+        return None
+    fast = _orbit_fast(flow, X, steps, save_every, plan)
+    if fast is None:
+        return None
+    from .maps import Advance
+
+    zero = np.zeros(())
+    return Advance(rows=fast[0], X=fast[1], carry=zero.astype(complex), imag_max=zero)
+
+
+def _orbit_fast(flow, x: np.ndarray, steps: int, save_every: int, plan: tuple | None) -> tuple | None:
+    """``(rows, final)`` of ``ChainExactFlow._orbit`` for one orbit ``x`` (float64 ``(3M,)``) and ``steps ≥ 1`` by
+    the plan of :func:`_fast_plan`: the same compiled solve and loop, the same bits, with two compiled calls and a
+    few µs of Python around them; ``None`` where the orbit needs the general path (no plan, ``x`` not C-contiguous
+    and writeable (another compiled signature), ``x`` not finite, no accepted solution, the adaptive quadrature, a
+    map not used or an ``η`` the maps refuse: that path raises the error or takes the fallback)."""
+    if plan is None or not (x.flags.c_contiguous and x.flags.writeable):
+        return None
+    solve, rows_family, finite, pre, post, k, ne, b, s, cache = plan[:10]
+    u = np.empty(ne)
+    nu = np.empty(k, dtype=complex)
+    eta = np.empty(k, dtype=complex)
+    if solve(x, *pre, u, np.empty((k, ne)), nu, *post, eta):
+        return None
+    key = eta.tobytes()
+    consts = cache.get(key)
+    if consts is None:  # the model's stacked constants of these η (cached per model; hashing the tuple ~1 µs)
+        if len(cache) >= 64:
+            cache.clear()
+        consts = cache[key] = _stacked_constants(flow, tuple(complex(e) for e in eta))
+    out = np.empty((steps // save_every, x.size))
+    final = np.empty(x.size)
+    rows_family(x, b, nu, *consts, 0.0, steps, save_every, s, out, final)  # elliptic: no rotation (θ = 0)
+    if not finite(out, final):
+        from ._errors import SingularStepError
+
+        raise SingularStepError("the compiled exact chain step produced non-finite values; give a smaller dt")
+    return out, final

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cache, cached_property
+from functools import cached_property
 from typing import Any, ClassVar
 
 import numpy as np
@@ -49,14 +49,18 @@ from ._errors import BranchPointError, InvalidParameterError, SingularStepError,
 from ._exact_chain_prep import (
     _NO_ROOTS_RHO,
     _NO_ROOTS_RHO_MODEL,
+    _advance_fast,
     _branch_ok,
     _family_constants,
+    _fast_plan,
     _identities,
     _integrals_row,
     _kernel_module,
+    _orbit_fast,
     _orbit_roots,
     _periodic_real_parts,
     _periodic_real_parts_of_sites,
+    _rules_of,
     _stacked_constants,
     _static,
     _trig_roots,
@@ -147,20 +151,8 @@ class _Weights:
         return om, -f[:, n], float(np.max(np.abs(om - om2)) / (np.abs(om).sum(axis=0).max() + 1e-300))
 
 
-@cache
-def _rules() -> tuple[np.ndarray, ...]:
-    """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2, xsc, permc, wc)``, ``xs1`` the 64-point
-    rule's nodes and the end point 1, ``xs2`` those and the 32-point rule's with its end point (the estimate pass),
-    ``xsc`` the coarse rule's (``_COARSE_NODES``) with the end point, ``perm*`` the order of the continuation
-    (increasing ``|s|``, stable: the NumPy route's order)."""
-    x1, w1 = _gauss_legendre(_NODES)
-    x2, w2 = _gauss_legendre(_NODES // 2)
-    xc, wc = _gauss_legendre(_COARSE_NODES)
-    xs1 = np.concatenate([x1, [1.0]])
-    xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
-    xsc = np.concatenate([xc, [1.0]])
-    return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2, xsc,
-            np.argsort(xsc, kind="stable"), wc)
+def _rules() -> tuple[np.ndarray, ...]:  # the compiled solve's nodes (_exact_chain_prep._rules_of of the rules above)
+    return _rules_of(_NODES, _COARSE_NODES)
 
 
 @dataclass(frozen=True, eq=False)
@@ -509,6 +501,10 @@ class _ChainExactFlow(StepByAdvance, Map):
         a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
         each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s``
         steps of each map per call of its NumPy route (the maps commute)."""
+        fast = _orbit_fast(self, x, steps, save_every, self._fast())  # the elliptic family's fast path (same bits)
+        if fast is not None:
+            rows[...] = fast[0]
+            return fast[1]
         eta, theta, nu = self._parameters(x, checked=True)  # advance checked X (per_orbit_buffers)
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
@@ -555,7 +551,7 @@ class _ChainExactFlow(StepByAdvance, Map):
             L.rows_rational(x, float(self.model.b), np.array(etas, dtype=complex), nu, *consts, *tail)
         else:
             L.rows_family(x, float(self.model.b), nu, *consts, *tail)
-        if not (np.all(np.isfinite(out)) and np.all(np.isfinite(final))):
+        if not _kernel_module("jetgaudin._exact_chain_kernels").all_finite(out, final):
             raise SingularStepError("the compiled exact chain step produced non-finite values; give a smaller dt")
         rows[...] = out
         return final
@@ -563,6 +559,9 @@ class _ChainExactFlow(StepByAdvance, Map):
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
         """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit), rows every
         ``save_every`` (class doc)."""
+        fast = _advance_fast(self, self._fast(), X, steps, save_every)  # one orbit, elliptic: the fast path
+        if fast is not None:
+            return fast
         steps, save_every, X, flat, rows, final = per_orbit_buffers(self.model, X, steps, save_every)
         if steps:
             for i, x in enumerate(flat):
@@ -573,6 +572,9 @@ class _ChainExactFlow(StepByAdvance, Map):
         zeros = np.zeros(X.shape[:-1])
         return Advance(rows=rows.reshape((-1,) + X.shape), X=final.reshape(X.shape), carry=zeros.astype(complex),
                        imag_max=zeros)
+
+    def _fast(self) -> tuple | None:  # the plan of the elliptic family's fast path (_exact_chain_prep._fast_plan)
+        return _fast_plan(self, (_STEP_TOL, _COARSE_TOL, _ITERATIONS), (_QUAD_TOL, _RES_TOL), _rules())
 
     def inverse(self) -> _ChainExactFlow:
         return _ChainExactFlow(self.H, -self.dt, self.rho_factor, self.substeps, backend=self.backend)
