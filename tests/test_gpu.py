@@ -444,3 +444,45 @@ def test_resident_health_finds_the_planted_breach_and_folds_up_to_it(tmp_path, m
     np.testing.assert_allclose(res.drift_abs[1], np.max(np.abs(I - res.integrals0[1]), axis=0), rtol=1e-12)
     r0 = np.linalg.norm(spec.X0[1, -3:])
     np.testing.assert_allclose(res.sphere_max_deviation, abs(np.linalg.norm(x8[-3:]) - r0), rtol=1e-12)
+
+
+def test_prepare_compiles_the_resident_kernels_with_the_run_types(tmp_path, monkeypatch):
+    """``gpu.prepare`` launches the resident route's kernels (``flag``, ``fold``, ``failed``) once, with the argument
+    types the run's loop gives them, so that Numba compiles them there (outside the stepping rate) and not at their
+    first call inside the timed loop (issue 36: ~1.4 s on an H200).  Every launch of the run has argument types (dtype,
+    dimensions, layout; int or float scalars: ``numba.typeof``) that one of prepare's launches had; on a real GPU the
+    run also adds no compiled overload."""
+    import numba
+
+    from jetgaudin import run as rl
+    from jetgaudin.gpu import _drivers, _resident
+
+    real = _resident._health_kernels()
+    seen: dict[str, dict[str, set]] = {"prepare": {}, "run": {}}
+    phase = {"now": "prepare"}
+
+    class Recorder:
+        def __init__(self, name, kernel):
+            self.name, self.kernel = name, kernel
+
+        def __getitem__(self, launch):
+            def run(*args):
+                types = tuple(str(numba.typeof(a)) for a in args)
+                seen[phase["now"]].setdefault(self.name, set()).add(types)
+                return self.kernel[launch](*args)
+            return run
+
+    monkeypatch.setattr(_resident, "_health_kernels",
+                        lambda: tuple(Recorder(n, k) for n, k in zip(("flag", "fold", "failed"), real, strict=True)))
+    monkeypatch.setattr(_drivers, "_prepared", set())
+    gpu.prepare(9, notify=lambda m: None)
+    assert set(seen["prepare"]) == {"flag", "fold", "failed"}
+    overloads = {n: len(getattr(k, "overloads", {})) for n, k in zip(("flag", "fold", "failed"), real, strict=True)}
+    phase["now"] = "run"
+    res = rl.start(_ens_spec("gpu"), tmp_path / "w", notify=lambda m: None)
+    assert res.status == "completed"
+    assert set(seen["run"]) == {"flag", "fold", "failed"}  # the run launches all three: the comparison is not empty
+    for name, types in seen["run"].items():
+        assert types <= seen["prepare"][name], (name, types - seen["prepare"][name])
+    assert overloads == {n: len(getattr(k, "overloads", {})) for n, k in zip(("flag", "fold", "failed"), real,
+                                                                               strict=True)}

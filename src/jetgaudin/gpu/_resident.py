@@ -55,7 +55,7 @@ cuda: Any = None
 #: at most this many pinned buffers for the rows' copies (a chunk of the loop holds a few calls' rows)
 POOL = 4
 
-__all__ = ["attach", "DeviceStates", "ResidentMap"]
+__all__ = ["attach", "DeviceStates", "ResidentMap", "warm"]
 
 
 class DeviceStates:
@@ -194,6 +194,32 @@ def _health_kernels() -> tuple[Any, Any, Any]:
             cuda.atomic.add(out, 1, 1)
 
     return flag, fold, failed
+
+
+def warm(n_state: int) -> None:
+    """Compile the resident route's own kernels (``flag``, ``fold``, ``failed`` of :func:`_health_kernels`) for runs
+    on states of ``n_state`` components: each is launched once on one orbit with the argument types a run gives it
+    (the same dtypes, dimensions and layouts; Python ``int`` step bounds, ``float`` limit), so that Numba compiles it
+    here -- in :func:`jetgaudin.gpu.prepare`, beside the stepping kernel and outside the stepping rate -- and not at
+    its first call inside the run's loop (~1.4 s on an H200, issue 36)."""
+    c = require()
+    flag, fold, failed = _health_kernels()
+    s = c.stream()
+    k = 2 * (int(n_state) // 3)
+    rows = c.device_array((2, 1, int(n_state)), stream=s)  # as a call's rows: device_array((S, B, n))
+    rows.copy_to_device(np.zeros((2, 1, int(n_state))), stream=s)
+    b = c.to_device(np.ones(1), stream=s)
+    I0 = c.to_device(np.zeros((1, k)), stream=s)
+    scale = c.to_device(np.ones((1, k)), stream=s)
+    first = c.to_device(np.array([2], dtype=np.int64), stream=s)
+    flag[1, THREADS, s](rows, 1, 2, b, I0, scale, 1.0, first)
+    drift, r0, sphere = c.to_device(np.zeros((1, k)), stream=s), c.to_device(np.zeros(1), stream=s), \
+        c.to_device(np.zeros(1), stream=s)
+    fold[1, THREADS, s](rows, 1, 2, b, I0, r0, drift, sphere)
+    status = c.device_array(1, np.int64, stream=s)
+    status.copy_to_device(np.zeros(1, dtype=np.int64), stream=s)
+    failed[1, THREADS, s](status, c.to_device(np.array([1, 0], dtype=np.int64), stream=s))
+    s.synchronize()
 
 
 class ResidentMap:
