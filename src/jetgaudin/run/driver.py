@@ -360,7 +360,7 @@ class Driver:
         if end is not None:
             n_end, X_end, c_end = end
             if not rows_n or rows_n[-1] != n_end:
-                bad = health.check([n_end], X_end[None], record=False)  # off the save grid: not in the maxima
+                bad = health.check_end(n_end, X_end)  # off the save grid: not in the maxima
                 if bad is not None:
                     self.store.append(np.asarray(rows_n, dtype=np.int64), S)
                     if rows_n:

@@ -76,6 +76,12 @@ class Health:
             f"integral drift: {self.names[k]}{orbit} drifted by {float(rel[first][where[3]]):.4e} (relative to "
             f"max(1, |I(0)|)) at step {steps[first]} > max_drift {self.limits.max_drift:g}", first)
 
+    def check_end(self, step: int, X: np.ndarray) -> Failure | None:
+        """Check the end state ``X`` ``(..., n)`` of a kernel call off the save grid (reached at ``step``): as
+        :meth:`check` with ``record=False`` (the maxima move only on a breach).  A separate entry so that a route
+        keeping its states elsewhere (the GPU's, :mod:`jetgaudin.gpu._resident`) checks them there."""
+        return self.check([step], np.asarray(X)[None], record=False)
+
     def _where(self, rel_row: np.ndarray):
         bad = ~np.isfinite(rel_row) | (rel_row > self.limits.max_drift)
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
