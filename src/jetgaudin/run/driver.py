@@ -237,7 +237,7 @@ class Driver:
             try:
                 store.begin(self.fresh)
                 if self.first:
-                    bad = health.check([0], pos.X[None])
+                    bad = health.check_start(pos.X)
                     failure = bad.reason if bad else None
                     store.append(np.array([0]), pos.X[None])
                     store.anchor = (0, pos.X, None)
@@ -262,6 +262,7 @@ class Driver:
                 else:
                     status, text = RunStatus.COMPLETED, "completed"
                 store.checkpoint(pos.n, pos.X, pos.carry, self.summary(text))
+                store.wait()  # the last checkpoint durable (an ensemble's writer thread: Store.overlap) before the end
             except RunIOError as exc:  # the status says what failed in one word: "disk full", ...
                 reason = _fs.io_failure(exc)
                 store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())

@@ -1,0 +1,132 @@
+"""The run layer's host-side work per row and per checkpoint made cheaper (issue 36) without changing what is written:
+the row digest hashes the arrays' buffers (no bytes copy), the checkpoint is hashed and written from the zip's buffer
+in place, ``BatchBacklund.describe`` builds its lists without a Python loop, the first row of a new run is not
+integrated again, and the end state of a call off the save grid has its own entry (:meth:`Health.check_end`) that
+the GPU route answers on the device (``tests/test_gpu.py``)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import struct
+
+import numpy as np
+import pytest
+
+import jetgaudin as jg
+from jetgaudin import run as rl
+from jetgaudin.ensemble import BatchBacklund, sample_on_leaf
+from jetgaudin.run.files import RowDigest
+from jetgaudin.run.health import Health
+
+
+def test_row_digest_is_the_sha256_of_the_little_endian_bytes():
+    """The format's definition (two SHA-256 streams: the ``n`` column as ``<i8``, the rows as ``<f8``, chunking
+    free), computed here from the bytes themselves; inputs of other dtypes, orders and layouts included."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(5, 4, 9))
+    parts = [(np.arange(2), X[:2]), (np.array([7], dtype=np.int32), X[2:3].astype(np.float32).astype(np.float64)),
+             (np.array([9, 11]), np.asfortranarray(X[3:]))]
+    d = RowDigest()
+    hn, hX = hashlib.sha256(), hashlib.sha256()
+    for n, S in parts:
+        d.update(n, S)
+        hn.update(b"".join(struct.pack("<q", int(v)) for v in np.ravel(n)))
+        hX.update(b"".join(struct.pack("<d", float(v)) for v in np.ravel(S, order="C")))
+    assert d.hexdigest() == hn.hexdigest() + ":" + hX.hexdigest()
+    e = RowDigest()
+    e.update(np.zeros(0, dtype=np.int64), np.zeros((0, 4, 9)))
+    assert e.hexdigest() == RowDigest().hexdigest()
+
+
+def _ensemble(tmp_path, B=40, steps=12, every=4, **kw):
+    X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], B, seed=2)
+    m = BatchBacklund(np.linspace(0.9, 1.1, B), (5 + 0.1j) + 0.01 * np.arange(B), backend="compiled")
+    spec = rl.RunSpec(m, X0, steps, every, rl.HealthLimits(max_drift=1e-6), csv=False, program="jetgaudin ensemble",
+                      **kw)
+    return spec, rl.start(spec, tmp_path / "e")
+
+
+def test_ensemble_checkpoint_file_matches_its_recorded_digest_and_loads(tmp_path):
+    """The checkpoint slot written from the zip's buffer: ``run.json``'s SHA-256 is the file's (hashed here from the
+    file read back), and it loads with the state of the last step (the final state of the run's own rows)."""
+    from jetgaudin.run.store import read_checkpoint_npz
+
+    spec, res = _ensemble(tmp_path)
+    run = json.loads((tmp_path / "e" / "run.json").read_text())
+    ck = run["checkpoint"]
+    data = (tmp_path / "e" / ck["file"]).read_bytes()
+    assert hashlib.sha256(data).hexdigest() == ck["sha256"]
+    got = read_checkpoint_npz(tmp_path / "e", ck, spec.X0.shape)
+    assert int(got["step"]) == 12
+    np.testing.assert_array_equal(got["X"], rl.load(tmp_path / "e").X[-1])
+
+
+def test_describe_gives_the_same_values_and_json():
+    """``describe`` of a batch: the same floats (and the same JSON text) as the orbit-by-orbit lists it replaced."""
+    B = 7
+    m = BatchBacklund(np.linspace(0.5, 2, B), np.exp(1j * np.linspace(0.1, 3, B)) * 3.3 + 0.01j)
+    d = m.describe()
+    assert d["eta"] == [[e.real, e.imag] for e in m.eta] and d["b"] == [float(v) for v in m.b]
+    assert json.dumps(d["eta"]) == json.dumps([[float(e.real), float(e.imag)] for e in m.eta])
+    assert BatchBacklund(np.ones(0), np.ones(0) * 1j).describe()["eta"] == []
+
+
+class _Counting:
+    """A map's ``integrals`` counted (the work :meth:`Health.check_start` saves)."""
+
+    def __init__(self, m):
+        self.m, self.calls = m, 0
+
+    def __getattr__(self, name):
+        return getattr(self.m, name)
+
+    def integrals(self, X):
+        self.calls += 1
+        return self.m.integrals(X)
+
+
+@pytest.mark.parametrize("kind", ["ensemble", "orbit"])
+def test_check_start_is_the_full_check_of_the_first_row(kind):
+    """``check_start(X0)`` where ``I0`` was computed from ``X0``: no integrals computed, and the result is the full
+    check's -- no breach, the drift maxima and the radius deviation exactly 0, as :meth:`Health.check` of the row
+    gives (checked here on a second ``Health``).  Where the states differ (one orbit's state changed) or ``I0`` was
+    given, the full check runs and finds the breach."""
+    if kind == "ensemble":
+        X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], 50, seed=4)
+        m = BatchBacklund(np.linspace(0.9, 1.1, 50), 5 + 0.1j)
+    else:
+        X0 = np.array([-2.4, -0.6, -1.2, -2.19, 0.89, 1.34, 1, 0, 0])
+        m = jg.TwoPointBacklund(1.0, 5 + 0.1j)
+    lim = rl.HealthLimits(max_drift=1e-6)
+    c = _Counting(m)
+    h = Health(c, X0, lim)
+    assert c.calls == 1
+    assert h.check_start(X0.copy()) is None and c.calls == 1  # nothing computed
+    assert np.all(h.drift == 0) and h.sphere == 0
+    full = Health(m, X0, lim)
+    assert full.check([0], X0[None]) is None
+    np.testing.assert_array_equal(full.drift, h.drift)  # the full check leaves exactly 0 too
+    assert full.sphere == h.sphere == 0
+    Y = X0.copy()
+    Y[..., 0] += 0.5  # another state: the full check runs and sees the drift
+    bad = h.check_start(Y)
+    assert bad is not None and "integral drift" in bad.reason and c.calls == 2
+    given = Health(c, X0, lim, I0=h.I0 + 1.0)  # I0 given (a resume): checked in full
+    calls = c.calls
+    assert given.check_start(X0) is not None and c.calls == calls + 1
+
+
+def test_check_end_is_the_unrecorded_check():
+    """``check_end`` of a state is ``check`` of that one row with ``record=False``: a passing state moves no maximum,
+    a breaching one is reported (and folded) as before."""
+    X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], 20, seed=6)
+    m = BatchBacklund(np.ones(20), 5 + 0.1j)
+    h = Health(m, X0, rl.HealthLimits(max_drift=1e-3))
+    X1 = m.advance(X0, None, 3).X
+    assert h.check_end(3, X1) is None and np.all(h.drift == 0) and h.sphere == 0
+    Y = X1.copy()
+    Y[4, :3] *= 1.5
+    bad = h.check_end(3, Y)
+    assert bad is not None and "of orbit 4" in bad.reason and "at step 3 " in bad.reason and bad.index == 0
+    assert h.drift[4].max() > 0
