@@ -130,3 +130,50 @@ def test_check_end_is_the_unrecorded_check():
     bad = h.check_end(3, Y)
     assert bad is not None and "of orbit 4" in bad.reason and "at step 3 " in bad.reason and bad.index == 0
     assert h.drift[4].max() > 0
+
+
+def test_run_ensemble_validates_the_ensemble_twice_not_three_times(tmp_path, monkeypatch):
+    """``run_ensemble`` builds the run's map (route, cluster) first and its ``RunSpec`` once: the ensemble is
+    validated (integrals and branch rule at ``X0``, seconds at 10⁷ orbits) by the ``EnsembleSpec`` and by that
+    ``RunSpec`` -- two, where it was three; the run is the same (rows equal the compiled iteration), and a bad
+    ``max_drift`` is still refused before anything runs."""
+    from jetgaudin import ensemble_recording as er
+    from jetgaudin.ensemble import iterate_ensemble
+    from jetgaudin.run.spec import RunSpec
+
+    seen = []
+    post = RunSpec.__post_init__
+    monkeypatch.setattr(RunSpec, "__post_init__", lambda self: (seen.append(1), post(self))[1])
+    X0 = sample_on_leaf(3, [0.5, 0.2, 1.0], 6, seed=1)
+    spec = er.EnsembleSpec(X0, 1.0, 5 + 0.1j, steps=12, save_every=4)
+    assert len(seen) == 1
+    res = er.run_ensemble(spec, tmp_path / "e", backend="compiled")
+    assert res.status == "completed" and len(seen) == 2
+    assert rl.read_run(tmp_path / "e")["inputs"]["backend"] == "compiled"
+    np.testing.assert_array_equal(er.load_ensemble(tmp_path / "e").states,
+                                  iterate_ensemble(X0, 1.0, 5 + 0.1j, 12, save_every=4).states)
+    with pytest.raises(jg.InvalidParameterError, match="max_drift"):
+        er.run_ensemble(spec, tmp_path / "f", max_drift=-1.0, scheduler="tcp://127.0.0.1:9")
+    assert not (tmp_path / "f").exists()
+
+
+def test_a_new_ensemble_record_does_not_describe_a_batch(tmp_path, monkeypatch):
+    """Starting an ensemble of ``BatchBacklund`` does not build its description (every orbit's ``b`` and ``η`` as
+    lists: ~1 s per 10⁶ orbits) only to find its kind; ``run.json`` records no ``map`` for it, as before.  A map with
+    another ``describe`` (a subclass here) is described and recorded."""
+    calls = []
+    original = BatchBacklund.describe
+    monkeypatch.setattr(BatchBacklund, "describe", lambda self: (calls.append(1), original(self))[1])
+    spec, res = _ensemble(tmp_path)
+    assert res.status == "completed" and calls == [] and "map" not in rl.read_run(tmp_path / "e")
+
+    class Described(BatchBacklund):
+        def describe(self):
+            return dict(original(self), kind="another")
+
+    from jetgaudin.run import api
+
+    m = Described(spec.map.b, spec.map.eta, backend="compiled")
+    rec = api._new_record(rl.RunSpec(m, spec.X0, 4, 4, spec.limits, csv=False, program="jetgaudin ensemble"),
+                          Health(m, spec.X0, spec.limits))
+    assert rec["map"]["kind"] == "another"
