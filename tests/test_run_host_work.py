@@ -177,3 +177,20 @@ def test_a_new_ensemble_record_does_not_describe_a_batch(tmp_path, monkeypatch):
     rec = api._new_record(rl.RunSpec(m, spec.X0, 4, 4, spec.limits, csv=False, program="jetgaudin ensemble"),
                           Health(m, spec.X0, spec.limits))
     assert rec["map"]["kind"] == "another"
+
+
+def test_a_new_run_integrates_the_initial_ensemble_once(tmp_path, monkeypatch):
+    """``start`` takes the run's ``I0`` from the run spec's own check (``RunSpec.integrals0``) instead of computing
+    the integrals of the whole initial ensemble a second time: one call on ``X0``-shaped input where there were two,
+    and the same ``I0`` bits as the map computes (so the first row's drift is still exactly 0)."""
+    calls = []
+    original = BatchBacklund.integrals
+    monkeypatch.setattr(BatchBacklund, "integrals",
+                        lambda self, X: (calls.append(np.shape(X)), original(self, X))[1])
+    spec, res = _ensemble(tmp_path)
+    assert res.status == "completed"
+    assert calls.count(spec.X0.shape) == 1  # the spec's check; the health's I0 taken from it
+    assert (1,) + spec.X0.shape not in calls  # nor the first row again (check_start: I0 is of X0; one chunk here)
+    np.testing.assert_array_equal(res.integrals0, original(spec.map, spec.X0))
+    assert spec.integrals0() is not spec.integrals0()  # a copy each time
+    np.testing.assert_array_equal(spec.integrals0(), res.integrals0)

@@ -337,7 +337,7 @@ def start(spec: RunSpec, out_dir: str | Path, *, overwrite: bool = False, record
     with _fs.RunDirLock(out_dir):
         if overwrite:
             _clear(out_dir)
-        health = Health(spec.map, spec.X0, spec.limits)
+        health = Health(spec.map, spec.X0, spec.limits, I0_of_X0=spec.integrals0())
         run = dict(_new_record(spec, health), **(record or {}))
         store = _open_store(spec, out_dir, run, fresh=True)
         pos = Position(0, spec.X0.copy(), None)

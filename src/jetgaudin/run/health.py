@@ -24,10 +24,15 @@ class Health:
     (absolute; relative to ``max(1, |I(X_0)|)`` for the check), ``sphere`` = ``max ||y_{N-1}(n)| − |y_{N-1}(0)||``
     (a Casimir, ``√C_N``) and ``imag`` = the largest imaginary residue."""
 
-    def __init__(self, map_: Map, X0: np.ndarray, limits: HealthLimits, *, I0: np.ndarray | None = None):
+    def __init__(self, map_: Map, X0: np.ndarray, limits: HealthLimits, *, I0: np.ndarray | None = None,
+                 I0_of_X0: np.ndarray | None = None):
+        """``I0``: the integrals to compare with (a resume's, from ``run.json``); ``I0_of_X0``: ``map_.integrals(X0)``
+        computed already (the run spec's check: :meth:`jetgaudin.run.RunSpec.integrals0`); neither: computed here."""
         self.map, self.limits = map_, limits
-        #: the states ``I0`` was computed from here (``None`` when given): :meth:`check_start` need not recompute
-        self._X0 = np.asarray(X0) if I0 is None else None
+        if I0 is None and I0_of_X0 is not None:
+            I0 = I0_of_X0
+        #: the states ``I0`` was computed from (``None`` when ``I0`` was given): :meth:`check_start` need not recompute
+        self._X0 = np.asarray(X0) if I0 is None or I0_of_X0 is not None else None
         self.I0 = np.asarray(map_.integrals(X0), dtype=float) if I0 is None else np.asarray(I0, dtype=float)
         self.scale = np.maximum(1.0, np.abs(self.I0))
         self.drift = np.zeros_like(self.I0)
