@@ -204,3 +204,41 @@ def test_a_checkpoint_records_what_it_was_given_when_asked(tmp_path, monkeypatch
     finally:
         gate.set()
         store.close()
+
+
+def test_an_error_in_the_loop_waits_for_the_writer_inside_the_signal_guard(tmp_path, monkeypatch):
+    """An unexpected error in the loop while a checkpoint is held in the writer thread (0.3 s): the writer's job has
+    ended before the error leaves the driver's signal guard (where SIGXFSZ is ignored: a write past ``ulimit -f``
+    then fails instead of killing the process); the run is marked interrupted with the error, and resumes bit for
+    bit."""
+    monkeypatch.setattr(driver, "FLUSH_MAX_SECONDS", 0.0)
+    _SlowWriter(monkeypatch, 0.3)  # kept alive by the methods it patched
+    ended, left = [], []
+    write = EnsembleStore._write_checkpoint  # the slow one
+    monkeypatch.setattr(EnsembleStore, "_write_checkpoint",
+                        lambda store, *a: (write(store, *a), ended.append(time.monotonic()))[0])
+    chunk, run = driver.Driver._chunk, driver.Driver.run
+    calls = []
+
+    def failing(self, *a, **kw):
+        calls.append(1)
+        if len(calls) == 4:
+            assert self.store._job is not None and self.store._job.is_alive()  # a checkpoint in the writer now
+            raise RuntimeError("planted bug")
+        return chunk(self, *a, **kw)
+
+    def timed(self):
+        try:
+            return run(self)
+        finally:
+            left.append(time.monotonic())
+
+    monkeypatch.setattr(driver.Driver, "_chunk", failing)
+    monkeypatch.setattr(driver.Driver, "run", timed)
+    with pytest.raises(RuntimeError, match="planted bug"):
+        rl.start(_spec(), tmp_path / "b", max_chunk_steps=4)
+    assert ended and left and max(ended) <= left[0]
+    assert rl.read_run(tmp_path / "b")["status"] == "interrupted"
+    monkeypatch.undo()
+    assert rl.resume(tmp_path / "b").state is rl.RunStatus.COMPLETED
+    np.testing.assert_array_equal(_rows(tmp_path / "b"), _reference(_spec()))

@@ -267,6 +267,9 @@ class Driver:
                 reason = _fs.io_failure(exc)
                 store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())
                 return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
+            except BaseException:
+                store._settle()  # an ensemble's writer thread ends here, while SIGXFSZ is still ignored
+                raise
             if self.progress is not None:
                 self.progress(pos.n, steps)
         # a signal that came after the last step (during the last checkpoint or the last progress call) is still

@@ -198,7 +198,6 @@ class Store:
     def _attrs(self, f: Any) -> None:
         f.attrs["note"] = "rows beyond run.json checkpoint.rows are not data (see docs/reliability.md)"
 
-    # ------------------------------------------------------------------------------------------ writes
     # ------------------------------------------------------------------------------------------ the writer
     def _submit(self, fn: Any, *args: Any) -> None:
         """Run ``fn(*args)`` once the previous job has ended: in the writer thread (:attr:`overlap`), else here."""
@@ -230,6 +229,7 @@ class Store:
         with contextlib.suppress(BaseException):
             self.wait()
 
+    # ------------------------------------------------------------------------------------------ writes
     def append(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         """Append rows ``S`` ``(k,) + shape`` at steps ``n_idx`` (not yet durable: see :meth:`checkpoint`).  With
         :attr:`overlap` the write runs in the writer thread: ``S`` must not be changed afterwards (the run layer
