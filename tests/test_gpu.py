@@ -446,3 +446,101 @@ def test_resident_health_finds_the_planted_breach_and_folds_up_to_it(tmp_path, m
     np.testing.assert_allclose(res.drift_abs[1], np.max(np.abs(I - res.integrals0[1]), axis=0), rtol=1e-12)
     r0 = np.linalg.norm(spec.X0[1, -3:])
     np.testing.assert_allclose(res.sphere_max_deviation, abs(np.linalg.norm(x8[-3:]) - r0), rtol=1e-12)
+
+
+def test_prepare_compiles_the_resident_kernels_with_the_run_types(tmp_path, monkeypatch):
+    """``gpu.prepare`` launches the resident route's kernels (``flag``, ``fold``, ``failed``) once, with the argument
+    types the run's loop gives them, so that Numba compiles them there (outside the stepping rate) and not at their
+    first call inside the timed loop (issue 36: ~1.4 s on an H200).  Every launch of the run has argument types (dtype,
+    dimensions, layout; int or float scalars: ``numba.typeof``) that one of prepare's launches had; on a real GPU the
+    run also adds no compiled overload."""
+    import numba
+
+    from jetgaudin import run as rl
+    from jetgaudin.gpu import _drivers, _resident
+
+    real = _resident._health_kernels()
+    seen: dict[str, dict[str, set]] = {"prepare": {}, "run": {}}
+    phase = {"now": "prepare"}
+
+    class Recorder:
+        def __init__(self, name, kernel):
+            self.name, self.kernel = name, kernel
+
+        def __getitem__(self, launch):
+            def run(*args):
+                types = tuple(str(numba.typeof(a)) for a in args)
+                seen[phase["now"]].setdefault(self.name, set()).add(types)
+                return self.kernel[launch](*args)
+            return run
+
+    monkeypatch.setattr(_resident, "_health_kernels",
+                        lambda: tuple(Recorder(n, k) for n, k in zip(("flag", "fold", "failed"), real, strict=True)))
+    monkeypatch.setattr(_drivers, "_prepared", set())
+    gpu.prepare(9, notify=lambda m: None)
+    assert set(seen["prepare"]) == {"flag", "fold", "failed"}
+    overloads = {n: len(getattr(k, "overloads", {})) for n, k in zip(("flag", "fold", "failed"), real, strict=True)}
+    phase["now"] = "run"
+    res = rl.start(_ens_spec("gpu"), tmp_path / "w", notify=lambda m: None)
+    assert res.status == "completed"
+    assert set(seen["run"]) == {"flag", "fold", "failed"}  # the run launches all three: the comparison is not empty
+    for name, types in seen["run"].items():
+        assert types <= seen["prepare"][name], (name, types - seen["prepare"][name])
+    assert overloads == {n: len(getattr(k, "overloads", {})) for n, k in zip(("flag", "fold", "failed"), real,
+                                                                               strict=True)}
+
+
+@pytest.mark.parametrize("plant", [False, True])
+def test_resident_end_state_off_the_grid_checked_on_the_device(tmp_path, monkeypatch, plant):
+    """A chunk ending off the save grid has its end state health-checked (as the CPU route's ``record=False``
+    check) on the device: no host check of a passing end state (issue 36: at 10⁷ orbits that was a 720 MB copy
+    and the host integrals per chunk).  Planted (``plant``): orbit 1's end state after the call 12..15 (off the grid
+    of 4) with ``y_0`` scaled by 1.5 on the device: the breach is found there and worded by the host as the CPU route
+    words it (orbit 1, step 15), the run stops at the last row, step 12.  One call per chunk
+    (``FLUSH_MAX_SECONDS = 0``), calls of 3 steps."""
+    from jetgaudin import run as rl
+    from jetgaudin.gpu import _kernels, _resident
+    from jetgaudin.run import driver, health
+
+    monkeypatch.setattr(driver, "FLUSH_MAX_SECONDS", 0.0)
+    host_end = []
+    original = health.Health.check
+
+    def counted(self, steps, S, *, record=True):
+        if not record:
+            host_end.append(steps[0])
+        return original(self, steps, S, record=record)
+
+    monkeypatch.setattr(health.Health, "check", counted)
+    ends = []
+    original_end = _resident.ResidentMap.check_end
+    monkeypatch.setattr(_resident.ResidentMap, "check_end", lambda self, X: (ends.append(X.step),
+                                                                             original_end(self, X))[1])
+    real3, realg = _kernels.top_kernels()
+    done = {"n": 0}
+
+    class Change:
+        def __getitem__(self, launch):
+            def run(X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last):
+                real3[launch](X0, b, eta, nu0, cont, steps, save_every, out, final, status, fail, nu_last)
+                done["n"] += int(steps)
+                if plant and done["n"] == 15:
+                    f = final.copy_to_host()
+                    f[1] = _scaled(f[1], 0, 1.5)
+                    final.copy_to_device(f)
+            return run
+
+    monkeypatch.setattr(_kernels, "top_kernels", lambda: (Change(), realg))
+    spec = _ens_spec("gpu", max_drift=1e-2)
+    res = rl.start(spec, tmp_path / "e", max_chunk_steps=3)
+    if not plant:
+        assert res.status == "completed"
+        assert host_end == [] and any(e % 4 for e in ends)  # end states off the grid met, none checked on the host
+        ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 40, save_every=4, gpu=True, want_drift=False)
+    else:
+        assert res.status.startswith("failed: integral drift") and "of orbit 1" in res.status, res.status
+        assert "at step 15 " in res.status and res.last_safe_step == 12
+        assert host_end == [15]  # the host words the breach the device found
+        ref = iterate_ensemble(spec.X0, spec.map.b, spec.map.eta, 12, save_every=4, gpu=True, want_drift=False)
+    d = rl.load(tmp_path / "e")
+    np.testing.assert_array_equal(d.X, np.moveaxis(ref.states, 0, 1) if d.X.shape[0] == spec.B else ref.states)

@@ -224,7 +224,7 @@ def open_write(dirpath: str | os.PathLike[str], name: str, *, append: bool = Fal
     return os.fdopen(fd, "ab" if append else "wb")
 
 
-def atomic_write_bytes(dirpath: str | os.PathLike[str], name: str, data: bytes) -> None:
+def atomic_write_bytes(dirpath: str | os.PathLike[str], name: str, data: bytes | memoryview) -> None:
     """Replace ``dirpath/name`` by ``data`` durably: write ``name.tmp`` (created with ``O_EXCL|O_NOFOLLOW``
     after removing any stale entry), fsync it, rename it over ``name``, fsync the directory.
 

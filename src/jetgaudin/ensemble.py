@@ -268,7 +268,9 @@ class BatchBacklund(Map):
         return K.prepare(n, B, notify=notify, step=self.scheduler is None, announce_load=False)
 
     def describe(self) -> dict:
-        return {"kind": "two_point_batch", "b": self.b.tolist(), "eta": [[e.real, e.imag] for e in self.eta],
+        # the same Python floats as [[e.real, e.imag] for e in eta], without a Python loop over the orbits
+        return {"kind": "two_point_batch", "b": self.b.tolist(),
+                "eta": np.stack([self.eta.real, self.eta.imag], axis=-1).tolist(),
                 "branch": self.branch.value, "backend": self.backend.value}
 
 

@@ -146,8 +146,7 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
                 max_chunk_bytes=max_chunk_bytes, notify=notify)
     if not resume and spec is None:
         raise InvalidParameterError("spec is required for a new run")
-    rs = None if resume or spec is None else spec.run_spec(max_drift=max_drift,
-                                                            checkpoint_seconds=checkpoint_seconds)
+    HealthLimits(max_drift, float("inf"))  # a bad limit refused before a cluster is contacted
     client, own = scheduler, False
     try:
         if scheduler is not None:
@@ -159,12 +158,14 @@ def run_ensemble(spec: EnsembleSpec | None, out_dir: str | Path, *, resume: bool
         if resume:
             return _api.resume(out_dir, expect=expect, checkpoint_seconds=checkpoint_seconds, map_options=mo,
                                program=COMMAND, **opts)
-        assert rs is not None
-        import dataclasses
-
-        batch: Any = rs.map
-        m = dataclasses.replace(batch, scheduler=client, chunk_size=chunk_size, backend=backend or "auto")
-        return _api.start(dataclasses.replace(rs, map=m), out_dir, overwrite=overwrite, **opts)
+        assert spec is not None
+        # the run's map as it will run (route, cluster), then its RunSpec: one validation of the whole ensemble
+        # (integrals and the branch rule at X0; seconds at 10^7 orbits) instead of two
+        route: Any = backend or "auto"  # a name: parsed (and refused with the map's message) by the map
+        m = BatchBacklund(spec.b, spec.eta, Branch.parse(spec.branch), scheduler=client, chunk_size=chunk_size,
+                          backend=route)
+        return _api.start(spec.run_spec(m, max_drift=max_drift, checkpoint_seconds=checkpoint_seconds), out_dir,
+                          overwrite=overwrite, **opts)
     finally:
         if own:
             with contextlib.suppress(Exception):

@@ -8,7 +8,8 @@ gives the loop a map whose ``advance`` keeps them on the device:
 * **States and ``ν1`` stay on the device.**  ``Advance.X`` and ``Advance.carry`` are :class:`DeviceStates`, handles
   of device arrays, given back to the next call as they are (no copy); one becomes a host array only where the loop
   reads it -- the checkpoint (every ``checkpoint_seconds``: :func:`attach` wraps ``store.checkpoint``), the reference
-  step of the imaginary residue (64 states), a state off the save grid at the end of a chunk.  Each call writes new
+  step of the imaginary residue (64 states), a state off the save grid at the end of a chunk that breaches (its
+  health is checked on the device first: :meth:`ResidentMap.check_end`).  Each call writes new
   device arrays (the old ones are freed once no handle refers to them), so a handle never changes.
 * **Only saved rows come back, their copy overlapping the next call.**  ``Advance.rows`` is a handle too.  A call
   that ends on the save grid (or at the run's last step: the loop takes its rows) starts the copy of its rows into a
@@ -55,7 +56,7 @@ cuda: Any = None
 #: at most this many pinned buffers for the rows' copies (a chunk of the loop holds a few calls' rows)
 POOL = 4
 
-__all__ = ["attach", "DeviceStates", "ResidentMap"]
+__all__ = ["attach", "DeviceStates", "ResidentMap", "warm"]
 
 
 class DeviceStates:
@@ -196,6 +197,32 @@ def _health_kernels() -> tuple[Any, Any, Any]:
     return flag, fold, failed
 
 
+def warm(n_state: int) -> None:
+    """Compile the resident route's own kernels (``flag``, ``fold``, ``failed`` of :func:`_health_kernels`) for runs
+    on states of ``n_state`` components: each is launched once on one orbit with the argument types a run gives it
+    (the same dtypes, dimensions and layouts; Python ``int`` step bounds, ``float`` limit), so that Numba compiles it
+    here -- in :func:`jetgaudin.gpu.prepare`, beside the stepping kernel and outside the stepping rate -- and not at
+    its first call inside the run's loop (~1.4 s on an H200, issue 36)."""
+    c = require()
+    flag, fold, failed = _health_kernels()
+    s = c.stream()
+    k = 2 * (int(n_state) // 3)
+    rows = c.device_array((2, 1, int(n_state)), stream=s)  # as a call's rows: device_array((S, B, n))
+    rows.copy_to_device(np.zeros((2, 1, int(n_state))), stream=s)
+    b = c.to_device(np.ones(1), stream=s)
+    I0 = c.to_device(np.zeros((1, k)), stream=s)
+    scale = c.to_device(np.ones((1, k)), stream=s)
+    first = c.to_device(np.array([2], dtype=np.int64), stream=s)
+    flag[1, THREADS, s](rows, 1, 2, b, I0, scale, 1.0, first)
+    drift, r0, sphere = c.to_device(np.zeros((1, k)), stream=s), c.to_device(np.zeros(1), stream=s), \
+        c.to_device(np.zeros(1), stream=s)
+    fold[1, THREADS, s](rows, 1, 2, b, I0, r0, drift, sphere)
+    status = c.device_array(1, np.int64, stream=s)
+    status.copy_to_device(np.zeros(1, dtype=np.int64), stream=s)
+    failed[1, THREADS, s](status, c.to_device(np.array([1, 0], dtype=np.int64), stream=s))
+    s.synchronize()
+
+
 class ResidentMap:
     """The map of a GPU run as the run layer's loop sees it (module docstring): ``advance`` on device-resident states;
     everything else is the wrapped :class:`jetgaudin.ensemble.BatchBacklund`'s."""
@@ -326,6 +353,18 @@ class ResidentMap:
                        imag_max=np.zeros(0))
 
     # ------------------------------------------------------------------ health
+    def check_end(self, X: DeviceStates) -> bool:
+        """Whether the end state ``X`` (a handle of this map's, ``(B, n)``) passes the health check, on the device
+        (``flag`` on it as a one-row call; nothing copied to the host, no maxima moved)."""
+        c, s = self.c, self.stream
+        d_first = c.to_device(np.array([1], dtype=np.int64), stream=s)
+        flag, _, _ = _health_kernels()
+        flag[-(-self.B // THREADS), THREADS, s](X.dev.reshape((1,) + tuple(X.dev.shape)), 0, 1, self.d_b, self.d_I0,
+                                                 self.d_scale, self.max_drift, d_first)
+        first = int(d_first.copy_to_host(stream=s)[0])
+        s.synchronize()
+        return first == 1
+
     def check_taken(self, count: int) -> int | None:
         """The health of the ``count`` rows the loop took since the last check (in order), on the device: the index
         of the first bad one (``None``: all good), the running maxima folded over the rows up to it (included, as
@@ -376,6 +415,12 @@ def _device_health_class(base: Any) -> type:
         @sphere.setter
         def sphere(self, value: float) -> None:
             self.__dict__["_sphere"] = float(value)
+
+        def check_end(self, step: int, X: Any) -> Any:
+            r = self.resident
+            if isinstance(X, DeviceStates) and X.owner is r and X.ndim == 2 and r.check_end(X):
+                return None  # passed on the device: not copied, not recorded (as the host's record=False)
+            return base.check_end(self, step, X)  # a breach (or a host state): checked and worded on the host
 
         def check(self, steps: list[int], S: np.ndarray, *, record: bool = True) -> Any:
             r = self.resident

@@ -237,7 +237,7 @@ class Driver:
             try:
                 store.begin(self.fresh)
                 if self.first:
-                    bad = health.check([0], pos.X[None])
+                    bad = health.check_start(pos.X)
                     failure = bad.reason if bad else None
                     store.append(np.array([0]), pos.X[None])
                     store.anchor = (0, pos.X, None)
@@ -262,10 +262,14 @@ class Driver:
                 else:
                     status, text = RunStatus.COMPLETED, "completed"
                 store.checkpoint(pos.n, pos.X, pos.carry, self.summary(text))
+                store.wait()  # the last checkpoint durable (an ensemble's writer thread: Store.overlap) before the end
             except RunIOError as exc:  # the status says what failed in one word: "disk full", ...
                 reason = _fs.io_failure(exc)
                 store.mark(f"failed: {reason}", failure="io", elapsed_seconds=self.elapsed())
                 return Outcome(RunStatus.FAILED_IO, reason, int(store.run.get("last_safe_step", 0)), self.elapsed())
+            except BaseException:
+                store._settle()  # an ensemble's writer thread ends here, while SIGXFSZ is still ignored
+                raise
             if self.progress is not None:
                 self.progress(pos.n, steps)
         # a signal that came after the last step (during the last checkpoint or the last progress call) is still
@@ -360,7 +364,7 @@ class Driver:
         if end is not None:
             n_end, X_end, c_end = end
             if not rows_n or rows_n[-1] != n_end:
-                bad = health.check([n_end], X_end[None], record=False)  # off the save grid: not in the maxima
+                bad = health.check_end(n_end, X_end)  # off the save grid: not in the maxima
                 if bad is not None:
                     self.store.append(np.asarray(rows_n, dtype=np.int64), S)
                     if rows_n:

@@ -160,8 +160,9 @@ class RowDigest:
         self.hn, self.hX = hashlib.sha256(), hashlib.sha256()
 
     def update(self, n_idx: Any, X: Any) -> None:
-        self.hn.update(np.ascontiguousarray(n_idx, dtype="<i8").tobytes())
-        self.hX.update(np.ascontiguousarray(X, dtype="<f8").tobytes())
+        # the arrays' buffers as they are (hashlib reads a C-contiguous buffer): no bytes copy of the rows
+        self.hn.update(np.ascontiguousarray(n_idx, dtype="<i8").data)
+        self.hX.update(np.ascontiguousarray(X, dtype="<f8").data)
 
     def hexdigest(self) -> str:
         return self.hn.hexdigest() + ":" + self.hX.hexdigest()

@@ -24,8 +24,15 @@ class Health:
     (absolute; relative to ``max(1, |I(X_0)|)`` for the check), ``sphere`` = ``max ||y_{N-1}(n)| − |y_{N-1}(0)||``
     (a Casimir, ``√C_N``) and ``imag`` = the largest imaginary residue."""
 
-    def __init__(self, map_: Map, X0: np.ndarray, limits: HealthLimits, *, I0: np.ndarray | None = None):
+    def __init__(self, map_: Map, X0: np.ndarray, limits: HealthLimits, *, I0: np.ndarray | None = None,
+                 I0_of_X0: np.ndarray | None = None):
+        """``I0``: the integrals to compare with (a resume's, from ``run.json``); ``I0_of_X0``: ``map_.integrals(X0)``
+        computed already (the run spec's check: :meth:`jetgaudin.run.RunSpec.integrals0`); neither: computed here."""
         self.map, self.limits = map_, limits
+        if I0 is None and I0_of_X0 is not None:
+            I0 = I0_of_X0
+        #: the states ``I0`` was computed from (``None`` when ``I0`` was given): :meth:`check_start` need not recompute
+        self._X0 = np.asarray(X0) if I0 is None or I0_of_X0 is not None else None
         self.I0 = np.asarray(map_.integrals(X0), dtype=float) if I0 is None else np.asarray(I0, dtype=float)
         self.scale = np.maximum(1.0, np.abs(self.I0))
         self.drift = np.zeros_like(self.I0)
@@ -75,6 +82,24 @@ class Health:
         return Failure(
             f"integral drift: {self.names[k]}{orbit} drifted by {float(rel[first][where[3]]):.4e} (relative to "
             f"max(1, |I(0)|)) at step {steps[first]} > max_drift {self.limits.max_drift:g}", first)
+
+    def check_start(self, X: np.ndarray) -> Failure | None:
+        """Check the run's first row, the states ``X`` at step 0: as :meth:`check` of ``[0]``.  Where ``I0`` and ``r0``
+        were computed here from states equal to ``X`` (a new run), that check is known without computing: the same
+        function of the same numbers gives the same bits, so every drift and the radius deviation are exactly 0 --
+        no breach when ``I0`` and ``r0`` are finite, and no maximum moves (they start at 0).  At 10⁷ orbits this
+        saves the integrals of the whole ensemble once more (seconds on the host)."""
+        X = np.asarray(X)
+        if (self._X0 is not None and X.shape == self._X0.shape and np.array_equal(X, self._X0)
+                and np.all(np.isfinite(self.I0)) and np.all(np.isfinite(self.r0))):
+            return None
+        return self.check([0], X[None])
+
+    def check_end(self, step: int, X: np.ndarray) -> Failure | None:
+        """Check the end state ``X`` ``(..., n)`` of a kernel call off the save grid (reached at ``step``): as
+        :meth:`check` with ``record=False`` (the maxima move only on a breach).  A separate entry so that a route
+        keeping its states elsewhere (the GPU's, :mod:`jetgaudin.gpu._resident`) checks them there."""
+        return self.check([step], np.asarray(X)[None], record=False)
 
     def _where(self, rel_row: np.ndarray):
         bad = ~np.isfinite(rel_row) | (rel_row > self.limits.max_drift)

@@ -163,9 +163,13 @@ class RunSpec:
         if self.stem not in ("flow", "orbit"):
             raise InvalidParameterError(f"stem must be 'flow' or 'orbit', got {self.stem!r}")
         with np.errstate(all="ignore"):
-            if not np.all(np.isfinite(self.map.integrals(self.X0))):
+            I0 = self.map.integrals(self.X0)
+            if not np.all(np.isfinite(I0)):
                 raise InvalidParameterError(
                     "the initial state is too large: its integrals overflow double precision; scale it down")
+            # kept for the run's health (:meth:`integrals0`): the ensemble's integrals once, not twice (10^7 orbits:
+            # seconds); a private attribute, recomputed by every RunSpec (dataclasses.replace included)
+            object.__setattr__(self, "_integrals0", I0)
             if self.X0.shape[0] > 0 or self.X0.ndim == 1:
                 carry = np.asarray(self.map.start(self.X0))
                 if not np.all(np.isfinite(carry)):
@@ -179,6 +183,11 @@ class RunSpec:
         if isinstance(cs, bool) or not isinstance(cs, int | float) or not (0 <= cs < math.inf):
             raise InvalidParameterError(f"checkpoint_seconds must be a finite number >= 0, got {cs!r}")
         return float(cs)
+
+    def integrals0(self) -> np.ndarray:
+        """``map.integrals(X0)``, as computed by this spec's check (a copy; computed now if the spec has none)."""
+        I0 = self.__dict__.get("_integrals0")
+        return np.array(self.map.integrals(self.X0) if I0 is None else I0, dtype=float)
 
     @property
     def layout(self) -> Layout:

@@ -5,6 +5,13 @@ checkpoint (an ``.npz`` slot for ensembles; inside ``run.json`` for orbits) is w
 is replaced atomically; the in-memory record is updated only once ``run.json`` is on disk.  Any ``OSError`` or
 HDF5 error on the way raises :class:`jetgaudin.RunIOError` and leaves the last durable checkpoint in force.
 Every file is opened through :mod:`jetgaudin._fs` (no symlink followed, no stray ``.tmp``).
+
+**Overlap** (ensembles, :attr:`Store.overlap`): an append (the HDF5 write and the rows' digest) and a checkpoint (the
+fsync, the slot's serialisation, digest and write, ``run.json``) run in a writer thread while the caller goes on
+stepping; one at a time, in the order given, each started only once the previous one has ended (its error, if any,
+raised then, in the caller's thread: the next append, checkpoint, :meth:`Store.wait`).  The files see the same
+operations in the same order as without it, so every rule above holds as it did; what a checkpoint records (the
+state, ``ν1``, the anchor, the drift, the summary, the rows' count and digest) is taken when it is asked for.
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ import copy
 import io
 import json
 import os
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -55,6 +63,8 @@ class Store:
     h5_name = ORBIT_H5
     data = "X"
     _COPY_BLOCK_BYTES = 64 << 20
+    #: appends and checkpoints overlap the caller's next steps (module doc; the ensembles': their rows are large)
+    overlap = False
 
     def __init__(self, out_dir: Path, run: dict, shape: tuple[int, ...], *, fresh: bool,
                  extra: dict[str, np.ndarray] | None = None, check_only: bool = False):
@@ -65,6 +75,8 @@ class Store:
         #: checkpoint, replayed by a resume (:mod:`jetgaudin.run.replay`)
         self.anchor: tuple[int, np.ndarray, Any] | None = None
         self.f: Any = None
+        self._job: threading.Thread | None = None  # the append or checkpoint running in the writer thread
+        self._job_error: BaseException | None = None
         #: a read-only view of a run to resume (:meth:`checked`): every check of a resume, nothing written
         self.check_only = check_only
         if check_only:
@@ -186,9 +198,45 @@ class Store:
     def _attrs(self, f: Any) -> None:
         f.attrs["note"] = "rows beyond run.json checkpoint.rows are not data (see docs/reliability.md)"
 
+    # ------------------------------------------------------------------------------------------ the writer
+    def _submit(self, fn: Any, *args: Any) -> None:
+        """Run ``fn(*args)`` once the previous job has ended: in the writer thread (:attr:`overlap`), else here."""
+        self.wait()
+        if not self.overlap:
+            fn(*args)
+            return
+
+        def job() -> None:
+            try:
+                fn(*args)
+            except BaseException as exc:  # raised in the caller's thread by the next wait()
+                self._job_error = exc
+
+        self._job = threading.Thread(target=job, name="jetgaudin-store", daemon=True)
+        self._job.start()
+
+    def wait(self) -> None:
+        """Wait for the append or checkpoint in the writer thread to end; raise its error (once)."""
+        if self._job is not None:
+            self._job.join()
+            self._job = None
+        err, self._job_error = self._job_error, None
+        if err is not None:
+            raise err
+
+    def _settle(self) -> None:
+        """:meth:`wait`, its error dropped (it has been raised already, or the caller is failing anyway)."""
+        with contextlib.suppress(BaseException):
+            self.wait()
+
     # ------------------------------------------------------------------------------------------ writes
     def append(self, n_idx: np.ndarray, S: np.ndarray) -> None:
-        """Append rows ``S`` ``(k,) + shape`` at steps ``n_idx`` (not yet durable: see :meth:`checkpoint`)."""
+        """Append rows ``S`` ``(k,) + shape`` at steps ``n_idx`` (not yet durable: see :meth:`checkpoint`).  With
+        :attr:`overlap` the write runs in the writer thread: ``S`` must not be changed afterwards (the run layer
+        hands fresh arrays)."""
+        self._submit(self._append, n_idx, S)
+
+    def _append(self, n_idx: np.ndarray, S: np.ndarray) -> None:
         k = len(n_idx)
         if k == 0:
             return
@@ -247,11 +295,19 @@ class Store:
 
     def checkpoint(self, step: int, X: np.ndarray, carry: Any, summary: dict) -> None:
         """Make everything appended durable and record ``(step, X, carry)`` as the checkpoint: data → fsync →
-        checkpoint → fsync → ``run.json``; ``self.run`` changes only after ``run.json`` is on disk."""
+        checkpoint → fsync → ``run.json``; ``self.run`` changes only after ``run.json`` is on disk.  With
+        :attr:`overlap` this runs in the writer thread (what it records is taken now)."""
+        self._submit(self._checkpoint, int(step), X, carry, summary, self.anchor, self._checkpoint_extra())
+
+    def _checkpoint_extra(self) -> Any:
+        """What a checkpoint records besides the state and the anchor, taken when it is asked for."""
+        return None
+
+    def _checkpoint(self, step: int, X: np.ndarray, carry: Any, summary: dict, anchor: Any, extra: Any) -> None:
         try:
             self._sync_data()
             new = copy.deepcopy(self.run)
-            self._write_checkpoint(new, int(step), X, carry)
+            self._write_checkpoint(new, int(step), X, carry, anchor, extra)
             new["checkpoint"].update(step=int(step), rows=self.rows, rows_sha256=self.h_rows.hexdigest())
             new.update(summary)
             new["last_safe_step"] = int(step)
@@ -264,7 +320,7 @@ class Store:
         self._committed()
         self.run = new
 
-    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any, anchor: Any, extra: Any) -> None:
         raise NotImplementedError
 
     def _committed(self) -> None:
@@ -274,13 +330,15 @@ class Store:
         """Start a session of writing: a new run's first ``run.json`` (no row yet: a failure at the first append
         leaves a run that resumes from ``X0``), then the reserve (:func:`jetgaudin._space.make_reserve`) that
         :meth:`mark` frees to record a full disk."""
+        self.wait()
         if fresh:
             write_run(self.out_dir, copy.deepcopy(self.run))
         _space.make_reserve(self.out_dir, RESERVE_BYTES + 2 * len(json.dumps(self.run)))
 
     def mark(self, status: str, **fields: Any) -> None:
         """Best effort: record ``status`` (and ``fields``) over the last durable checkpoint (the disk may be what
-        failed: the reserve is freed first)."""
+        failed: the reserve is freed first; a job in the writer thread ends first)."""
+        self._settle()
         _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
             new = copy.deepcopy(self.run)
@@ -289,6 +347,7 @@ class Store:
             self.run = new
 
     def close(self) -> None:
+        self._settle()
         if not self.check_only:
             _space.release_reserve(self.out_dir)
         with contextlib.suppress(Exception):
@@ -420,12 +479,12 @@ class OrbitStore(Store):
             self.csv_fh.flush()
             os.fsync(self.csv_fh.fileno())
 
-    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any, anchor: Any, extra: Any) -> None:
         ck = new["checkpoint"]
         ck["X_hex"] = hex_floats(X)
         ck["nu1_hex"] = _hex_carry(carry)
-        if self.anchor is not None:
-            a_n, a_X, a_c = self.anchor
+        if anchor is not None:
+            a_n, a_X, a_c = anchor
             ck["anchor"] = {"step": int(a_n), "X_hex": hex_floats(a_X), "nu1_hex": _hex_carry(a_c)}
         if self.csv_fh is not None:
             ck["csv_bytes"] = self.csv_fh.tell()
@@ -450,6 +509,7 @@ class EnsembleStore(Store):
 
     h5_name = ENSEMBLE_H5
     data = "states"
+    overlap = True
 
     def __init__(self, out_dir: Path, run: dict, shape: tuple[int, int], *, fresh: bool,
                  extra: dict[str, np.ndarray] | None = None, check_only: bool = False):
@@ -469,14 +529,17 @@ class EnsembleStore(Store):
         f.attrs["layout"] = "states[r, i, :] is orbit i at step n[r]; components y_0, y_1, ... (3N)"
         super()._attrs(f)
 
-    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any) -> None:
+    def _checkpoint_extra(self) -> Any:
+        return self.drift_rel  # the relative drift (set by the run layer before each checkpoint)
+
+    def _write_checkpoint(self, new: dict, step: int, X: np.ndarray, carry: Any, anchor: Any, extra: Any) -> None:
         name = f"checkpoint-{self.slot}.npz"
         buf = io.BytesIO()
-        a_n, a_X, a_c = self.anchor if self.anchor is not None else (-1, np.zeros((0,) + X.shape[1:]), None)
+        a_n, a_X, a_c = anchor if anchor is not None else (-1, np.zeros((0,) + X.shape[1:]), None)
         np.savez(buf, step=np.int64(step), X=X, nu1=np.zeros(0, complex) if carry is None else carry,
-                 drift=self.drift_rel, anchor_step=np.int64(a_n), anchor_X=a_X,
+                 drift=extra, anchor_step=np.int64(a_n), anchor_X=a_X,
                  anchor_nu1=np.zeros(0, complex) if a_c is None else a_c)
-        data = buf.getvalue()
+        data = buf.getbuffer()  # the file's bytes in place (getvalue() would copy them once more)
         _fs.atomic_write_bytes(self.out_dir, name, data)
         import hashlib
 
