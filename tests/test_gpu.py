@@ -457,7 +457,7 @@ def test_prepare_compiles_the_resident_kernels_with_the_run_types(tmp_path, monk
     import numba
 
     from jetgaudin import run as rl
-    from jetgaudin.gpu import _drivers, _resident
+    from jetgaudin.gpu import _drivers, _health, _resident
 
     real = _resident._health_kernels()
     seen: dict[str, dict[str, set]] = {"prepare": {}, "run": {}}
@@ -474,8 +474,11 @@ def test_prepare_compiles_the_resident_kernels_with_the_run_types(tmp_path, monk
                 return self.kernel[launch](*args)
             return run
 
-    monkeypatch.setattr(_resident, "_health_kernels",
-                        lambda: tuple(Recorder(n, k) for n, k in zip(("flag", "fold", "failed"), real, strict=True)))
+    def recorded():
+        return tuple(Recorder(n, k) for n, k in zip(("flag", "fold", "failed"), real, strict=True))
+
+    monkeypatch.setattr(_resident, "_health_kernels", recorded)  # the run's launches
+    monkeypatch.setattr(_health, "_health_kernels", recorded)  # prepare's (warm)
     monkeypatch.setattr(_drivers, "_prepared", set())
     gpu.prepare(9, notify=lambda m: None)
     assert set(seen["prepare"]) == {"flag", "fold", "failed"}

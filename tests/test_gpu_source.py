@@ -38,13 +38,13 @@ def test_no_numpy_inside_a_cuda_kernel():
             found += 1
             if names := numpy_names(fn):
                 bad[f"{path.name}:{fn.name}"] = sorted(names)
-    assert found >= 8  # the kernels and device functions of _kernels.py and _resident.py: the scan sees them
+    assert found >= 8  # the kernels and device functions of _kernels.py and _health.py: the scan sees them
     assert not bad, f"NumPy inside CUDA-compiled functions (use math): {bad}"
 
 
 def test_the_scan_sees_a_planted_numpy_call():
-    """The check itself bites: the bug it is for, planted in a copy of the resident route's source."""
-    src = (GPU / "_resident.py").read_text()
+    """The check itself bites: the bug it is for, planted in a copy of the health kernels' source."""
+    src = (GPU / "_health.py").read_text()
     assert "math.sqrt(" in src
     planted = ast.parse(src.replace("math.sqrt(", "np.sqrt(", 1))
     assert any("np.sqrt" in numpy_names(fn) for fn in cuda_functions(planted))

@@ -257,7 +257,7 @@ def prepare(n_state: int, notify=None, chain_map=None) -> GPUReport:
     """Compile the GPU kernel a run on states of ``n_state`` components will launch (the top's N = 3 or generic
     kernel, or ``chain_map``'s), saying so first and when done (``notify(message)``; default stderr); nothing is
     said when it is compiled in this process already.  For the top, the run layer's resident kernels (health and
-    status on the device: :func:`jetgaudin.gpu._resident.warm`) are compiled here too, so that no compile falls
+    status on the device: :func:`jetgaudin.gpu._health.warm`) are compiled here too, so that no compile falls
     inside a run's timed loop.  Numba's CUDA target keeps no on-disk cache of these kernels: a new process compiles
     them again (a few seconds)."""
     import sys
@@ -272,7 +272,7 @@ def prepare(n_state: int, notify=None, chain_map=None) -> GPUReport:
         x = np.ones((1, n_state))
         run_chain(chain_map.model, chain_map.eta, x, np.ones(1, dtype=complex), 0, 1)
     else:
-        from ._resident import warm
+        from ._health import warm
 
         run_batch(np.ones((1, n_state)), 1.0, 2 + 1j, 1 + 0j, False, 0, 1, want_drift=False)
         warm(n_state)  # the run layer's resident kernels (health, status) too: not compiled inside the timed loop
