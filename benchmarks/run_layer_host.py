@@ -21,6 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from _baseline import extract_src  # benchmarks/ is the script's directory: on sys.path
+
 ROOT = Path(__file__).resolve().parents[1]
 
 _KERNEL = r"""
@@ -69,12 +71,7 @@ def main() -> None:
     p.add_argument("--json", help="write the results here")
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        base = Path(tmp) / "base"
-        base.mkdir()
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "src"], check=True,
-                                 capture_output=True).stdout
-        subprocess.run(["tar", "x", "-C", str(base)], input=archive, check=True)
-        trees = {"current": ROOT / "src", args.baseline: base / "src"}
+        trees = {"current": ROOT / "src", args.baseline: extract_src(ROOT, args.baseline, Path(tmp))}
         for src in trees.values():  # compile or load every kernel once per tree, outside the timings
             run_cli(src, Path(tmp) / "warm", argparse.Namespace(**{**vars(args), "orbits": 64, "steps": 4}))
         res: dict[str, list[dict]] = {k: [] for k in trees}

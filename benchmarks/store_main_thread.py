@@ -20,6 +20,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from _baseline import extract_src  # benchmarks/ is the script's directory: on sys.path
+
 ROOT = Path(__file__).resolve().parents[1]
 
 _CHILD = r"""
@@ -68,12 +70,7 @@ def main() -> None:
     p.add_argument("--repeat", type=int, default=2, help="processes per tree, alternated")
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        base = Path(tmp) / "base"
-        base.mkdir()
-        archive = subprocess.run(["git", "-C", str(ROOT), "archive", args.baseline, "src"], check=True,
-                                 capture_output=True).stdout
-        subprocess.run(["tar", "x", "-C", str(base)], input=archive, check=True)
-        trees = {"current": ROOT / "src", args.baseline: base / "src"}
+        trees = {"current": ROOT / "src", args.baseline: extract_src(ROOT, args.baseline, Path(tmp))}
         for k in range(args.repeat):
             for name, src in trees.items():
                 out = Path(tmp) / f"{name}-{k}"
