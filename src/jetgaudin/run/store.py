@@ -21,6 +21,7 @@ import copy
 import io
 import json
 import os
+import signal
 import threading
 import time
 from pathlib import Path
@@ -347,12 +348,13 @@ class Store:
             self.run = new
 
     def close(self) -> None:
-        self._settle()
-        if not self.check_only:
-            _space.release_reserve(self.out_dir)
-        with contextlib.suppress(Exception):
-            if self.f is not None:
-                self.f.close()
+        with ignoring_sigxfsz():
+            self._settle()
+            if not self.check_only:
+                _space.release_reserve(self.out_dir)
+            with contextlib.suppress(Exception):
+                if self.f is not None:
+                    self.f.close()
 
 
 class OrbitStore(Store):
@@ -493,8 +495,24 @@ class OrbitStore(Store):
     def close(self) -> None:
         super().close()
         if self.csv_fh is not None:
-            with contextlib.suppress(Exception):
-                self.csv_fh.close()
+            with ignoring_sigxfsz(), contextlib.suppress(Exception):
+                self.csv_fh.close()  # flushes the buffered CSV: past RLIMIT_FSIZE, EFBIG (suppressed), not SIGXFSZ
+
+
+@contextlib.contextmanager
+def ignoring_sigxfsz():
+    """SIGXFSZ ignored while a store closes (in the main thread; restored after): its buffered CSV and HDF5 file are
+    flushed then, after the driver's loop (which ignores SIGXFSZ while it runs) has restored the handler, and a write
+    past ``RLIMIT_FSIZE`` must fail with EFBIG (suppressed: the run has already failed or its rows are declared by
+    the checkpoint) instead of killing a host process whose SIGXFSZ is at its default action."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "SIGXFSZ"):
+        yield
+        return
+    old = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGXFSZ, old)
 
 
 def _hex_carry(carry: Any) -> list[str] | None:
