@@ -16,7 +16,8 @@ from jetgaudin.gaudin import GaudinModel
 MODELS = {"rational": GaudinModel(1.0, [(0.0, 2), (0.7, 1)]),
           "trigonometric": GaudinModel(1.0, [(0.0, 2), (0.7, 1)], family="trigonometric", gamma=1.3),
           "elliptic": GaudinModel(0.0, [(0.0, 2), (0.7, 1)], family="elliptic", modulus=0.6),
-          "elliptic, k = 0.95": GaudinModel(0.0, [(0.0, 2), (0.7, 1)], family="elliptic", modulus=0.95)}
+          "elliptic, k = 0.95": GaudinModel(0.0, [(0.0, 2), (0.7, 1)], family="elliptic", modulus=0.95),
+          "elliptic, k = 0.05": GaudinModel(0.0, [(0.0, 2), (0.7, 1)], family="elliptic", modulus=0.05)}
 
 
 def close(a, b) -> bool:

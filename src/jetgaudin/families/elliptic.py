@@ -197,11 +197,11 @@ class EllipticFamily(Family):
         :func:`mpmath.ellipfun` calls), their series from ``sn' = cn dn``, ``cn' = −sn dn``, ``dn' = −m sn cn``
         (``(k + 1) s_{k+1} = Σ_j c_j d_{k−j}``, …), then ``ns = 1/sn`` by series inversion, ``ds = dn·ns``,
         ``cs = cn·ns`` (Cauchy products): exact to the working precision, where :func:`mpmath.taylor` evaluates
-        ``mp_w`` at many points (~15 ms a coefficient)."""
+        ``mp_w`` at many points (~15 ms a coefficient).  ``sn, cn, dn`` by :func:`_mp_sn_cn_dn`."""
         import mpmath
 
         m = mpmath.mpf(self.modulus) ** 2
-        s, c, d = ([mpmath.ellipfun(f, x, m=m)] for f in ("sn", "cn", "dn"))
+        s, c, d = ([v] for v in _mp_sn_cn_dn(self.modulus, mpmath.mp.prec, x))
         for k in range(n - 1):
             s.append(mpmath.fsum(c[j] * d[k - j] for j in range(k + 1)) / (k + 1))
             c.append(-mpmath.fsum(s[j] * d[k - j] for j in range(k + 1)) / (k + 1))
@@ -238,6 +238,36 @@ class EllipticFamily(Family):
         xi = complex(xi)
         lam0 = self._lam0(xi)
         return _jacobi.w_values(np.array([xi - lam0, np.conj(xi) - lam0]), self.modulus).T.ravel()
+
+
+@lru_cache(maxsize=16)
+def _mp_theta_constants(modulus: float, prec: int) -> tuple:
+    """``(K, q, θ2(0), θ3(0), θ4(0))`` of the parameter ``m = k²`` at the binary precision ``prec`` (cached: what
+    :func:`mpmath.ellipfun` computes again at every call)."""
+    import mpmath
+
+    with mpmath.workprec(prec):
+        m = mpmath.mpf(modulus) ** 2
+        q = mpmath.qfrom(m=m)
+        return mpmath.ellipk(m), q, mpmath.jtheta(2, 0, q), mpmath.jtheta(3, 0, q), mpmath.jtheta(4, 0, q)
+
+
+def _mp_sn_cn_dn(modulus: float, prec: int, u) -> tuple:
+    """``sn, cn, dn`` of ``u`` (an ``mpc``) and ``m = k²`` from the theta functions of the cached nome: with
+    ``z = πu/(2K)``, ``sn = (θ3/θ2) θ1(z)/θ4(z)``, ``cn = (θ4/θ2) θ2(z)/θ4(z)``, ``dn = (θ4/θ3) θ3(z)/θ4(z)`` (DLMF
+    22.2.4–22.2.6; the constants at 0).  Equal to :func:`mpmath.ellipfun` to ~1e-41 relative at 40 digits
+    (``tests/test_mp_series.py`` compares the series built on them with ``mpmath.taylor`` of ``ellipfun``), four
+    theta calls against ``ellipfun``'s three calls that each recompute the nome and ``K``.  At ``k = 0`` (nome 0,
+    ``θ2(0) = 0``) ``ellipfun`` itself."""
+    import mpmath
+
+    K, q, t2, t3, t4 = _mp_theta_constants(modulus, prec)
+    if q == 0:  # k = 0 (the trigonometric limit): θ2(0) = 0; sin, cos, 1 through ellipfun
+        m = mpmath.mpf(modulus) ** 2
+        return tuple(mpmath.ellipfun(f, u, m=m) for f in ("sn", "cn", "dn"))
+    z = mpmath.pi * u / (2 * K)
+    th1, th2, th3, th4 = (mpmath.jtheta(n, z, q) for n in (1, 2, 3, 4))
+    return t3 / t2 * th1 / th4, t4 / t2 * th2 / th4, t4 / t3 * th3 / th4
 
 
 @lru_cache(maxsize=64)
