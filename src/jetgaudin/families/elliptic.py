@@ -336,6 +336,8 @@ def spectral_null_vector(family: EllipticFamily, xi, k1, k2) -> np.ndarray:
         take = ~done & (size > best)
         S[take], best[take] = n[take], size[take]
         done |= best > 1e-4 * rn[..., rows[0]] * rn[..., rows[1]] * rn[..., rows[2]]
+        if np.all(done):  # the other choices would change nothing (``take`` is empty once every orbit is done)
+            break
     S = S / np.sqrt(best)[..., None]
     big = np.argmax(np.abs(S), axis=-1)
     top = np.take_along_axis(S, big[..., None], axis=-1)[..., 0]
