@@ -327,15 +327,17 @@ def test_the_coarse_rule_only_starts_newton_on_the_fine_rule(name):
     bound = np.minimum(2 * np.abs(rho - lc) + (P or 0.0), 0.9 * Kp)
     rules = _rules()
     out = []
-    for coarse in (rules[6:], (rules[6][:0], rules[7][:0], rules[8][:0])):  # with the 16-point phase, without
+    no = (rules[6][:0], rules[7][:0], rules[8][:0])
+    for coarse in (rules[6:], rules[6:9] + no, no + no):  # with both coarse phases, the 16-point one only, neither
         u, om, nu = np.empty(E.shape[0]), np.empty((k, E.shape[0])), np.empty(k, dtype=complex)
-        status, quad = K.newton(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const, dconst,
+        status, quad, _ = K.newton(COMPILED_FAMILIES[fam.name], _family_constants(fam), pos, orders, hI, const, dconst,
                                 kidx, E, 0.05 * wkeep, rho, bound, *rules[:6], *coarse, _STEP_TOL, _COARSE_TOL,
                                 _ITERATIONS, u, om, nu)
         assert status == 0
         out.append((u.copy(), om.copy(), quad))
-    # both end with Newton on the 64-point rule to a step of 1e-13 |u|: the same solution to round-off (1e-13
+    # all end with Newton on the 64-point rule to a step of 1e-13 |u|: the same solution to round-off (1e-13
     # relative, the step tolerance), the same weights and quadrature estimate (1e-12 of their scale)
-    assert np.max(np.abs(out[0][0] - out[1][0]) / np.abs(out[1][0])) < 1e-13
-    assert np.max(np.abs(out[0][1] - out[1][1])) < 1e-12 * np.abs(out[1][1]).max()
-    assert abs(out[0][2] - out[1][2]) < 1e-12
+    for a in out[:2]:
+        assert np.max(np.abs(a[0] - out[2][0]) / np.abs(out[2][0])) < 1e-13
+        assert np.max(np.abs(a[1] - out[2][1])) < 1e-12 * np.abs(out[2][1]).max()
+        assert abs(a[2] - out[2][2]) < 1e-12

@@ -42,14 +42,11 @@ __all__ = ["all_finite", "branch_numerical", "branch_uniformized", "newton", "nu
            "solve_numerical", "solve_orbit_numerical", "trig_polynomial"]
 
 
-@njit(cache=True, error_model="numpy")
-def _psi_site(fid, fp, z, order, out, o, s, c, r, d, xcache, ic):
-    """``out[o + m − 1] = ψ_m(z)``, ``m = 1..order`` (``s, c, r, d`` complex scratch of length ``order``; ``fp`` the
-    family's constants: trigonometric ``(γ,)``, elliptic ``_exact_elliptic.elliptic_constants``; ``xcache[ic]`` (9
-    values) the elliptic functions of ``Re z`` kept between points of one segment, zeros before the first)."""
-    if fid == 2:
-        psi_elliptic_cached(z, fp, order, out, o, s, c, r, d, xcache, ic)
-        return
+@njit(cache=True, error_model="numpy", inline="always")
+def _psi_site(fid, fp, z, order, out, o, s, c, r):
+    """``out[o + m − 1] = ψ_m(z)``, ``m = 1..order``, of the rational (``fid`` 0) and trigonometric (1) families
+    (``s, c, r`` complex scratch of length ``order``; ``fp`` the family's constants: trigonometric ``(γ,)``; the
+    elliptic family's basis is :func:`jetgaudin._exact_elliptic.psi_elliptic_cached`)."""
     if fid == 0:
         inv = 1.0 / z
         p = inv
@@ -93,13 +90,14 @@ def _psi_site(fid, fp, z, order, out, o, s, c, r, d, xcache, ic):
         out[o + n] = acc if n % 2 == 0 else -acc
 
 
-@njit(cache=True, error_model="numpy")
-def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot):
+@njit(cache=True, error_model="numpy", inline="always")
+def _psi_point_inline(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot):
     """``psi[o_i + m − 1] = ψ_m(λ − λ_i)`` for every site ``i`` and ``m = 1..2N_i`` (``o_i = 2 Σ_{i' < i} N_i'``);
     the elliptic functions of ``Re(λ − λ_i)`` kept in the row ``slot · (number of sites) + i`` of ``xcache`` (one slot
     per vertical segment: Newton's passes over the ``k`` segments then evaluate them once per segment and solve,
-    not once per pass).  The elliptic basis is called directly (not through :func:`_psi_site`: ~30 ns a node
-    less)."""
+    not once per pass).  Inlined into the two loops over nodes (:func:`_segment`, :func:`nu_numerical`): a call
+    passes its eight arrays with their reference counts, ~75 ns a Clebsch node (150 → 75 ns); the other callers
+    take :func:`_psi_point` (one compiled copy of the basis: the compile time)."""
     o = 0
     if fid == 2:
         for i in range(site_pos.shape[0]):
@@ -110,8 +108,14 @@ def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot):
         return
     for i in range(site_pos.shape[0]):
         order = 2 * site_n[i]
-        _psi_site(fid, fp, lam - site_pos[i], order, psi, o, s, c, r, d, xcache, slot * site_pos.shape[0] + i)
+        _psi_site(fid, fp, lam - site_pos[i], order, psi, o, s, c, r)
         o += order
+
+
+@njit(cache=True, error_model="numpy")
+def _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot):
+    """:func:`_psi_point_inline` as a call (the callers off the loops over nodes)."""
+    _psi_point_inline(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot)
 
 
 def psi_values(fid: int, fp: np.ndarray, lam: np.ndarray, site_pos: np.ndarray, site_n: np.ndarray) -> np.ndarray:
@@ -163,7 +167,7 @@ def _segment(fid, fp, site_pos, site_n, hI, const, dconst, kidx, a, h, xs, perm,
     for t in range(perm.shape[0]):
         q = perm[t]
         lam = complex(a, h * xs[q])
-        _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot)
+        _psi_point_inline(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, slot)
         acc = complex(const, 0.0)
         for cI in range(n2):
             acc += hI[cI] * psi[cI]
@@ -229,6 +233,12 @@ def _weights(fid, fp, site_pos, site_n, hI, const, dconst, kidx, rho, h, xs, per
 
 #: the step (relative to ``|u|``) from which Newton on the fine rule alone continues with the estimate pass (``xs2``)
 _FINE_FROM = 1e-9
+#: the step (relative to ``|u|``) at which Newton leaves the very coarse rule for the coarse one
+_VERY_COARSE_TO = 1e-3
+#: the fast path's coarse phase ends at a step of ``_FAST_COARSE_TO |u|`` (the next error ``~ C·1e-16 |u|``: one pass of
+#: the fine rule then converges) and its quadrature estimate must be at most ``_FAST_QUAD_TOL`` (``exact_chain``'s
+#: ``_QUAD_TOL``), else the orbit takes the path of the rules alone
+_FAST_COARSE_TO, _FAST_QUAD_TOL = 1e-8, 1e-13
 
 
 @njit(cache=True, error_model="numpy")
@@ -284,20 +294,32 @@ def _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho,
 
 @njit(cache=True, error_model="numpy")
 def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2, perm2,
-           w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end):
+           w2, xsc, permc, wc, xsv, permv, wv, step_tol, coarse_tol, iterations, u, om, nu_end):
     """Newton's method of ``ChainExactFlow._newton_numpy`` compiled: ``u = (h_1..h_k, extra unknowns)`` with
     ``Σ_j ω(ρ_j + i h_j) − E u_{k:} = target`` on the matched integrals ``kidx``.  The start from the linearisation
     at ``h = 0`` (``∂ω/∂h = −Re[∂ν²/∂I(ρ)/ν(ρ)]``), then steps with the exact Jacobian while ``|h_j| ≤ bound_j``,
-    the Jacobian finite with condition number at most 1e12: first on the coarse rule ``(xsc, permc, wc)`` to
-    ``|Δu| ≤ coarse_tol |u|`` (cheap iterations far from the solution; a step whose nodes are too few to continue
-    ``ν`` takes the rule ``w1``), else (the coarse phase fails, or ``wc`` is empty) from the linear start on the rule
-    ``w1`` to ``|Δu| ≤ _FINE_FROM |u|``; then steps on the rule ``w1`` with the half rule ``w2`` in the same pass (nodes
-    ``xs2``, their continuation order ``perm2``) until every ``|Δu| ≤ step_tol |u|`` (quadratic convergence: one
-    step where the coarse rule has converged to round-off, else two).  The solution is the fine rule's (the coarse
-    one only gives the start), so the result is that of Newton on the fine rule alone to round-off.  Returns
-    ``(status, quadrature estimate)``: status 0 converged (``u``; ``om`` (k, n_keep) by the rule ``w1`` and
-    ``nu_end`` (k,) at the last point evaluated, ``u`` + the last step: the residual there is ``O(|Δu|)``, and
-    ``ν`` there only chooses the maps' root), 1 no solution."""
+    the Jacobian finite with condition number at most 1e12.  The solution is the fine rule's (``w1``): the coarser
+    rules only find the start of its iterations, so the result is that of Newton on the fine rule alone to round-off.
+
+    * **The fast path** (with both ``wv`` and ``wc``): steps on the very coarse rule ``(xsv, permv, wv)`` to
+      ``|Δu| ≤ _VERY_COARSE_TO |u|``, on the coarse rule ``(xsc, permc, wc)`` to ``_FAST_COARSE_TO |u|`` (a segment
+      whose nodes are too few to continue ``ν`` takes the rule ``w1`` in that pass), then on the rule ``w1`` until
+      every ``|Δu| ≤ step_tol |u|`` (one pass where the coarse rule has converged, else two); the estimate is
+      ``|Q_w1 − Q_wc|``, the coarse rule's weights carried from its last point ``h_c`` to the fine rule's ``h_f`` to
+      first order (``ω_c + ∂ω/∂h (h_f − h_c)``, an error ``~|ω''| |h_f − h_c|² ≲ 1e-16 |u|²|ω''|``): accepted at
+      most ``_FAST_QUAD_TOL``.  Any failure (and an estimate above it) leaves it for the path below, from the same
+      start, whose result is then the same bits: the orbits solved are those the path below solves, and a few more
+      (none among the 22 states of ``benchmarks/exact_chain_roundoff.py`` at 60 step sizes each; on a chain with two
+      close sites, 5 steps inside the feasible range where the path below fails; ``tests/test_exact_chain_fast_solve``).
+    * **The path of the rules alone**: on the coarse rule to ``|Δu| ≤ coarse_tol |u|`` (a step whose nodes are too
+      few to continue ``ν`` takes the rule ``w1``), else (the coarse phase fails, or ``wc`` is empty) from the
+      linear start on the rule ``w1`` to ``|Δu| ≤ _FINE_FROM |u|``; then steps on the rule ``w1`` with the half rule
+      ``w2`` in the same pass (nodes ``xs2``, their continuation order ``perm2``) until every
+      ``|Δu| ≤ step_tol |u|``; the estimate ``|Q_w1 − Q_w2|``.
+
+    Returns ``(status, quadrature estimate, fast)``: status 0 converged (``u``; ``om`` (k, n_keep) by the rule ``w1``
+    and ``nu_end`` (k,) at the last point evaluated, ``u`` + the last step: the residual there is ``O(|Δu|)``, and
+    ``ν`` there only chooses the maps' root), 1 no solution; ``fast`` 1 where the fast path gave the solution."""
     k = rho.shape[0]
     nk = kidx.shape[0]
     ne = E.shape[1]
@@ -328,51 +350,86 @@ def newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, b
     JS = np.empty_like(J)
     du = np.empty(k + ne)
     if not (np.all(np.isfinite(J)) and _cond_at_most(J, 1e12, JS)):
-        return 1, 0.0
+        return 1, 0.0, 0
     _lu_solve(J, target, JS, u)
     u0 = u.copy()
-    status = 1
     none = w1[:0]
-    if wc.shape[0]:
-        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc, wc,
-                          none, xs1, perm1, w1, coarse_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d,
-                          xcache, J, res, JS, du, roots_a)
-    if status:  # the coarse phase failed (or none): from the linear start on the fine rule
+    status = 1
+    if wv.shape[0] and wc.shape[0]:
+        # the fast path: the very coarse rule while the steps are large, the coarse rule to a step of 1e-8 |u|, one
+        # or two passes of the fine rule (a segment whose nodes are too few to continue ν takes the fine rule, as the
+        # coarse phase of the path below does)
+        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsv, permv, wv,
+                          none, xs1, perm1, w1, _VERY_COARSE_TO, iterations, u, om, dom, om2, nu_end, f, psi,
+                          s, c, r, d, xcache, J, res, JS, du, roots_a)
+        if not status:
+            status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc,
+                              wc, none, xs1, perm1, w1, _FAST_COARSE_TO, iterations, u, om, dom, om2, nu_end, f,
+                              psi, s, c, r, d, xcache, J, res, JS, du, roots_a)
+        if not status:  # the coarse rule's ω and ∂ω/∂h at its last point h_c (u + the last step)
+            omc = om.copy()
+            domc = dom.copy()
+            hc = u[:k] + du[:k]
+            status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1,
+                              w1, none, none, perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi,
+                              s, c, r, d, xcache, J, res, JS, du, roots_a)
+            if not status:  # the estimate: the coarse rule carried to the fine rule's last point h_f to first order
+                for j in range(k):
+                    dh = (u[j] + du[j]) - hc[j]
+                    for i in range(nk):
+                        om2[j, i] = omc[j, i] + domc[j, i] * dh
+                if _estimate(om, om2) > _FAST_QUAD_TOL:
+                    status = 1
+    if status:  # else the path of the rules alone, from the linear start: every orbit it solves is solved
         u[:] = u0
-        status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1,
-                          none, none, perm1[:0], none, _FINE_FROM, iterations, u, om, dom, om2, nu_end, f, psi, s, c,
-                          r, d, xcache, J, res, JS, du, roots_a)
-    if status:
-        return 1, 0.0
-    # the last steps on the fine rule with the half rule's estimate in the same pass (xs2): om, om2, nu_end at
-    # the last point evaluated, u = that point + the last step (|Δu| ≤ step_tol |u|)
-    if _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs2, perm2, w1, w2, none,
-                perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache, J, res, JS,
-                du, roots_a):
-        return 1, 0.0
+        if wc.shape[0]:
+            status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xsc, permc,
+                              wc, none, xs1, perm1, w1, coarse_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c,
+                              r, d, xcache, J, res, JS, du, roots_a)
+        if status:  # the coarse phase failed (or none): from the linear start on the fine rule
+            u[:] = u0
+            status = _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1,
+                              w1, none, none, perm1[:0], none, _FINE_FROM, iterations, u, om, dom, om2, nu_end, f,
+                              psi, s, c, r, d, xcache, J, res, JS, du, roots_a)
+        if status:
+            return 1, 0.0, 0
+        # the last steps on the fine rule with the half rule's estimate in the same pass (xs2): om, om2, nu_end at
+        # the last point evaluated, u = that point + the last step (|Δu| ≤ step_tol |u|)
+        if _iterate(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs2, perm2, w1, w2,
+                    none, perm1[:0], none, step_tol, iterations, u, om, dom, om2, nu_end, f, psi, s, c, r, d, xcache,
+                    J, res, JS, du, roots_a):
+            return 1, 0.0, 0
+        return 0, _estimate(om, om2), 0
+    return 0, _estimate(om, om2), 1
+
+
+@njit(cache=True, error_model="numpy")
+def _estimate(om, om2):
+    """The quadrature estimate ``max_{j,i} |om − om2| / max_i Σ_j |om_{j,i}|``."""
     quad = 0.0
     scale = 0.0
-    for i in range(nk):
+    for i in range(om.shape[1]):
         tot = 0.0
-        for j in range(k):
+        for j in range(om.shape[0]):
             quad = max(quad, abs(om[j, i] - om2[j, i]))
             tot += abs(om[j, i])
         scale = max(scale, tot)
-    return 0, quad / (scale + 1e-300)
+    return quad / (scale + 1e-300)
 
 
 @njit(cache=True, error_model="numpy")
 def solve_numerical(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1, xs2,
-                    perm2, w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end, quad_tol, res_tol,
-                    period, n0, n_max, branch_tol):
+                    perm2, w2, xsc, permc, wc, xsv, permv, wv, step_tol, coarse_tol, iterations, u, om, nu_end,
+                    quad_tol, res_tol, period, n0, n_max, branch_tol):
     """The whole solve of a family without a uniformizer (elliptic) in one call: :func:`newton`, then the acceptance
     of ``ChainExactFlow._newton`` — the residual ``max_i |Σ_j ω_{j,i} − (E u_{k:})_i − target_i| / scale_i ≤ res_tol``
     (``scale_i = Σ_j |ω_{j,i}| + |target_i| + |(E u_{k:})_i|``, NumPy's sums in the same order) and the branch check
     :func:`branch_numerical` at ``η_j = ρ_j + i u_j`` to ``branch_tol``.  Returns ``(status, quadrature estimate)``:
     0 accepted, 1 no accepted solution, 2 the estimate is above ``quad_tol`` (``u``, ``om``, ``nu_end`` of
     :func:`newton`; the caller takes the adaptive quadrature and checks the rest itself)."""
-    status, quad = newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1, w1,
-                          xs2, perm2, w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end)
+    status, quad, _ = newton(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1, perm1,
+                             w1, xs2, perm2, w2, xsc, permc, wc, xsv, permv, wv, step_tol, coarse_tol, iterations, u,
+                             om, nu_end)
     if status:
         return 1, quad
     if quad > quad_tol:
@@ -408,7 +465,8 @@ def solve_numerical(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, targe
 
 @njit(cache=True, error_model="numpy")
 def solve_orbit_numerical(x, q3, lin, b, forms, fid, fp, site_pos, site_n, dconst, kidx, E, target, rho, bound, xs1,
-                          perm1, w1, xs2, perm2, w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om, nu_end,
+                          perm1, w1, xs2, perm2, w2, xsc, permc, wc, xsv, permv, wv, step_tol, coarse_tol, iterations,
+                          u, om, nu_end,
                           quad_tol, res_tol, period, n0, n_max, branch_tol, im_limit, eta):
     """One orbit's whole solve for the elliptic family in one call (``ChainExactFlow``'s fast path: the Python around
     the compiled calls was ~1/4 of a Clebsch top's every-row call): ``x`` checked finite; its integrals by
@@ -439,7 +497,8 @@ def solve_orbit_numerical(x, q3, lin, b, forms, fid, fp, site_pos, site_n, dcons
         hI[i] = out[0, i]
     const = out[0, n2]
     status, _ = solve_numerical(fid, fp, site_pos, site_n, hI, const, dconst, kidx, E, target, rho, bound, xs1,
-                                perm1, w1, xs2, perm2, w2, xsc, permc, wc, step_tol, coarse_tol, iterations, u, om,
+                                perm1, w1, xs2, perm2, w2, xsc, permc, wc, xsv, permv, wv, step_tol, coarse_tol,
+                                iterations, u, om,
                                 nu_end, quad_tol, res_tol, period, n0, n_max, branch_tol)
     if status:
         return 1
@@ -485,7 +544,7 @@ def nu_numerical(fid, fp, site_pos, site_n, hI, const, period, eta, n0, n_max):
         v = 0j
         for q in range(n + 1):
             lam = complex(a, eta.imag * (q / n))
-            _psi_point(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, 0)
+            _psi_point_inline(fid, fp, lam, site_pos, site_n, psi, s, c, r, d, xcache, 0)
             acc = complex(const, 0.0)
             for cI in range(n2):
                 acc += hI[cI] * psi[cI]

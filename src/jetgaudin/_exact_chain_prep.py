@@ -303,7 +303,7 @@ _F64, _INT64_MAX = np.dtype(float), 2**63 - 1
 
 
 @lru_cache(maxsize=4)
-def _rules_of(nodes: int, coarse: int) -> tuple[np.ndarray, ...]:
+def _rules_of(nodes: int, coarse: int, very_coarse: int) -> tuple[np.ndarray, ...]:
     """The nodes of the compiled solve: ``(xs1, perm1, w1, xs2, perm2, w2, xsc, permc, wc)``, ``xs1`` the
     ``nodes``-point rule's nodes and the end point 1, ``xs2`` those and the ``nodes/2``-point rule's with its end point
     (the estimate pass), ``xsc`` the coarse rule's (``coarse`` points) with the end point, ``perm*`` the order of the
@@ -313,11 +313,13 @@ def _rules_of(nodes: int, coarse: int) -> tuple[np.ndarray, ...]:
     x1, w1 = _gauss_legendre(nodes)
     x2, w2 = _gauss_legendre(nodes // 2)
     xc, wc = _gauss_legendre(coarse)
+    xv, wv = _gauss_legendre(very_coarse)
     xs1 = np.concatenate([x1, [1.0]])
     xs2 = np.concatenate([x1, [1.0], x2, [1.0]])
     xsc = np.concatenate([xc, [1.0]])
+    xsv = np.concatenate([xv, [1.0]])
     return (xs1, np.argsort(xs1, kind="stable"), w1, xs2, np.argsort(xs2, kind="stable"), w2, xsc,
-            np.argsort(xsc, kind="stable"), wc)
+            np.argsort(xsc, kind="stable"), wc, xsv, np.argsort(xsv, kind="stable"), wv)
 
 
 def _advance_fast(flow, plan: tuple | None, X, steps, save_every):

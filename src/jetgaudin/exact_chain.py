@@ -83,6 +83,9 @@ _NODES, _QUAD_TOL = 64, 1e-13
 #: the compiled solve's coarse rule and the step (relative to |u|) at which Newton leaves it for the 64-point rule
 #: (the coarse rule only finds the start of the fine rule's Newton iterations: the solution is the fine rule's)
 _COARSE_NODES, _COARSE_TOL = 16, 1e-9
+#: the compiled solve's very coarse rule, which its fast path takes while Newton's steps are large
+#: (``_exact_chain_kernels.newton``)
+_VERY_COARSE_NODES = 8
 #: the smallest ``R`` of the real-part rule: below it (one site and no branch points: the elliptic family, whose
 #: branch points are not computed) ``ρ_j = λ_c ± c R`` would sit on the site, so a periodic family takes
 #: :func:`_periodic_real_parts` (the Clebsch top) and any other one refuses the orbit
@@ -152,7 +155,7 @@ class _Weights:
 
 
 def _rules() -> tuple[np.ndarray, ...]:  # the compiled solve's nodes (_exact_chain_prep._rules_of of the rules above)
-    return _rules_of(_NODES, _COARSE_NODES)
+    return _rules_of(_NODES, _COARSE_NODES, _VERY_COARSE_NODES)
 
 
 @dataclass(frozen=True, eq=False)
@@ -407,10 +410,10 @@ class _ChainExactFlow(StepByAdvance, Map):
         om = np.empty((k, E.shape[0]))
         nu_end = np.empty(k, dtype=complex)
         K: Any = _kernel_module("jetgaudin._exact_chain_kernels")  # Numba (imported on first use)
-        status, quad = K.newton(fid, _family_constants(fam), pos, orders, hI, const, dconst, kidx,
-                                np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(target),
-                                np.ascontiguousarray(rho, dtype=float), np.ascontiguousarray(bound, dtype=float),
-                                *_rules(), _STEP_TOL, _COARSE_TOL, _ITERATIONS, u, om, nu_end)
+        status, quad, _ = K.newton(fid, _family_constants(fam), pos, orders, hI, const, dconst, kidx,
+                                   np.ascontiguousarray(E, dtype=float), np.ascontiguousarray(target),
+                                   np.ascontiguousarray(rho, dtype=float), np.ascontiguousarray(bound, dtype=float),
+                                   *_rules(), _STEP_TOL, _COARSE_TOL, _ITERATIONS, u, om, nu_end)
         return None if status else (u, om, quad, nu_end)
 
     def _newton_numpy(self, x, keep, E, target, rho, bound):
