@@ -163,3 +163,88 @@ def test_orbit_dt_sites_takes_substeps(capsys, tmp_path):
     _, rows = table(tmp_path / "b" / "orbit.csv")
     ref = jg.integrate(model.hamiltonian(w), X0, 1.0, rtol=1e-13, atol=1e-13).X[-1]
     assert np.max(np.abs(rows[-1, 2:] - ref)) < 1e-11
+
+
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
+def test_orbit_dt_sites_runs_the_route_asked_for(capsys, tmp_path, backend):
+    """``--backend`` of a chain's exact run is honoured (it was ignored: a ChainExactFlow was built on ``auto``, which
+    the run layer recorded as the NumPy route).  Both runs are the same exact flow: the compiled and NumPy routes
+    agree to 1e-12 after 20 steps (each step's parameters from the integrals at its chunk's start, solved by each
+    route to ~1e-15; the orbit's round-off grows with the steps)."""
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2", "--family", "elliptic", "--modulus", 0.6, "--b", 0,
+                           "--hamiltonian", "0,0.7,0,0,1.0", "--init", "0.3,-0.5,0.4,0.8,0.2,-0.3", "--dt", 0.9,
+                           "--steps", 20, "--no-plots", "--backend", backend, "--out", tmp_path / "run")
+    assert code == 0, err
+    rec = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert rec["map"]["kind"] == "chain_exact" and rec["map"]["backend"] == backend
+    _, rows = table(tmp_path / "run" / "orbit.csv")
+    H = jg.clebsch_top(0.6).hamiltonian([0, 0.7, 0, 0, 1.0])
+    ref = jg.ChainExactFlow(H, 0.9, backend="numpy").iterate(np.array([0.3, -0.5, 0.4, 0.8, 0.2, -0.3]), 20)
+    assert np.max(np.abs(rows[:, 2:] - ref)) < 1e-12
+
+
+def test_orbit_dt_sites_auto_takes_the_compiled_route_for_a_long_run(capsys, tmp_path):
+    """``auto`` on 20 000 steps: the compiled route whatever the state of Numba's cache (estimated NumPy ~110 s,
+    compiled at most ~46 s with a compile), as run.json records it: the route of the run layer had been the NumPy one
+    for every chain exact run (the Clebsch top at ~160 steps/s)."""
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2", "--family", "elliptic", "--modulus", 0.6, "--b", 0,
+                           "--hamiltonian", "0,0.7,0,0,1.0", "--init", "0.3,-0.5,0.4,0.8,0.2,-0.3", "--dt", 0.9,
+                           "--steps", 20000, "--save-every", 1000, "--no-plots", "--out", tmp_path / "run")
+    assert code == 0, err
+    rec = json.loads((tmp_path / "run" / "run.json").read_text())
+    assert rec["map"]["backend"] == "compiled" and rec["status"] == "completed"
+
+
+def test_the_exact_chain_route_rule():
+    """``AUTO``'s rule for the exact chain step (``gaudin._backend.exact_route_costs``; the run layer resolves it
+    before its first call): the NumPy route for a short run where the compiled one must first be compiled or loaded,
+    the compiled route for a long one, the compiled route as soon as its kernels are loaded."""
+    from jetgaudin.gaudin._backend import exact_route_costs
+
+    fam = jg.clebsch_top(0.6).family
+    pick = lambda steps, state: (lambda c: "compiled" if c.compiled <= c.numpy else "numpy")(  # noqa: E731
+        exact_route_costs(fam, 2, 1, steps, 2, 1, state))
+    assert [pick(n, "cold") for n in (10, 1000, 10**4, 10**5)] == ["numpy", "numpy", "compiled", "compiled"]
+    assert [pick(n, "cached") for n in (10, 30, 1000)] == ["numpy", "numpy", "compiled"]
+    assert pick(1, "loaded") == "compiled"
+    # the orbits of a batch cost one by one on both routes; a sub-step costs its maps
+    c1, c4 = exact_route_costs(fam, 2, 1, 500, 2, 1, "loaded"), exact_route_costs(fam, 2, 4, 500, 2, 1, "loaded")
+    assert c4.numpy == pytest.approx(4 * c1.numpy) and c4.compiled == pytest.approx(4 * c1.compiled)
+    assert exact_route_costs(fam, 2, 1, 500, 2, 3, "loaded").numpy > 2.5 * c1.numpy
+
+
+def test_the_chain_exact_flow_s_auto_route_is_its_compiled_one():
+    """``resolved_backend`` (what the run layer records) of an ``auto`` ChainExactFlow on a long run: compiled for
+    every family with the compiled solve, NumPy for the elliptic family below modulus 1e-3 (whose solve has no
+    compiled route; ``backend="compiled"`` is refused there)."""
+    X9 = np.array([0.3, -0.2, 0.4, 0.1, 0.5, -0.3, -0.2, 0.1, 0.6])
+    trig = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 1), (2.5, 1)], family="trigonometric", gamma=0.5)
+    rat = jg.GaudinModel(1.0, [(0.0, 1), (1.0, 2)])
+    for H, x in ((jg.clebsch_top(0.6).hamiltonian([0, 0.7, 0, 0, 1.0]), X9[:6]),
+                 (trig.hamiltonian([0.3, 0, -0.2, 0, 0.5, 0, 0.4]), X9),
+                 (rat.hamiltonian([0.3, 0.1, -0.2, 0.4, 0.5, 0.2]), X9)):
+        flow = jg.ChainExactFlow(H, 0.05)
+        assert flow.has_compiled and flow.resolved_backend(x, 10**5) is jg.Backend.COMPILED
+        assert flow.with_backend("numpy").resolved_backend(x, 10**5) is jg.Backend.NUMPY
+    low = jg.clebsch_top(1e-4).hamiltonian([0, 0.7, 0, 0, 1.0])
+    flow = jg.ChainExactFlow(low, 0.05)
+    assert not flow.has_compiled and flow.resolved_backend(X9[:6], 10**5) is jg.Backend.NUMPY
+    with pytest.raises(jg.InvalidParameterError, match="compiled"):
+        jg.ChainExactFlow(low, 0.05, backend="compiled")
+
+
+def test_the_chain_exact_flow_prepares_its_compiled_route():
+    """``prepare_kernels`` (the run layer calls it before its loop, so that a compile is announced and kept out of the
+    rate): nothing for the NumPy route; for the compiled route the report of the kernels of the family's route, here
+    already loaded in this process (no message), and a flow whose first state is infeasible is not an error there
+    (the run reports it at its first call)."""
+    H = jg.clebsch_top(0.6).hamiltonian([0, 0.7, 0, 0, 1.0])
+    x = np.array([0.3, -0.5, 0.4, 0.8, 0.2, -0.3])
+    said = []
+    flow = jg.ChainExactFlow(H, 0.9, backend="compiled")
+    flow.advance(x, None, 1, 1)  # the kernels loaded in this process
+    report = flow.prepare_kernels(x, 10, said.append)
+    assert report.state == "loaded" and said == []
+    assert "solve_orbit_numerical" in " ".join(report.kernels)
+    assert jg.ChainExactFlow(H, 0.9, backend="numpy").prepare_kernels(x, 10**6, said.append) is None
+    assert jg.ChainExactFlow(H, 5.0, backend="compiled").prepare_kernels(x, 10, said.append).state == "loaded"

@@ -38,6 +38,7 @@ sites are close compared with ``R`` (the maps must then separate the sites' weig
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -214,6 +215,70 @@ class _ChainExactFlow(StepByAdvance, Map):
     @property
     def model(self):
         return self.H.model
+
+    @property
+    def has_compiled(self) -> bool:  # type: ignore[override]
+        """Whether the compiled route exists: the family's compiled solve (:data:`COMPILED_FAMILIES`; elliptic:
+        modulus ``≥ 1e-3``), with the compiled loop of the maps (without this property the run layer recorded the
+        NumPy route for every ``AUTO`` run: ``jetgaudin orbit --sites … --dt`` ran the Clebsch top at ~160 steps/s,
+        the compiled route at ~2·10⁴ with the run layer's chunks)."""
+        fam = self.model.family
+        return COMPILED_FAMILIES.get(fam.name) is not None and not (
+            fam.name == "elliptic" and not float(fam.modulus) >= 1e-3)
+
+    def route_costs(self, X: Any, steps: Any):
+        """The estimated seconds of ``steps`` steps of the states ``X`` on each route, as the run layer calls the flow
+        (``jetgaudin.gaudin._backend.exact_route_costs``: a call per chunk of 256 steps, each solving the parameters;
+        the compiled route's compile or load included)."""
+        from .gaudin._backend import exact_route_costs
+
+        keep, E, _ = self._design
+        shape = np.shape(X)
+        return exact_route_costs(self.model.family, self.model.M, int(np.prod(shape[:-1])) if shape else 1,
+                                 0 if steps is None else int(steps), int(keep.sum()) - int(E.shape[1]), self.substeps)
+
+    def _auto_backend(self, X: Any, steps: Any) -> Backend:
+        """``AUTO`` as the run layer resolves it (``Map.resolved_backend``, recorded before the first call): the route
+        of the smaller estimated time (:meth:`route_costs`; estimates within √3 of the true times never pick a route
+        3× slower).  The library's own :meth:`advance` of an ``AUTO`` flow takes the compiled route."""
+        cost = self.route_costs(X, steps)
+        return Backend.COMPILED if cost.compiled <= cost.numpy else Backend.NUMPY
+
+    def prepare_kernels(self, X: Any = None, steps: Any = None, notify: Any = None):
+        """Compile (or load) the kernels of the compiled route visibly before a run of ``steps`` steps from ``X`` that
+        takes it (:meth:`resolved_backend`): a message with the expected time first and one when done where they
+        must be compiled, quietly and timed where Numba's cache holds them, nothing where they are loaded or the
+        NumPy route is taken (the run layer calls it before its loop, so that the rate excludes the compile).  The
+        compile is one call of the flow on the first state (solve and one step: the kernels of the route).  Returns
+        a ``CompileReport`` or ``None``."""
+        from .backlund.kernels._select import prepare_call
+        from .gaudin._backend import _EXACT_KERNELS, EXACT_COMPILE_S, _module_state
+
+        if X is None:  # everything it could need: a long run of the model's first state given
+            return None
+        if not np.size(X) or self.resolved_backend(X, 10**6 if steps is None else steps) is not Backend.COMPILED:
+            return None
+        name = self.model.family.name
+        need = _EXACT_KERNELS.get(name, _EXACT_KERNELS["elliptic"])
+        state = _module_state(need)
+        x0 = np.reshape(np.asarray(X, dtype=float), (-1, np.shape(X)[-1]))[0].copy()
+        flow = self if self.backend is Backend.COMPILED else dataclasses.replace(self, backend=Backend.COMPILED)
+
+        def call() -> None:
+            try:
+                flow.advance(x0, None, 1, 1)
+            except StepTooLargeError:  # the run itself reports it (with its dt_max) at its first call
+                pass
+
+        return prepare_call(tuple(f"{m.rsplit('.', 1)[-1]}.{f}" for m, f in need), state == "loaded",
+                            EXACT_COMPILE_S.get(name, EXACT_COMPILE_S["elliptic"]), call, notify, state == "cached")
+
+    def route_notice(self, X: Any, steps: Any) -> str | None:
+        """One line naming the route ``AUTO`` takes where it matters (the NumPy route, with both estimates;
+        ``jetgaudin.gaudin._backend.auto_notice``), else ``None``."""
+        from .gaudin._backend import auto_notice
+
+        return auto_notice(self, X, steps)
 
     @property
     def n_state(self) -> int:

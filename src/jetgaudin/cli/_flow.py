@@ -302,7 +302,7 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
         if isinstance(model, jg.SunGaudinModel):  # su(3): SunExactFlow (gaudin/sun_exact.py)
             fm = model.exact_flow(H, dt, substeps, jg.Backend.parse(kernel))
         elif model is not None:
-            fm = jg.ChainExactFlow(H, dt, substeps=substeps)
+            fm = jg.ChainExactFlow(H, dt, substeps=substeps, backend=jg.Backend.parse(kernel))
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
     try:  # su(3): solved here once for the run (bind_run), not again at every chunk

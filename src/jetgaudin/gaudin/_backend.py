@@ -27,8 +27,8 @@ import numpy as np
 from .._errors import InvalidParameterError
 from ..maps import Backend, auto_gpu, check_gpu
 
-__all__ = ["AUTO_MIN_WORK", "CHAIN_COMPILE_S", "RouteCost", "auto_notice", "kernel_state", "resolve_backend",
-           "route_costs"]
+__all__ = ["AUTO_MIN_WORK", "CHAIN_COMPILE_S", "RouteCost", "auto_notice", "exact_route_costs", "kernel_state",
+           "resolve_backend", "route_costs"]
 
 #: the work (orbit-steps) :meth:`ChainTwoPointBacklund.prepare_kernels` compiles for when called without arguments
 AUTO_MIN_WORK = 20000
@@ -81,6 +81,74 @@ def _cached(stem: str, func: str) -> bool:
     pattern = f"{stem}.{func}-*.nbi"
     return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
                for d in dirs)
+
+
+#: the exact chain step (:class:`jetgaudin.ChainExactFlow`): the compiled functions of its route per family (the
+#: solve and the loop of the maps), their first-use compile time in a fresh cache (seconds: 44.6, 39.6, 18.4 measured
+#: on the project's 2-vCPU AMD EPYC, ``NUMBA_CACHE_DIR`` empty, each family in a new process) and their load time
+#: from the cache (0.4–0.5 s measured)
+_EXACT_KERNELS = {
+    "elliptic": (("jetgaudin._exact_chain_kernels", "solve_orbit_numerical"),
+                 ("jetgaudin._exact_chain_loop", "rows_family")),
+    "trigonometric": (("jetgaudin._exact_chain_kernels", "newton"),
+                      ("jetgaudin._exact_chain_kernels", "branch_uniformized"),
+                      ("jetgaudin._exact_chain_loop", "rows_family")),
+    "rational": (("jetgaudin._exact_chain_kernels", "newton"), ("jetgaudin._exact_chain_loop", "rows_rational")),
+}
+EXACT_COMPILE_S = {"elliptic": 45.0, "trigonometric": 40.0, "rational": 18.0}
+EXACT_LOAD_S = 0.6
+#: the exact step's set-up per orbit and call (the parameter solve and the maps' 40-digit constants; seconds): the
+#: NumPy route's and the compiled route's (measured as above, ~1.5× the quiet values); its steps cost ``k`` map steps
+#: each (:data:`NUMPY_STEP_S`, :data:`COMPILED_STEP_S`)
+EXACT_SETUP_S = {"elliptic": (7e-2, 7e-3), "trigonometric": (2e-2, 5e-3), "rational": (1e-2, 2e-3)}
+#: the run layer's call of a flow (``run/driver.py``: fixed chunks of ``every · max(1, 256 // every)`` steps; the
+#: exact step solves its parameters at the start of every call)
+EXACT_CHUNK = 256
+
+
+def _module_state(need) -> str:
+    """:func:`kernel_state` of compiled functions named ``(module, function)`` (any package of jetgaudin)."""
+    def loaded(mod: str, func: str) -> bool:
+        return bool(getattr(getattr(sys.modules.get(mod), func, None), "signatures", None))
+
+    def cached(mod: str, func: str) -> bool:
+        parts = mod.split(".")
+        user = os.environ.get("NUMBA_CACHE_DIR")
+        here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the jetgaudin package
+        dirs = [user] if user else [os.path.join(here, *parts[1:-1], "__pycache__"),
+                                    os.path.expanduser("~/.cache/numba")]
+        pattern = f"{parts[-1]}.{func}-*.nbi"
+        return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
+                   for d in dirs)
+
+    if all(loaded(*k) for k in need):
+        return "loaded"
+    return "cached" if all(loaded(*k) or cached(*k) for k in need) else "cold"
+
+
+def exact_route_costs(family, M: int, batch: int, steps: int, maps: int, substeps: int = 1,
+                      state: str | None = None) -> RouteCost:
+    """:class:`RouteCost` of ``steps`` exact steps (``substeps`` sub-steps of ``maps`` two-point maps each) of
+    ``batch`` orbits of a chain of ``M`` components: per orbit and run-layer call (:data:`EXACT_CHUNK` steps) the
+    set-up :data:`EXACT_SETUP_S`, per map step the maps' costs (:data:`NUMPY_STEP_S` per orbit: the exact step runs
+    its orbits one by one; :data:`COMPILED_STEP_S`), and the compiled route's compile or load
+    (:data:`EXACT_COMPILE_S`, :data:`EXACT_LOAD_S`; ``state`` as found now by default).  A family without measured
+    constants is costed as the elliptic one."""
+    name = getattr(family, "name", "")
+    name = name if name in _EXACT_KERNELS else "elliptic"
+    batch, steps = max(1, int(batch)), max(0, int(steps))
+    state = _module_state(_EXACT_KERNELS[name]) if state is None else state
+    scale = (int(M) + 1) / 4
+    calls = -(-steps // EXACT_CHUNK)
+    map_steps = steps * max(1, int(substeps)) * max(1, int(maps))
+    fixed, per_orbit = NUMPY_STEP_S.get(name, _DEFAULT_NUMPY)
+    np_setup, c_setup = EXACT_SETUP_S[name]
+    numpy_s = batch * (calls * np_setup + map_steps * (fixed + per_orbit) * scale)
+    setup = 0.0 if state == "loaded" else (EXACT_LOAD_S if state == "cached" else EXACT_COMPILE_S[name])
+    if state != "loaded" and "numba" not in sys.modules:
+        setup += NUMBA_IMPORT_S
+    compiled_s = setup + batch * (calls * c_setup + map_steps * COMPILED_STEP_S * scale)
+    return RouteCost(numpy_s, compiled_s, setup, state)
 
 
 def kernel_state(family, batch: int = 1) -> str:
@@ -161,7 +229,8 @@ def auto_notice(m, X, steps) -> str | None:
     if m.resolved_backend(X, steps) is not Backend.NUMPY:
         return None
     fam = getattr(getattr(m, "model", None), "family", None)
-    cost = _costs(np.asarray(X), steps, fam, None)
+    own = getattr(m, "route_costs", None)  # a map with its own estimates (the exact chain step)
+    cost = own(X, steps) if callable(own) else _costs(np.asarray(X), steps, fam, None)
     why = {"cold": "compiling its kernel", "cached": "loading its kernel"}.get(cost.state, "its set-up")
     return (f"backend auto: the NumPy route (about {cost.numpy:.2g} s; the compiled route would take about "
             f"{cost.compiled:.2g} s, {why} included); give --backend compiled to take it")
