@@ -426,6 +426,21 @@ class ExactFlow(_SystemMap):
             f"{type(H).__name__}"
         )
 
+    def bind_run(self, X0: Any) -> Any:
+        """The implementation's :meth:`bind_run` (the run layer's per-run set-up, :func:`jetgaudin.run.spec.run_map`:
+        the chain exact flow's parameters), wrapped; this map where the implementation has none."""
+        impl = self._r()
+        bind = getattr(type(impl), "bind_run", None)
+        new = bind(impl, X0) if callable(bind) else impl
+        return self if new is impl else self._wrap(new)
+
+    def unbound(self) -> Any:
+        """The implementation's :meth:`unbound`, wrapped; this map where the implementation has none."""
+        impl = self._r()
+        unbind = getattr(type(impl), "unbound", None)
+        new = unbind(impl) if callable(unbind) else impl
+        return self if new is impl else self._wrap(new)
+
     @staticmethod
     def _system_of(impl: Any, sk: str) -> Any:
         return impl.H

@@ -38,6 +38,7 @@ sites are close compared with ``R`` (the maps must then separate the sites' weig
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -187,6 +188,8 @@ class _ChainExactFlow(StepByAdvance, Map):
     kernel: Any = None  # the alias of backend (None once parsed into backend)
     chunk_invariant: ClassVar[bool] = False
     public_name: ClassVar[str] = "ExactFlow"  # the class its messages name (jetgaudin.maps.map_name)
+    #: ``(X0 (B, 3M), [(η, θ, ν) per orbit])`` of :meth:`bind_run` (set on the bound copy only)
+    _bound: ClassVar[Any] = None
 
     def __post_init__(self) -> None:
         model = getattr(self.H, "model", None)
@@ -227,9 +230,9 @@ class _ChainExactFlow(StepByAdvance, Map):
             fam.name == "elliptic" and not float(fam.modulus) >= 1e-3)
 
     def route_costs(self, X: Any, steps: Any):
-        """The estimated seconds of ``steps`` steps of the states ``X`` on each route, as the run layer calls the flow
-        (``jetgaudin.gaudin._backend.exact_route_costs``: a call per chunk of 256 steps, each solving the parameters;
-        the compiled route's compile or load included)."""
+        """The estimated seconds of a run of ``steps`` steps of the states ``X`` on each route
+        (``jetgaudin.gaudin._backend.exact_route_costs``: the parameters solved once, :meth:`bind_run`; the compiled
+        route's compile or load included)."""
         from .gaudin._backend import exact_route_costs
 
         keep, E, _ = self._design
@@ -562,18 +565,23 @@ class _ChainExactFlow(StepByAdvance, Map):
         flat = X.reshape(-1, X.shape[-1])
         return np.array([abs(self._largest_dt(x, 10 * self.dt)) for x in flat]).reshape(X.shape[:-1])
 
-    def _orbit(self, x: np.ndarray, steps: int, save_every: int, rows: np.ndarray) -> np.ndarray:
+    def _orbit(self, x: np.ndarray, steps: int, save_every: int, rows: np.ndarray,
+               params: tuple | None = None) -> np.ndarray:
         """``steps`` steps of one orbit ``x``: the saved rows into ``rows`` ``(steps // save_every, 3M)``; returns
         the last state.  The maps run unrotated (they commute with the rotation), and each row is rotated once
         through its accumulated angle ``n s θ``: no rotation's round-off carries over to the next row.  Maps with
         a compiled kernel (every family's): every step in one compiled loop (:mod:`jetgaudin._exact_chain_loop`),
         each map's ``ν1`` the solve's ``ν(η_j)`` (checked against ``model.nu``) and then continued; else ``k s``
-        steps of each map per call of its NumPy route (the maps commute)."""
-        fast = _orbit_fast(self, x, steps, save_every, self._fast())  # the elliptic family's fast path (same bits)
-        if fast is not None:
-            rows[...] = fast[0]
-            return fast[1]
-        eta, theta, nu = self._parameters(x, checked=True)  # advance checked X (per_orbit_buffers)
+        steps of each map per call of its NumPy route (the maps commute).  ``params``: the orbit's ``(η, θ, ν)``
+        (:meth:`bind_run`), else solved here."""
+        if params is None:
+            fast = _orbit_fast(self, x, steps, save_every, self._fast())  # the elliptic fast path (same bits)
+            if fast is not None:
+                rows[...] = fast[0]
+                return fast[1]
+            eta, theta, nu = self._parameters(x, checked=True)  # advance checked X (per_orbit_buffers)
+        else:
+            eta, theta, nu = params
         s = self.substeps
         # |Im η| at round-off: weights ~1e-17, the map is the identity (left out)
         used = [j for j, e in enumerate(eta) if abs(e.imag) > 1e-13 * max(abs(e.real), 1.0)]
@@ -624,17 +632,53 @@ class _ChainExactFlow(StepByAdvance, Map):
         rows[...] = out
         return final
 
+    def bind_run(self, X0) -> _ChainExactFlow:
+        """This flow with each orbit's parameters ``(η_j, θ, ν(η_j))`` solved once, at the run's initial states ``X0``
+        ``(3M,)`` or ``(B, 3M)`` (the run layer's :func:`jetgaudin.run.spec.run_map`): its :meth:`advance` of the
+        run's orbits, in order, uses them instead of solving at every call (they are functions of the integrals,
+        constant along each orbit; solving them again at every chunk of the run moved them by round-off and paid
+        the maps' 40-digit constants, ~5–10 ms, at every chunk: the Clebsch top's ``orbit --dt`` ran at ~2·10⁴
+        steps/s).  Only for the run's own orbits: a batch of ``b ≤ B`` orbits is taken as the run's first ``b`` (the
+        driver's reference step), so a flow bound here must not be given other states.  The same flow when already
+        bound at these ``X0``; raises what :meth:`parameters` raises (``orbit i:`` named in a batch)."""
+        X0 = np.asarray(self.model.check_state(X0), dtype=float)
+        flat = np.ascontiguousarray(X0.reshape(-1, X0.shape[-1]))
+        if self._bound is not None and np.array_equal(self._bound[0], flat):
+            return self
+        params = []
+        for i, x in enumerate(flat):
+            try:
+                params.append(self._parameters(np.ascontiguousarray(x), checked=True))
+            except StepTooLargeError as exc:
+                raise StepTooLargeError(f"orbit {i}: {exc}" if len(flat) > 1 else str(exc),
+                                        dt_max=exc.dt_max) from None
+        bound = copy.copy(self)
+        object.__setattr__(bound, "_bound", (flat.copy(), params))
+        return bound
+
+    def unbound(self) -> _ChainExactFlow:
+        """This flow solving the parameters at the start of every :meth:`advance` call (the run layer's way before
+        :meth:`bind_run`; a run directory written that way is resumed that way: :mod:`jetgaudin.run.replay`)."""
+        if self._bound is None:
+            return self
+        out = copy.copy(self)
+        object.__setattr__(out, "_bound", None)
+        return out
+
     def advance(self, X: np.ndarray, carry: Any, steps: int, save_every: int = 1) -> Advance:
-        """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit), rows every
-        ``save_every`` (class doc)."""
-        fast = _advance_fast(self, self._fast(), X, steps, save_every)  # one orbit, elliptic: the fast path
-        if fast is not None:
-            return fast
+        """``steps`` exact steps from ``X`` ``(..., 3M)`` (parameters solved at ``X``, per orbit, or those of
+        :meth:`bind_run`), rows every ``save_every`` (class doc)."""
+        bound = self._bound
+        if bound is None:
+            fast = _advance_fast(self, self._fast(), X, steps, save_every)  # one orbit, elliptic: the fast path
+            if fast is not None:
+                return fast
         steps, save_every, X, flat, rows, final = per_orbit_buffers(self.model, X, steps, save_every)
+        params = bound[1] if bound is not None and len(flat) <= len(bound[1]) else None
         if steps:
             for i, x in enumerate(flat):
                 try:
-                    final[i] = self._orbit(x, steps, save_every, rows[:, i])
+                    final[i] = self._orbit(x, steps, save_every, rows[:, i], None if params is None else params[i])
                 except StepTooLargeError as exc:
                     raise StepTooLargeError(f"orbit {i}: {exc}", dt_max=exc.dt_max) from None
         zeros = np.zeros(X.shape[:-1])

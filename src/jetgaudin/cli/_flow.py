@@ -305,12 +305,12 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
             fm = jg.ChainExactFlow(H, dt, substeps=substeps, backend=jg.Backend.parse(kernel))
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
-    try:  # su(3): solved here once for the run (bind_run), not again at every chunk
+    try:  # su(3), chains: solved here once for the run (bind_run), not again at every chunk; a top: checked here
         bind = getattr(fm, "bind_run", None)
-        if bind is not None:
-            fm = bind(np.asarray(X0, dtype=float))
-        else:
+        bound = fm if bind is None else bind(np.asarray(X0, dtype=float))
+        if bound is fm:  # binding solved nothing (the top's flow has no per-run set-up)
             fm.parameters(np.asarray(X0, dtype=float))
+        fm = bound
     except jg.StepTooLargeError as exc:
         dmax = getattr(exc, "dt_max", None)
         if dmax is None:

@@ -97,13 +97,11 @@ _EXACT_KERNELS = {
 }
 EXACT_COMPILE_S = {"elliptic": 45.0, "trigonometric": 40.0, "rational": 18.0}
 EXACT_LOAD_S = 0.6
-#: the exact step's set-up per orbit and call (the parameter solve and the maps' 40-digit constants; seconds): the
-#: NumPy route's and the compiled route's (measured as above, ~1.5× the quiet values); its steps cost ``k`` map steps
-#: each (:data:`NUMPY_STEP_S`, :data:`COMPILED_STEP_S`)
+#: the exact step's set-up per orbit and run (the parameter solve and the maps' 40-digit constants, once: the run
+#: layer binds the flow at X0, ``ChainExactFlow.bind_run``; seconds): the NumPy route's and the compiled route's
+#: (measured as above, ~1.5× the quiet values); its steps cost ``k`` map steps each (:data:`NUMPY_STEP_S`,
+#: :data:`COMPILED_STEP_S`)
 EXACT_SETUP_S = {"elliptic": (7e-2, 7e-3), "trigonometric": (2e-2, 5e-3), "rational": (1e-2, 2e-3)}
-#: the run layer's call of a flow (``run/driver.py``: fixed chunks of ``every · max(1, 256 // every)`` steps; the
-#: exact step solves its parameters at the start of every call)
-EXACT_CHUNK = 256
 
 
 def _module_state(need) -> str:
@@ -128,26 +126,25 @@ def _module_state(need) -> str:
 
 def exact_route_costs(family, M: int, batch: int, steps: int, maps: int, substeps: int = 1,
                       state: str | None = None) -> RouteCost:
-    """:class:`RouteCost` of ``steps`` exact steps (``substeps`` sub-steps of ``maps`` two-point maps each) of
-    ``batch`` orbits of a chain of ``M`` components: per orbit and run-layer call (:data:`EXACT_CHUNK` steps) the
-    set-up :data:`EXACT_SETUP_S`, per map step the maps' costs (:data:`NUMPY_STEP_S` per orbit: the exact step runs
-    its orbits one by one; :data:`COMPILED_STEP_S`), and the compiled route's compile or load
-    (:data:`EXACT_COMPILE_S`, :data:`EXACT_LOAD_S`; ``state`` as found now by default).  A family without measured
-    constants is costed as the elliptic one."""
+    """:class:`RouteCost` of a run of ``steps`` exact steps (``substeps`` sub-steps of ``maps`` two-point maps each)
+    of ``batch`` orbits of a chain of ``M`` components: per orbit the set-up :data:`EXACT_SETUP_S` (once: the run
+    binds the flow), per map step the maps' costs (:data:`NUMPY_STEP_S` per orbit: the exact step runs its orbits
+    one by one; :data:`COMPILED_STEP_S`), and the compiled route's compile or load (:data:`EXACT_COMPILE_S`,
+    :data:`EXACT_LOAD_S`; ``state`` as found now by default).  The run layer's own cost per call is the same on
+    both routes (left out).  A family without measured constants is costed as the elliptic one."""
     name = getattr(family, "name", "")
     name = name if name in _EXACT_KERNELS else "elliptic"
     batch, steps = max(1, int(batch)), max(0, int(steps))
     state = _module_state(_EXACT_KERNELS[name]) if state is None else state
     scale = (int(M) + 1) / 4
-    calls = -(-steps // EXACT_CHUNK)
     map_steps = steps * max(1, int(substeps)) * max(1, int(maps))
     fixed, per_orbit = NUMPY_STEP_S.get(name, _DEFAULT_NUMPY)
     np_setup, c_setup = EXACT_SETUP_S[name]
-    numpy_s = batch * (calls * np_setup + map_steps * (fixed + per_orbit) * scale)
+    numpy_s = batch * (np_setup + map_steps * (fixed + per_orbit) * scale)
     setup = 0.0 if state == "loaded" else (EXACT_LOAD_S if state == "cached" else EXACT_COMPILE_S[name])
     if state != "loaded" and "numba" not in sys.modules:
         setup += NUMBA_IMPORT_S
-    compiled_s = setup + batch * (calls * c_setup + map_steps * COMPILED_STEP_S * scale)
+    compiled_s = setup + batch * (c_setup + map_steps * COMPILED_STEP_S * scale)
     return RouteCost(numpy_s, compiled_s, setup, state)
 
 
