@@ -253,3 +253,38 @@ def test_a_directory_filled_during_the_compile_is_refused(tmp_path, monkeypatch)
     with pytest.raises(jg.RunDirectoryError, match="not empty"):
         runlayer.start(_spec(100), out, notify=lambda m: None)
     assert sorted(p.name for p in out.iterdir()) == ["other.txt"]
+
+
+def test_the_compile_guard_s_handler_only_records_the_signal():
+    """The handler of the compile guard never raises (it did: a signal landing inside ``Thread.start``'s wait for
+    the compile's worker thread broke ``threading.Condition``'s lock, ``RuntimeError: release unlocked lock`` and a
+    traceback instead of one line, one run in ~50 of ``test_a_signal_during_the_compile_ends_with_one_line`` under
+    load); the waiting thread raises ``CompileInterrupted`` itself, within its 0.05 s poll, and a signal recorded after
+    the compile and before the handlers are restored is raised on leaving the guard."""
+    import threading
+
+    from jetgaudin.run.driver import CompileInterrupted, RaiseOnSignal
+
+    started = threading.Event()
+
+    def compile_():
+        started.set()
+        time.sleep(0.5)
+
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(CompileInterrupted) as exc:
+        with RaiseOnSignal(True) as guard:
+            assert guard.enabled
+            threading.Timer(0.1, lambda: guard._handler(signal.SIGTERM, None)).start()  # as the handler is called
+            t0 = time.monotonic()
+            guard.call(compile_)
+    assert exc.value.signum == signal.SIGTERM and time.monotonic() - t0 < 0.4 and started.is_set()
+    with RaiseOnSignal(True) as guard:
+        guard._handler(signal.SIGINT, None)  # records, raises nothing here
+        assert guard.signum == signal.SIGINT
+        guard.signum = 0
+    with pytest.raises(CompileInterrupted):
+        with RaiseOnSignal(True) as guard:
+            assert guard.call(lambda: 7) == 7
+            guard._handler(signal.SIGINT, None)  # after the compile: raised on leaving
+    assert signal.getsignal(signal.SIGINT) == before  # the handlers restored
