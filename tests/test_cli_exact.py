@@ -248,3 +248,13 @@ def test_the_chain_exact_flow_prepares_its_compiled_route():
     assert "solve_orbit_numerical" in " ".join(report.kernels)
     assert jg.ChainExactFlow(H, 0.9, backend="numpy").prepare_kernels(x, 10**6, said.append) is None
     assert jg.ChainExactFlow(H, 5.0, backend="compiled").prepare_kernels(x, 10, said.append).state == "loaded"
+
+
+def test_orbit_dt_sites_backend_compiled_without_the_compiled_solve_is_one_line(capsys, tmp_path):
+    """An elliptic modulus below 1e-3 has no compiled exact solve: ``--backend compiled`` is refused in one line
+    naming ``--backend`` (it named ``--dt``), and nothing is written."""
+    code, _, err = run_cli(capsys, "orbit", "--sites", "0:2", "--family", "elliptic", "--modulus", 1e-4, "--b", 0,
+                           "--hamiltonian", "0,0.7,0,0,1.0", "--init", "0.3,-0.5,0.4,0.8,0.2,-0.3", "--dt", 0.4,
+                           "--steps", 5, "--no-plots", "--backend", "compiled", "--out", tmp_path / "run")
+    assert one_line_error(code, err, "--backend", "compiled")
+    assert not (tmp_path / "run").exists()

@@ -302,9 +302,12 @@ def exact_map(H, dt: float, substeps: int, X0, model=None, kernel: str = "auto")
         if isinstance(model, jg.SunGaudinModel):  # su(3): SunExactFlow (gaudin/sun_exact.py)
             fm = model.exact_flow(H, dt, substeps, jg.Backend.parse(kernel))
         elif model is not None:
-            fm = jg.ChainExactFlow(H, dt, substeps=substeps, backend=jg.Backend.parse(kernel))
+            fm = jg.ChainExactFlow(H, dt, substeps=substeps)
         else:
             fm = jg.ExactFlow(H, dt, substeps, jg.Backend.parse(kernel))
+    if model is not None and not isinstance(model, jg.SunGaudinModel) and kernel != "auto":
+        with cm.blame("--backend"):  # a family without the compiled solve refuses 'compiled', naming --backend
+            fm = fm.with_backend(kernel)
     try:  # su(3), chains: solved here once for the run (bind_run), not again at every chunk; a top: checked here
         bind = getattr(fm, "bind_run", None)
         bound = fm if bind is None else bind(np.asarray(X0, dtype=float))
