@@ -48,6 +48,8 @@ def dump(out: str, other: bool = False) -> None:
             E1 = jg.ExactFlow(H, 1.0)
             dmax = float(E1.max_dt(x))
             n = int(np.ceil(T / (0.9 * dmax)))
+            while E1._solve(x, T / n) is None:  # a hole below dt_max (feasibility is not monotone): the next n
+                n += 1
             E = jg.ExactFlow(H, T / n)
             eta, theta = E.parameters(x)
             feas = np.array([E1._solve(x, f * dmax) is not None for f in FRACTIONS])
