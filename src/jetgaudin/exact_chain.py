@@ -257,7 +257,7 @@ class _ChainExactFlow(StepByAdvance, Map):
         from .backlund.kernels._select import prepare_call
         from .gaudin._backend import _EXACT_KERNELS, EXACT_COMPILE_S, _module_state
 
-        if X is None:  # everything it could need: a long run of the model's first state given
+        if X is None:  # no state: nothing to solve the parameters on (the compile is one call of the flow)
             return None
         if not np.size(X) or self.resolved_backend(X, 10**6 if steps is None else steps) is not Backend.COMPILED:
             return None

@@ -67,20 +67,37 @@ def _group(family, batch: int) -> str:
     return "batch" if batch > 1 else "orbit"
 
 
-def _loaded(stem: str, func: str) -> bool:
-    mod = sys.modules.get(f"{__package__}.{stem}")
-    return bool(getattr(getattr(mod, func, None), "signatures", None))
+def _module(name: str) -> str:
+    """The full module name of ``name``: a module of this package by its stem (``_family_kernel``), else as given
+    (``jetgaudin._exact_chain_kernels``)."""
+    return name if name.startswith("jetgaudin.") else f"{__package__}.{name}"
 
 
-def _cached(stem: str, func: str) -> bool:
-    """Numba's cache holds an index file of ``stem.func`` (next to the sources, under ``NUMBA_CACHE_DIR`` when set,
-    or the user-wide cache); a wrong guess costs time, never correctness."""
+def _loaded(name: str, func: str) -> bool:
+    """The compiled function ``func`` of the module ``name`` (:func:`_module`) is compiled or loaded in this
+    process."""
+    return bool(getattr(getattr(sys.modules.get(_module(name)), func, None), "signatures", None))
+
+
+def _cached(name: str, func: str) -> bool:
+    """Numba's cache holds an index file of ``func`` of the module ``name`` (:func:`_module`; next to the sources,
+    under ``NUMBA_CACHE_DIR`` when set, or the user-wide cache); a wrong guess costs time, never correctness."""
+    parts = _module(name).split(".")
     user = os.environ.get("NUMBA_CACHE_DIR")
-    dirs = [user] if user else [os.path.join(os.path.dirname(os.path.abspath(__file__)), "__pycache__"),
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # jetgaudin/
+    dirs = [user] if user else [os.path.join(package, *parts[1:-1], "__pycache__"),
                                 os.path.expanduser("~/.cache/numba")]
-    pattern = f"{stem}.{func}-*.nbi"
+    pattern = f"{parts[-1]}.{func}-*.nbi"
     return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
                for d in dirs)
+
+
+def _module_state(need) -> str:
+    """``"loaded"``, ``"cached"`` or ``"cold"`` (:func:`kernel_state`) of the compiled functions ``need``, pairs
+    ``(module, function)`` (:func:`_module`)."""
+    if all(_loaded(*k) for k in need):
+        return "loaded"
+    return "cached" if all(_loaded(*k) or _cached(*k) for k in need) else "cold"
 
 
 #: the exact chain step (:class:`jetgaudin.ChainExactFlow`): the compiled functions of its route per family (the
@@ -102,26 +119,6 @@ EXACT_LOAD_S = 0.6
 #: (measured as above, ~1.5× the quiet values); its steps cost ``k`` map steps each (:data:`NUMPY_STEP_S`,
 #: :data:`COMPILED_STEP_S`)
 EXACT_SETUP_S = {"elliptic": (7e-2, 7e-3), "trigonometric": (2e-2, 5e-3), "rational": (1e-2, 2e-3)}
-
-
-def _module_state(need) -> str:
-    """:func:`kernel_state` of compiled functions named ``(module, function)`` (any package of jetgaudin)."""
-    def loaded(mod: str, func: str) -> bool:
-        return bool(getattr(getattr(sys.modules.get(mod), func, None), "signatures", None))
-
-    def cached(mod: str, func: str) -> bool:
-        parts = mod.split(".")
-        user = os.environ.get("NUMBA_CACHE_DIR")
-        here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))  # the jetgaudin package
-        dirs = [user] if user else [os.path.join(here, *parts[1:-1], "__pycache__"),
-                                    os.path.expanduser("~/.cache/numba")]
-        pattern = f"{parts[-1]}.{func}-*.nbi"
-        return any(glob.glob(os.path.join(d, pattern)) or glob.glob(os.path.join(d, "**", pattern), recursive=True)
-                   for d in dirs)
-
-    if all(loaded(*k) for k in need):
-        return "loaded"
-    return "cached" if all(loaded(*k) or cached(*k) for k in need) else "cold"
 
 
 def exact_route_costs(family, M: int, batch: int, steps: int, maps: int, substeps: int = 1,
@@ -152,10 +149,7 @@ def kernel_state(family, batch: int = 1) -> str:
     """``"loaded"`` (compiled or loaded in this process), ``"cached"`` (in Numba's cache) or ``"cold"`` (to be
     compiled): the chain kernels a compiled call of ``batch`` orbits of ``family`` needs.  Looks at modules and files
     only (imports nothing)."""
-    need = _KERNELS[_group(family, batch)]
-    if all(_loaded(*k) for k in need):
-        return "loaded"
-    return "cached" if all(_loaded(*k) or _cached(*k) for k in need) else "cold"
+    return _module_state(_KERNELS[_group(family, batch)])
 
 
 @dataclass(frozen=True)
