@@ -7,8 +7,9 @@ tests compare the two to round-off).
 (``c`` the family's constant ``nu2_constant(b, extra)``; ``docs/families.md``), with the basis ``ψ_m`` compiled
 per family (:mod:`jetgaudin._exact_chain_basis`): rational ``ψ_m(z) = z^{−m}``; trigonometric
 ``ψ_m = (−1)^{m−1} [x^{m−1}] w_3(z + x)``, ``w_3 = γ cot(γ ·)``, from the Taylor series of ``sin`` and ``cos`` at
-``γz`` (series inverse and product, as :meth:`jetgaudin.families.TrigonometricFamily.taylor`); elliptic ``ψ_m = (−1)^{m−1} [x^{m−1}] F(z + x)``,
-``F = cs dn + Z`` (:mod:`jetgaudin._exact_elliptic`).  Family ids: ``exact_chain.COMPILED_FAMILIES``.
+``γz`` (series inverse and product, as :meth:`jetgaudin.families.TrigonometricFamily.taylor`); elliptic
+``ψ_m = (−1)^{m−1} [x^{m−1}] F(z + x)``, ``F = cs dn + Z`` (:mod:`jetgaudin._exact_elliptic`).  Family ids:
+``exact_chain.COMPILED_FAMILIES``.
 
 The weights ``ω_I(ρ_j + i h_j) = −h_j Σ_q w_q Re[∂ν²/∂I(λ_q)/ν(λ_q)]`` by the Gauss–Legendre rule, ``ν`` continued
 node by node from ``+√ν²(ρ)`` in the order of ``|s|`` (the root nearer to the previous one; a step that moves ``ν``
